@@ -1,0 +1,37 @@
+"""Diagnostics: every problem a user sees is one line, made here at the edge.
+
+Errors travel as values (`Diagnostic`) or typed exceptions (`PlcLabError` and subclasses);
+the CLI prints them and sets the exit code. Nothing below the CLI prints.
+"""
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+
+@dataclass(frozen=True, order=True)
+class Diagnostic:
+    """One error in ST source: printed as `file:line:col: error: message` (1-based line/col)."""
+
+    file: str
+    line: int
+    col: int
+    message: str
+
+    def __str__(self) -> str:
+        return f"{self.file}:{self.line}:{self.col}: error: {self.message}"
+
+
+class PlcLabError(Exception):
+    """An error a user caused and can fix; its str() is the one line shown to them."""
+
+
+class CompileError(PlcLabError):
+    """ST that does not pass the front end; carries every diagnostic found."""
+
+    def __init__(self, diagnostics: list[Diagnostic]):
+        self.diagnostics = sorted(set(diagnostics))
+        super().__init__("\n".join(str(d) for d in self.diagnostics))
+
+
+class ConfigError(PlcLabError):
+    """A bad openplc.conf: the message names section, key, value and what is allowed."""

@@ -1,0 +1,73 @@
+"""The process image: OpenPLC's I/O and memory areas, shared by the PLC, plants and Modbus faces.
+
+Bit areas are indexed by `8 * byte + bit` (the PSM and Modbus address of `%IX3.2` is 26).
+The runtime reads inputs from and writes outputs to this image once per tick; plant models
+and Modbus faces never touch the PLC's variables, only the image. Writes coming from other
+threads (Modbus clients) are queued and applied by the scan thread at the start of the next
+tick, so a scan never sees a half-applied multi-register write.
+"""
+from __future__ import annotations
+
+import threading
+from dataclasses import dataclass, field
+
+BIT_AREA_BYTES = 100     # %IX0.0 .. %IX99.7, %QX0.0 .. %QX99.7
+WORD_AREA_SIZE = 1024    # %IW, %QW, %MW, %MD, %ML 0..1023
+
+# area name -> (element count, bit width); bits are stored as 0/1 ints in `bits` areas.
+AREAS: dict[str, tuple[int, int]] = {
+    "IX": (BIT_AREA_BYTES * 8, 1),
+    "QX": (BIT_AREA_BYTES * 8, 1),
+    "IW": (WORD_AREA_SIZE, 16),
+    "QW": (WORD_AREA_SIZE, 16),
+    "MW": (WORD_AREA_SIZE, 16),
+    "MD": (WORD_AREA_SIZE, 32),
+    "ML": (WORD_AREA_SIZE, 64),
+}
+
+
+@dataclass
+class ProcessImage:
+    """All located storage of one PLC. Values are unsigned raw integers of the area's width."""
+
+    areas: dict[str, list[int]] = field(default_factory=lambda: {
+        name: [0] * count for name, (count, _w) in AREAS.items()})
+    _pending: list[tuple[str, int, list[int]]] = field(default_factory=list)
+    _lock: threading.Lock = field(default_factory=threading.Lock)
+
+    # -- used by the scan thread and in-process plants -------------------------------------
+    def get(self, area: str, index: int) -> int:
+        return self.areas[area][index]
+
+    def set(self, area: str, index: int, value: int) -> None:
+        self.areas[area][index] = value
+
+    def get_bit(self, area: str, byte: int, bit: int) -> bool:
+        return bool(self.areas[area][byte * 8 + bit])
+
+    def set_bit(self, area: str, byte: int, bit: int, value: bool) -> None:
+        self.areas[area][byte * 8 + bit] = 1 if value else 0
+
+    # -- used by other threads (Modbus faces) ----------------------------------------------
+    def snapshot(self, area: str, start: int, count: int) -> list[int]:
+        """A consistent copy of `count` elements of `area` from `start` (taken under the lock)."""
+        with self._lock:
+            return self.areas[area][start:start + count]
+
+    def queue_write(self, area: str, start: int, values: list[int]) -> None:
+        """Queue a write; the scan thread applies it whole at the start of its next tick."""
+        with self._lock:
+            self._pending.append((area, start, list(values)))
+
+    def apply_pending(self) -> int:
+        """Apply queued writes in arrival order; returns how many were applied."""
+        with self._lock:
+            pending, self._pending = self._pending, []
+            for area, start, values in pending:
+                self.areas[area][start:start + len(values)] = values
+        return len(pending)
+
+    def publish(self, fn) -> None:
+        """Run `fn(areas)` under the lock, so snapshots never see a half-published tick."""
+        with self._lock:
+            fn(self.areas)
