@@ -1,0 +1,63 @@
+"""ST front end: parse and check one compilation unit made of one or more files.
+
+`load_files` / `check_sources` are what the CLI, the build, the runtime and the tests call.
+"""
+from __future__ import annotations
+
+from pathlib import Path
+from typing import Iterable
+
+from plclab.errors import CompileError, Diagnostic
+from plclab.frontend import ast as A
+from plclab.frontend.checker import CheckedUnit, check_unit
+from plclab.frontend.parser import parse_source
+
+__all__ = ["CheckedUnit", "check_sources", "load_files", "read_source"]
+
+
+def read_source(path: str | Path) -> tuple[str, list[Diagnostic]]:
+    """The text of an ST file, or a diagnostic saying why it cannot be read."""
+    name = str(path)
+    try:
+        data = Path(path).read_bytes()
+    except FileNotFoundError:
+        return "", [Diagnostic(name, 1, 1, "no such file")]
+    except IsADirectoryError:
+        return "", [Diagnostic(name, 1, 1, "is a directory, not an ST file")]
+    except OSError as e:
+        return "", [Diagnostic(name, 1, 1, f"cannot read file: {e.strerror}")]
+    return data.decode("utf-8", errors="replace").replace("\ufffd", "\x00" if b"\x00" in data else "\ufffd"), []
+
+
+def check_sources(sources: Iterable[tuple[str, str]]) -> CheckedUnit:
+    """Parse and check (name, text) pairs as one compilation unit; raises CompileError."""
+    merged = A.Unit(line=1, col=1, file="")
+    diags: list[Diagnostic] = []
+    for name, text in sources:
+        unit, errs = parse_source(text, name)
+        diags.extend(errs)
+        if unit is not None:
+            merged.types.extend(unit.types)
+            merged.pous.extend(unit.pous)
+            merged.configs.extend(unit.configs)
+            merged.gvls.extend(unit.gvls)
+    if diags:
+        raise CompileError(diags)
+    checked = check_unit(merged)
+    if checked.diagnostics:
+        raise CompileError(checked.diagnostics)
+    return checked
+
+
+def load_files(paths: Iterable[str | Path]) -> CheckedUnit:
+    """Read, parse and check ST files as one compilation unit; raises CompileError."""
+    sources = []
+    diags: list[Diagnostic] = []
+    for p in paths:
+        text, errs = read_source(p)
+        diags.extend(errs)
+        if not errs:
+            sources.append((str(p), text))
+    if diags:
+        raise CompileError(diags)
+    return check_sources(sources)
