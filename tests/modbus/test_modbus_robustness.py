@@ -43,15 +43,23 @@ def connect(port: int) -> socket.socket:
     return sock
 
 
-def recv_frame(sock: socket.socket) -> bytes:
-    """One response frame, or b'' if the server closed the connection."""
+def recv_exact(sock: socket.socket, n: int) -> bytes:
     data = b""
-    while len(data) < 7 or len(data) < 6 + struct.unpack(">H", data[4:6])[0]:
-        chunk = sock.recv(1024)
+    while len(data) < n:
+        chunk = sock.recv(n - len(data))
         if not chunk:
             return b""
         data += chunk
     return data
+
+
+def recv_frame(sock: socket.socket) -> bytes:
+    """One response frame, or b'' if the server closed the connection."""
+    head = recv_exact(sock, 7)
+    if not head:
+        return b""
+    body = recv_exact(sock, struct.unpack(">H", head[4:6])[0] - 1)
+    return head + body if body else b""
 
 
 def closed_by_server(sock: socket.socket) -> bool:

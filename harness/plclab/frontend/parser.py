@@ -24,7 +24,7 @@ MAX_NESTING = 200   # statement/expression nesting deeper than this is refused, 
 _PRETTY = {
     "SEMICOLON": "';'", "COLON": "':'", "COMMA": "','", "LPAR": "'('", "RPAR": "')'",
     "LSQB": "'['", "RSQB": "']'", "DOT": "'.'", "__ANON_0": "':='", "IDENT": "an identifier",
-    "INTEGER": "a number", "$END": "end of file",
+    "INTEGER": "a number", "REAL_NUMBER": "a number", "$END": "end of file",
 }
 
 
@@ -375,26 +375,31 @@ class _Builder(Transformer):
         return (w[0], w[1])
 
     def case_stmt(self, meta, children):
-        w = _words(children)
-        sel = w[0]
-        branches = [c for c in w[1:] if isinstance(c, A.CaseBranch)]
+        # children: CASE selector OF head (head | stmt)* [ELSE stmt_list] END_CASE
+        sel = children[1]
+        branches: list[A.CaseBranch] = []
         else_body = None
-        if any(isinstance(c, Token) and c.type == "ELSE" for c in children):
-            else_body = w[-1]
+        for i, c in enumerate(children[3:], start=3):
+            if isinstance(c, A.CaseBranch):
+                branches.append(c)
+            elif isinstance(c, A.Stmt):
+                branches[-1].body.append(c)
+            elif isinstance(c, Token) and c.type == "ELSE":
+                else_body = children[i + 1]
+                break
         return A.Case(**self._at(meta), selector=sel, branches=branches, else_body=else_body)
 
-    def case_branch(self, meta, children):
+    def case_head(self, meta, children):
         labels = [c for c in children if isinstance(c, A.CaseLabel)]
-        return A.CaseBranch(**self._at(meta), labels=labels, body=children[-1])
+        return A.CaseBranch(**self._at(meta), labels=labels, body=[])
 
     def case_label(self, meta, children):
         lo, hi = children
         return A.CaseLabel(line=lo.line, col=lo.col, file=self.file, lo=lo, hi=hi)
 
     def for_stmt(self, meta, children):
-        w = [c for c in children if not (isinstance(c, Token) and c.type != "IDENT")]
-        var = w[0]
-        start, end, step, body = w[1], w[2], w[3], w[4]
+        # children: FOR IDENT start TO end (BY step | None None) DO body END_FOR
+        var, start, end, step, body = children[1], children[2], children[4], children[6], children[8]
         return A.For(**self._at(meta), var=A.Name(**self._tok(var), name=str(var)),
                      start=start, end=end, step=step, body=body)
 
@@ -474,7 +479,18 @@ class _Builder(Transformer):
         return A.Unary(**self._tok(minus), op="-", operand=operand)
 
     def pos(self, meta, children):
-        return children[1]
+        plus, operand = children
+        operand.line, operand.col = plus.line, plus.column
+        operand.text = "+" + operand.text
+        return operand
+
+    def neg_neg(self, meta, children):
+        minus, inner_minus, operand = children
+        return A.Unary(**self._tok(minus), op="-", operand=self.neg(meta, [inner_minus, operand]))
+
+    def neg_pos(self, meta, children):
+        minus, plus, operand = children
+        return A.Unary(**self._tok(minus), op="-", operand=self.pos(meta, [plus, operand]))
 
     def not_(self, meta, children):
         tok, operand = children

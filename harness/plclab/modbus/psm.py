@@ -259,8 +259,7 @@ class PsmClient:
         try:
             self._sock = socket.create_connection((self.host, self.port), timeout=self.timeout)
         except OSError as exc:
-            raise PsmError(f"psm: cannot connect to {self.host}:{self.port}: "
-                           f"{exc.strerror or exc}") from None
+            raise self._fail(f"cannot connect: {exc.strerror or exc}") from None
         self._sock.setsockopt(socket.IPPROTO_TCP, socket.TCP_NODELAY, 1)
         return self
 
@@ -317,9 +316,11 @@ class PsmClient:
 
     # -- framing --------------------------------------------------------------------------
     def _fail(self, what: str) -> PsmError:
+        """Count one error (connects included) and make its one-line message."""
         self.error_count += 1
+        self.close()    # the stream may be out of step: start the next exchange afresh
         suffix = "; PSM disabled" if self.disabled else ""
-        return PsmError(f"psm: {what} ({self.host}:{self.port}){suffix}")
+        return PsmError(f"psm: {self.host}:{self.port}: {what}{suffix}")
 
     def _exchange(self, request: bytes, function: int) -> bytes:
         if self.disabled:

@@ -153,21 +153,23 @@ class ModbusTcpServer:
 
     # -- event loop thread ----------------------------------------------------------------
     def _run(self) -> None:
-        loop = asyncio.new_event_loop()
-        self._loop = loop
         try:
-            loop.run_until_complete(self._main())
+            asyncio.run(self._main())   # cancels leftover tasks and closes the loop at the end
         finally:
-            loop.close()
             self._stopped.set()
             self._ready.set()
 
     async def _main(self) -> None:
+        loop = asyncio.get_running_loop()
+        self._loop = loop
         self._stop_event = asyncio.Event()
+        transports: set[asyncio.BaseTransport] = set()
+
+        def protocol() -> asyncio.StreamReaderProtocol:
+            return _TrackedProtocol(asyncio.StreamReader(loop=loop), self._serve_client, transports)
         try:
-            server = await asyncio.start_server(self._serve_client, self.host,
-                                                self._requested_port, reuse_address=True,
-                                                backlog=128)
+            server = await loop.create_server(protocol, self.host, self._requested_port,
+                                              reuse_address=True, backlog=128)
         except OSError as exc:
             self._error = exc
             return
@@ -179,6 +181,15 @@ class ModbusTcpServer:
                 await self._stop_event.wait()
         finally:
             server.close()
+            # A connection accepted just before the stop gets its transport one or two loop
+            # iterations later (asyncio's accept is itself a task); let those complete so
+            # that every accepted connection is closed below. (The kernel resets those never
+            # accepted when the listening socket closes.)
+            for _ in range(3):
+                await asyncio.sleep(0)
+            # close() (not abort) still flushes a reply already written (PSM stop).
+            for transport in list(transports):
+                transport.close()
             for task in list(self._tasks):
                 task.cancel()
             await asyncio.gather(*self._tasks, return_exceptions=True)
@@ -227,3 +238,21 @@ class ModbusTcpServer:
             writer.write(frame(transaction, unit, response))
             async with asyncio.timeout(self.idle_timeout):
                 await writer.drain()
+
+
+class _TrackedProtocol(asyncio.StreamReaderProtocol):
+    """StreamReaderProtocol that records its transport, so stop() can close every connection."""
+
+    def __init__(self, reader: asyncio.StreamReader, callback, transports: set):
+        super().__init__(reader, callback)
+        self._transports = transports
+        self._tracked: asyncio.BaseTransport | None = None
+
+    def connection_made(self, transport: asyncio.BaseTransport) -> None:
+        self._tracked = transport
+        self._transports.add(transport)
+        super().connection_made(transport)
+
+    def connection_lost(self, exc: Exception | None) -> None:
+        self._transports.discard(self._tracked)
+        super().connection_lost(exc)

@@ -1,0 +1,723 @@
+"""Checked AST -> Python source -> code objects: the soft PLC executes compiled POUs.
+
+Every POU becomes Python code once, at load time, so a scan is plain Python calls with no
+tree walking:
+  PROGRAM / FUNCTION_BLOCK -> a class with __slots__ (one attribute per variable, named by
+                              the variable's upper-case key) and __call__ = the body
+  FUNCTION                 -> a Python function; VAR_OUTPUT / VAR_IN_OUT are Ref cells
+  globals                  -> attributes of one `G` object
+Integer results are wrapped to their C width inline, REAL results rounded to single
+precision, as the C code matiec generates would. A line map from generated Python lines to
+ST lines lets a runtime fault name the POU, file and line without any cost on the hot path.
+"""
+from __future__ import annotations
+
+import itertools
+import math
+from dataclasses import dataclass, field
+from typing import Any, Callable, Optional
+
+from plclab.frontend import ast as A
+from plclab.frontend.checker import CheckedUnit, EnumValue, _LitType
+from plclab.frontend.stdsigs import FBSig
+from plclab.iec import types as T
+from plclab.runtime import stdlib
+try:
+    from plclab.runtime import stdfb
+except ImportError:  # pragma: no cover - being written
+    stdfb = None
+from plclab.runtime.faults import PlcFault
+
+
+class Ref:
+    """A reference to a scalar variable (VAR_IN_OUT and function outputs)."""
+
+    __slots__ = ("obj", "attr")
+
+    def __init__(self, obj: Any, attr: Any):
+        self.obj, self.attr = obj, attr
+
+    def get(self) -> Any:
+        o = self.obj
+        return o[self.attr] if isinstance(o, list) else getattr(o, self.attr)
+
+    def set(self, value: Any) -> None:
+        o = self.obj
+        if isinstance(o, list):
+            o[self.attr] = value
+        else:
+            setattr(o, self.attr, value)
+
+
+def _idiv(a: int, b: int) -> int:
+    """C integer division: truncates toward zero; division by zero is a runtime fault."""
+    if b == 0:
+        raise PlcFault("division_by_zero", "integer division by zero")
+    q = abs(a) // abs(b)
+    return q if (a < 0) == (b < 0) else -q
+
+
+def _imod(a: int, b: int) -> int:
+    """C `%`: the result has the dividend's sign; MOD by zero is a runtime fault."""
+    if b == 0:
+        raise PlcFault("division_by_zero", "MOD by zero")
+    r = abs(a) % abs(b)
+    return -r if a < 0 else r
+
+
+def _fdiv(a: float, b: float) -> float:
+    """REAL division as IEEE 754 does it in C (x/0.0 is +-inf or nan, not a fault)."""
+    try:
+        return a / b
+    except ZeroDivisionError:
+        if a == 0 or a != a:
+            return math.nan
+        return math.copysign(math.inf, a) * math.copysign(1.0, b)
+
+
+def _expt(a: float, b: float) -> float:
+    try:
+        return math.pow(a, b)
+    except (ValueError, OverflowError):
+        return math.nan if a < 0 else math.inf
+
+
+def _bound(i: int, lo: int, hi: int) -> int:
+    """Array index check: out of range is a runtime fault (C would overrun memory)."""
+    if lo <= i <= hi:
+        return i - lo
+    raise PlcFault("index_out_of_range", f"array index {i} outside {lo}..{hi}")
+
+
+def _time_mul(t: int, k: Any) -> int:
+    return int(t * k)
+
+
+def _time_div(t: int, k: Any) -> int:
+    if k == 0:
+        raise PlcFault("division_by_zero", "TIME division by zero")
+    if isinstance(k, float):
+        return int(t / k)
+    return _idiv(t, k)
+
+
+@dataclass
+class LineInfo:
+    file: str
+    line: int
+    pou: str
+
+
+@dataclass
+class CompiledProgram:
+    """What the runtime loads: the namespace with the generated classes and tables."""
+
+    checked: CheckedUnit
+    namespace: dict[str, Any]
+    source: str
+    line_map: dict[int, LineInfo]
+    filename: str
+    program_classes: dict[str, str] = field(default_factory=dict)   # PROGRAM key -> class name
+    fb_classes: dict[str, str] = field(default_factory=dict)
+    retained_globals: list[str] = field(default_factory=list)
+
+    def where(self, py_line: int) -> Optional[LineInfo]:
+        return self.line_map.get(py_line)
+
+
+_counter = itertools.count()
+
+
+def _pyname(kind: str, name: str) -> str:
+    return f"{kind}_{name.upper()}"
+
+
+class _Emitter:
+    """Collects generated lines with their ST origin."""
+
+    def __init__(self) -> None:
+        self.lines: list[str] = []
+        self.origin: dict[int, LineInfo] = {}
+        self.pou = ""
+
+    def emit(self, indent: int, text: str, node: Any = None) -> None:
+        self.lines.append("    " * indent + text)
+        if node is not None and getattr(node, "line", 0):
+            self.origin[len(self.lines)] = LineInfo(node.file, node.line, self.pou)
+
+
+class Compiler:
+    def __init__(self, checked: CheckedUnit):
+        self.cu = checked
+        self.out = _Emitter()
+        self.consts: dict[str, Any] = {}
+        self.const_ids: dict[int, str] = {}
+        self.ns: dict[str, Any] = {
+            "_idiv": _idiv, "_imod": _imod, "_fdiv": _fdiv, "_expt": _expt, "_bound": _bound,
+            "_f32": T.to_f32, "_copy": T.copy_value, "Ref": Ref, "PlcFault": PlcFault,
+            "_time_mul": _time_mul, "_time_div": _time_div, "_StructValue": T.StructValue,
+            "_Locals": _Locals, "_NegRef": _NegRef,
+        }
+        self.tmp = itertools.count()
+        self.pou: Optional[A.PouDecl] = None
+        self.in_function = False
+        self.loop_stack: list[str] = []
+
+    # ------------------------------------------------------------------ helpers
+    def const(self, value: Any) -> str:
+        """A name in the generated module bound to a (possibly mutable) constant value."""
+        if isinstance(value, (bool, int, float, str)) and not isinstance(value, float) or value is None:
+            return repr(value)
+        if isinstance(value, float):
+            if math.isfinite(value):
+                return repr(value)
+        key = id(value)
+        if key not in self.const_ids:
+            name = f"_k{len(self.const_ids)}"
+            self.const_ids[key] = name
+            self.ns[name] = value
+            self.consts[name] = value
+        return self.const_ids[key]
+
+    def init_code(self, value: Any) -> str:
+        """Code creating a fresh copy of an initial value."""
+        if isinstance(value, (list, T.StructValue)):
+            return f"_copy({self.const(value)})"
+        return self.const(value)
+
+    def bind(self, obj: Any, prefix: str = "_f") -> str:
+        name = f"{prefix}{next(self.tmp)}"
+        self.ns[name] = obj
+        return name
+
+    @staticmethod
+    def wrap(code: str, ty: Optional[T.Type]) -> str:
+        """Normalise an arithmetic result to the C type of `ty`."""
+        b = T.base_of(ty) if ty is not None else None
+        if isinstance(b, _LitType) or b is None:
+            return code
+        if isinstance(b, T.ElementaryType):
+            if b.kind == "sint":
+                half = 1 << (b.bits - 1)
+                return f"((({code}) + {half}) & {(1 << b.bits) - 1}) - {half}"
+            if b.kind in ("uint", "bits"):
+                return f"(({code}) & {(1 << b.bits) - 1})"
+            if b is T.REAL:
+                return f"_f32({code})"
+            if b.kind in ("time", "date", "tod", "dt"):
+                return f"(((({code}) + (1 << 63)) & ((1 << 64) - 1)) - (1 << 63))"
+        return code
+
+    # ------------------------------------------------------------------ driver
+    def compile(self) -> CompiledProgram:
+        cu = self.cu
+        out = self.out
+        out.emit(0, "# generated by plclab from ST; do not edit")
+        out.emit(0, "class _Globals:")
+        out.emit(1, "pass")
+        out.emit(0, "G = _Globals()")
+        # functions first (they are called by FBs and programs), then FBs, then programs
+        order = [p for p in cu.unit.pous if p.kind == "FUNCTION"] + \
+                [p for p in cu.unit.pous if p.kind == "FUNCTION_BLOCK"] + \
+                [p for p in cu.unit.pous if p.kind == "PROGRAM"]
+        result = CompiledProgram(cu, self.ns, "", {}, f"<plc-{next(_counter)}>")
+        for pou in order:
+            if cu.pous.get(pou.key) is not pou:
+                continue
+            out.pou = pou.name
+            if pou.kind == "FUNCTION":
+                self.function(pou)
+            else:
+                cls = self.pou_class(pou)
+                (result.program_classes if pou.kind == "PROGRAM" else result.fb_classes)[pou.key] = cls
+        out.pou = "CONFIGURATION"
+        self.globals_init(result)
+        source = "\n".join(out.lines) + "\n"
+        code = compile(source, result.filename, "exec")
+        exec(code, self.ns)
+        result.source = source
+        result.line_map = out.origin
+        return result
+
+    def globals_init(self, result: CompiledProgram) -> None:
+        out = self.out
+        out.emit(0, "def _init_globals():")
+        any_ = False
+        for key, d in self.cu.globals.items():
+            if key.startswith("%"):
+                continue
+            any_ = True
+            out.emit(1, f"G.{key} = {self.var_init(d)}", d)
+            if d.retain:
+                result.retained_globals.append(key)
+        for key, d in self.cu.globals.items():
+            if key.startswith("%") and d.ty is not None:
+                attr = f"_AT_{d.location.area}{d.location.size}{'_'.join(map(str, d.location.parts))}"
+                out.emit(1, f"G.{attr} = {self.var_init(d)}", d)
+                any_ = True
+        if not any_:
+            out.emit(1, "pass")
+
+    def var_init(self, d: A.VarDecl) -> str:
+        ty = d.ty
+        if isinstance(ty, T.FBType):
+            return self.fb_new(ty, d)
+        return self.init_code(d.init_value if d.init_value is not None else T.default_value(ty))
+
+    def fb_new(self, ty: T.FBType, d: Optional[A.VarDecl]) -> str:
+        inits = getattr(d, "fb_init", None) if d is not None else None
+        if isinstance(ty.pou, FBSig):
+            cls = self.bind(getattr(stdfb, ty.pou.name), "_std")
+            code = f"{cls}(_rt.clock)"
+        else:
+            code = f"{_pyname('FB', ty.pou.name)}()"
+        if inits:
+            return f"_rt.init_fb({code}, {self.const(dict(inits))})"
+        return code
+
+    # ------------------------------------------------------------------ POU classes
+    def pou_class(self, pou: A.PouDecl) -> str:
+        out = self.out
+        self.pou = pou
+        self.in_function = False
+        name = _pyname("FB" if pou.kind == "FUNCTION_BLOCK" else "PRG", pou.name)
+        decls = [d for d in pou.decls if d.name]
+        located = [d for d in pou.decls if d.location is not None]
+        attrs = [d.key for d in decls] + [f"_AT_{id(d)}" for d in located if not d.name]
+        edges = [d for d in decls if d.edge]
+        attrs += [f"_EDGE_{d.key}" for d in edges]
+        out.emit(0, f"class {name}:")
+        out.emit(1, f"__slots__ = {tuple(attrs)!r}")
+        out.emit(1, f"_ST_NAME = {pou.name!r}")
+        out.emit(1, "def __init__(self):", pou)
+        for d in decls:
+            if d.section == "VAR_EXTERNAL":
+                continue
+            if d.section == "VAR_IN_OUT":
+                out.emit(2, f"self.{d.key} = None", d)
+                continue
+            out.emit(2, f"self.{d.key} = {self.var_init(d)}", d)
+        for d in edges:
+            out.emit(2, f"self._EDGE_{d.key} = {d.edge == 'F_EDGE'}", d)
+        for d in located:
+            if not d.name:
+                out.emit(2, f"self._AT_{id(d)} = {self.var_init(d)}", d)
+        out.emit(2, "pass")
+        out.emit(1, "def __call__(self):", pou)
+        for d in edges:
+            if d.edge == "R_EDGE":
+                out.emit(2, f"_raw = self.{d.key}; self.{d.key} = _raw and not self._EDGE_{d.key}; "
+                            f"self._EDGE_{d.key} = _raw", d)
+            else:
+                out.emit(2, f"_raw = self.{d.key}; self.{d.key} = (not _raw) and self._EDGE_{d.key}; "
+                            f"self._EDGE_{d.key} = _raw", d)
+        temps = [d for d in decls if d.section == "VAR_TEMP"]
+        for d in temps:
+            out.emit(2, f"self.{d.key} = {self.var_init(d)}", d)
+        self.block(pou.body, 2)
+        out.emit(2, "return")
+        return name
+
+    def function(self, pou: A.PouDecl) -> None:
+        out = self.out
+        self.pou = pou
+        self.in_function = True
+        params = [d for d in pou.decls if d.section in ("VAR_INPUT", "VAR_OUTPUT", "VAR_IN_OUT")]
+        sig = ", ".join(f"{d.key}=None" if d.section != "VAR_INPUT" else f"{d.key}={self.init_code(d.init_value)}"
+                        if not isinstance(d.init_value, (list, T.StructValue)) else f"{d.key}=None"
+                        for d in params)
+        fname = _pyname("FC", pou.name)
+        out.emit(0, f"def {fname}({sig}):", pou)
+        out.emit(1, "_L = _Locals()")
+        outs = [d for d in params if d.section == "VAR_OUTPUT"]
+        for d in params:
+            if d.section == "VAR_OUTPUT":
+                out.emit(1, f"_out_{d.key} = {d.key}; _L.{d.key} = {self.var_init(d)}", d)
+            else:
+                out.emit(1, f"_L.{d.key} = {d.key}", d)
+        for d in pou.decls:
+            if d.section in ("VAR", "VAR_TEMP") and d.name:
+                out.emit(1, f"_L.{d.key} = {self.var_init(d)}", d)
+        ret = getattr(pou, "ret_decl", None)
+        out.emit(1, f"_L.RET_ = {self.init_code(ret.init_value) if ret is not None else 'None'}", pou)
+        out.emit(1, "try:")
+        self.block(pou.body, 2)
+        out.emit(1, "finally:")
+        for d in outs:
+            out.emit(2, f"if _out_{d.key} is not None: _out_{d.key}.set(_L.{d.key})", d)
+        out.emit(2, "pass")
+        out.emit(1, "return _L.RET_")
+
+    # ------------------------------------------------------------------ statements
+    def block(self, body: list[A.Stmt], ind: int) -> None:
+        if not body:
+            self.out.emit(ind, "pass")
+        for s in body:
+            self.stmt(s, ind)
+
+    def stmt(self, s: A.Stmt, ind: int) -> None:
+        out = self.out
+        if isinstance(s, A.Assign):
+            self.assign(s.target, self.expr_as(s.value, s.target.ty), ind, s, s.value)
+        elif isinstance(s, A.CallStmt):
+            self.fb_call(s, ind)
+        elif isinstance(s, A.If):
+            for i, (cond, body) in enumerate(s.branches):
+                out.emit(ind, f"{'if' if i == 0 else 'elif'} {self.expr(cond)}:", cond)
+                self.block(body, ind + 1)
+            if s.else_body is not None:
+                out.emit(ind, "else:")
+                self.block(s.else_body, ind + 1)
+        elif isinstance(s, A.Case):
+            sel = f"_c{next(self.tmp)}"
+            out.emit(ind, f"{sel} = {self.expr(s.selector)}", s)
+            first = True
+            for br in s.branches:
+                conds = []
+                for lab in br.labels:
+                    if lab.hi is not None and lab.hi_value != lab.lo_value:
+                        conds.append(f"{self.const(lab.lo_value)} <= {sel} <= {self.const(lab.hi_value)}")
+                    else:
+                        conds.append(f"{sel} == {self.const(lab.lo_value)}")
+                out.emit(ind, f"{'if' if first else 'elif'} {' or '.join(conds) or 'False'}:", br)
+                first = False
+                self.block(br.body, ind + 1)
+            if s.else_body is not None:
+                if first:
+                    out.emit(ind, "if True:")
+                else:
+                    out.emit(ind, "else:")
+                self.block(s.else_body, ind + 1)
+        elif isinstance(s, A.For):
+            self.for_(s, ind)
+        elif isinstance(s, A.While):
+            out.emit(ind, f"while {self.expr(s.cond)}:", s)
+            out.emit(ind + 1, "_rt.loop_check()", s)
+            self.loop_stack.append("")
+            self.block(s.body, ind + 1)
+            self.loop_stack.pop()
+        elif isinstance(s, A.Repeat):
+            flag = f"_x{next(self.tmp)}"
+            out.emit(ind, "while True:", s)
+            out.emit(ind + 1, "_rt.loop_check()", s)
+            self.one_shot_body(s.body, flag, ind + 1)
+            out.emit(ind + 1, f"if {self.expr(s.cond)}: break", s.cond)
+        elif isinstance(s, A.Exit):
+            flag = self.loop_stack[-1] if self.loop_stack else ""
+            out.emit(ind, f"{flag} = True; break" if flag else "break", s)
+        elif isinstance(s, A.Continue):
+            flag = self.loop_stack[-1] if self.loop_stack else ""
+            out.emit(ind, "break" if flag else "continue", s)
+        elif isinstance(s, A.Return):
+            out.emit(ind, "return" if not self.in_function else "return _L.RET_", s)
+        elif isinstance(s, A.Empty):
+            out.emit(ind, "pass", s)
+        else:  # pragma: no cover - the checker admits nothing else
+            raise TypeError(f"cannot compile {type(s).__name__}")
+
+    def one_shot_body(self, body: list[A.Stmt], flag: str, ind: int) -> None:
+        """A loop body inside `for _once in (0,)`, so that CONTINUE (a `break` out of the
+        one-shot) still reaches the loop's step / UNTIL, and EXIT sets `flag` first."""
+        out = self.out
+        out.emit(ind, f"{flag} = False")
+        out.emit(ind, "for _once in (0,):")
+        self.loop_stack.append(flag)
+        self.block(body, ind + 1)
+        self.loop_stack.pop()
+        out.emit(ind, f"if {flag}: break")
+
+    def for_(self, s: A.For, ind: int) -> None:
+        out = self.out
+        var_code = self.lvalue_get(s.var)
+        vt = s.var.ty
+        start = self.expr_as(s.start, vt)
+        end_v = f"_e{next(self.tmp)}"
+        step_v = f"_s{next(self.tmp)}"
+        out.emit(ind, f"{step_v} = {self.expr_as(s.step, vt) if s.step is not None else '1'}", s)
+        self.assign(s.var, start, ind, s)
+        out.emit(ind, f"while True:", s)
+        out.emit(ind + 1, f"{end_v} = {self.expr_as(s.end, vt)}", s)
+        out.emit(ind + 1, f"if ({step_v} > 0 and {var_code} > {end_v}) or ({step_v} < 0 and {var_code} < {end_v}) "
+                          f"or {step_v} == 0 and {var_code} != {end_v}: break", s)
+        out.emit(ind + 1, "_rt.loop_check()", s)
+        self.one_shot_body(s.body, f"_x{next(self.tmp)}", ind + 1)
+        self.assign(s.var, self.wrap(f"{var_code} + {step_v}", vt), ind + 1, s)
+
+    # ------------------------------------------------------------------ assignment
+    def assign(self, target: A.Expr, value_code: str, ind: int, node: Any, value: Optional[A.Expr] = None) -> None:
+        ty = target.ty
+        b = T.base_of(ty) if ty is not None else None
+        if isinstance(b, T.StringType) and b.length < 126:
+            value_code = f"({value_code})[:{b.length}]"
+        if isinstance(b, (T.ArrayType, T.StructType)):
+            if value is not None and isinstance(value, A.Call):
+                pass
+            else:
+                value_code = f"_copy({value_code})"
+            # a VAR_IN_OUT array/struct is the caller's object: update it in place
+            if isinstance(target, A.Name) and isinstance(target.sym, A.VarDecl) and \
+                    target.sym.section == "VAR_IN_OUT":
+                if isinstance(b, T.ArrayType):
+                    self.out.emit(ind, f"{self.lvalue_get(target)}[:] = {value_code}", node)
+                else:
+                    self.out.emit(ind, f"{self.lvalue_get(target)}.__dict__.update({value_code}.__dict__)", node)
+                return
+        self.out.emit(ind, self.store(target, value_code), node)
+
+    def store(self, target: A.Expr, value_code: str) -> str:
+        if isinstance(target, A.Name):
+            sym = target.sym
+            if isinstance(sym, A.VarDecl) and sym.section == "VAR_IN_OUT" and self._is_scalar(sym.ty):
+                return f"{self.name_code(target)}.set({value_code})"
+            return f"{self.name_code(target)} = {value_code}"
+        return f"{self.lvalue_get(target)} = {value_code}"
+
+    @staticmethod
+    def _is_scalar(ty: Optional[T.Type]) -> bool:
+        return not isinstance(T.base_of(ty) if ty is not None else None, (T.ArrayType, T.StructType, T.FBType))
+
+    def name_code(self, e: A.Name) -> str:
+        """The storage of a name (without the .get() of scalar VAR_IN_OUT refs)."""
+        sym = e.sym
+        if isinstance(sym, A.VarDecl):
+            if sym.section == "VAR_EXTERNAL":
+                return f"G.{sym.key}"
+            if sym.section == "VAR_GLOBAL":
+                return f"G.{sym.key}"
+            if self.in_function:
+                return "_L.RET_" if sym.section == "RETURN" else f"_L.{sym.key}"
+            return f"self.{sym.key}"
+        raise TypeError(f"not a variable: {e.name}")
+
+    def lvalue_get(self, e: A.Expr) -> str:
+        """Code reading a variable/element/field (also the target form for stores)."""
+        if isinstance(e, A.Name):
+            sym = e.sym
+            if isinstance(sym, EnumValue):
+                return repr(sym.name)
+            code = self.name_code(e)
+            if isinstance(sym, A.VarDecl) and sym.section == "VAR_IN_OUT" and self._is_scalar(sym.ty):
+                return code + ".get()"
+            return code
+        if isinstance(e, A.Member):
+            return f"{self.lvalue_get(e.base)}.{e.key}"
+        if isinstance(e, A.Index):
+            arr = T.base_of(e.base.ty)
+            return f"{self.lvalue_get(e.base)}[{self.flat_index(e, arr)}]"
+        raise TypeError(f"not an lvalue: {type(e).__name__}")
+
+    def flat_index(self, e: A.Index, arr: T.ArrayType) -> str:
+        parts = []
+        stride = 1
+        strides = []
+        for lo, hi in reversed(arr.dims):
+            strides.append(stride)
+            stride *= hi - lo + 1
+        strides.reverse()
+        for ix, (lo, hi), st in zip(e.indexes, arr.dims, strides):
+            v = self.cu_const(ix)
+            if isinstance(v, int) and not isinstance(v, bool) and lo <= v <= hi:
+                off = str(v - lo)
+            else:
+                off = f"_bound({self.expr(ix)}, {lo}, {hi})"
+            parts.append(off if st == 1 else f"{off} * {st}")
+        return " + ".join(parts)
+
+    def cu_const(self, e: A.Expr) -> Any:
+        if isinstance(e, A.Literal):
+            return e.value
+        return None
+
+    # ------------------------------------------------------------------ FB calls
+    def fb_call(self, s: A.CallStmt, ind: int) -> None:
+        out = self.out
+        inst = self.lvalue_get(s.target)
+        fb: T.FBType = s.fb_type
+        iv = f"_i{next(self.tmp)}"
+        out.emit(ind, f"{iv} = {inst}", s)
+        outputs = []
+        for a in s.args:
+            key = a.key
+            if a.is_output:
+                outputs.append(a)
+                continue
+            decl = a.param if isinstance(a.param, A.VarDecl) else None
+            if decl is not None and decl.section == "VAR_IN_OUT":
+                out.emit(ind, f"{iv}.{key} = {self.ref_to(a.value, decl.ty)}", a)
+            else:
+                ptype = decl.ty if decl is not None else a.value.ty
+                out.emit(ind, f"{iv}.{key} = {self.expr_as(a.value, ptype)}", a)
+        out.emit(ind, f"{iv}()", s)
+        for a in outputs:
+            code = f"{iv}.{a.key}"
+            if a.negated:
+                code = f"not {code}"
+            self.assign(a.value, code, ind, a)
+
+    def ref_to(self, e: A.Expr, ty: Optional[T.Type]) -> str:
+        """A reference to variable `e` for a VAR_IN_OUT parameter."""
+        if not self._is_scalar(ty):
+            return self.lvalue_get(e)
+        if isinstance(e, A.Name):
+            sym = e.sym
+            if isinstance(sym, A.VarDecl) and sym.section == "VAR_IN_OUT":
+                return self.name_code(e)   # pass the caller's reference on
+            code = self.name_code(e)
+            obj, _, attr = code.rpartition(".")
+            return f"Ref({obj}, {attr!r})"
+        if isinstance(e, A.Member):
+            return f"Ref({self.lvalue_get(e.base)}, {e.key!r})"
+        if isinstance(e, A.Index):
+            arr = T.base_of(e.base.ty)
+            return f"Ref({self.lvalue_get(e.base)}, {self.flat_index(e, arr)})"
+        raise TypeError("not a reference")
+
+    # ------------------------------------------------------------------ expressions
+    def expr_as(self, e: A.Expr, ty: Optional[T.Type]) -> str:
+        return self.expr(e)
+
+    def expr(self, e: A.Expr) -> str:
+        if isinstance(e, A.Literal):
+            v = e.value
+            tb = T.base_of(e.ty) if e.ty is not None else None
+            if tb is T.REAL and isinstance(v, (int, float)):
+                v = T.to_f32(float(v))
+            elif tb is not None and isinstance(tb, T.ElementaryType) and tb.is_real:
+                v = float(v)
+            elif tb is T.BOOL:
+                v = bool(v)
+            return self.const(v) if not isinstance(v, float) or math.isfinite(v) else self.bind(v, "_x")
+        if isinstance(e, (A.Name, A.Member, A.Index)):
+            if isinstance(e, A.Name) and isinstance(e.sym, EnumValue):
+                return repr(e.sym.name)
+            return self.lvalue_get(e)
+        if isinstance(e, A.Unary):
+            inner = self.expr(e.operand)
+            b = T.base_of(e.ty)
+            if e.op == "NOT":
+                if b is T.BOOL:
+                    return f"(not {inner})"
+                return f"(~({inner}) & {(1 << b.bits) - 1})"
+            return self.wrap(f"-({inner})", e.ty)
+        if isinstance(e, A.Binary):
+            return self.binary(e)
+        if isinstance(e, A.Call):
+            return self.call(e)
+        raise TypeError(f"cannot compile {type(e).__name__}")
+
+    _PYOP = {"=": "==", "<>": "!=", "<": "<", ">": ">", "<=": "<=", ">=": ">="}
+
+    def binary(self, e: A.Binary) -> str:
+        l, r = self.expr(e.left), self.expr(e.right)
+        op = e.op
+        ot = T.base_of(e.operand_ty) if e.operand_ty is not None else T.base_of(e.ty)
+        if op in self._PYOP:
+            return f"({l} {self._PYOP[op]} {r})"
+        if op in ("AND", "OR", "XOR"):
+            if ot is T.BOOL or T.base_of(e.ty) is T.BOOL:
+                if op == "XOR":
+                    return f"({l} != {r})"
+                # both sides evaluated, like the C code matiec generates for BOOL (no side effects lost)
+                return f"({l} {'and' if op == 'AND' else 'or'} {r})"
+            return f"({l} {'&' if op == 'AND' else '|' if op == 'OR' else '^'} {r})"
+        rt = e.ty
+        rb = T.base_of(rt)
+        if op == "**":
+            return self.wrap(f"_expt({l}, {r})", rt)
+        if op == "MOD":
+            return self.wrap(f"_imod({l}, {r})", rt)
+        if isinstance(rb, T.ElementaryType) and rb.kind == "time" and isinstance(ot, T.ElementaryType) and ot.is_num:
+            if op == "*":
+                return self.wrap(f"_time_mul({l}, {r})", rt)
+            return self.wrap(f"_time_div({l}, {r})", rt)
+        if op == "/":
+            if isinstance(ot, T.ElementaryType) and ot.is_real:
+                return self.wrap(f"_fdiv({l}, {r})", rt)
+            return self.wrap(f"_idiv({l}, {r})", rt)
+        return self.wrap(f"({l} {op} {r})", rt)
+
+    def call(self, c: A.Call) -> str:
+        en = next((a for a in c.args if a.key == "EN" and not a.is_output), None)
+        eno = next((a for a in c.args if a.key == "ENO" and a.is_output), None)
+        if c.pou is not None:
+            code = self.user_call(c)
+        else:
+            code = self.std_call(c)
+        if en is None and eno is None:
+            return code
+        en_code = self.expr(en.value) if en is not None else "True"
+        default = self.const(T.default_value(c.ty)) if c.ty is not None else "None"
+        call = f"({code} if _en else {default})"
+        if eno is not None:
+            setter = self.bind(None, "_eno")
+            self.ns[setter] = None
+            target = self.ref_to(eno.value, T.BOOL)
+            return f"(lambda _en: ({target}.set(_en), {call})[1])({en_code})"
+        return f"(lambda _en: {call})({en_code})"
+
+    def user_call(self, c: A.Call) -> str:
+        pou: A.PouDecl = c.pou
+        params = [d for d in pou.decls if d.section in ("VAR_INPUT", "VAR_OUTPUT", "VAR_IN_OUT")]
+        args = []
+        for a in c.args:
+            if a.key in ("EN", "ENO"):
+                continue
+            d = a.param
+            if d is None:
+                continue
+            if d.section == "VAR_INPUT":
+                args.append(f"{d.key}={self.expr_as(a.value, d.ty)}")
+            elif d.section == "VAR_OUTPUT":
+                target = self.ref_to(a.value, d.ty)
+                if a.negated:
+                    target = f"_NegRef({target})"
+                args.append(f"{d.key}={target}")
+            else:
+                args.append(f"{d.key}={self.ref_to(a.value, d.ty)}")
+        for d in params:
+            if d.section == "VAR_INPUT" and isinstance(d.init_value, (list, T.StructValue)) and \
+                    not any(a.param is d for a in c.args):
+                args.append(f"{d.key}={self.init_code(d.init_value)}")
+        return f"{_pyname('FC', pou.name)}({', '.join(args)})"
+
+    def std_call(self, c: A.Call) -> str:
+        args = [a for a in c.args if a.key not in ("EN", "ENO")]
+        names = getattr(c, "bound_params", [a.key for a in args])
+        arg_types = list(c.arg_types or [a.value.ty for a in args])
+        arg_types = [T.DINT if isinstance(t, _LitType) and t.kind == "int" else
+                     T.LREAL if isinstance(t, _LitType) else t for t in arg_types]
+        result = c.ty
+        if isinstance(result, _LitType):
+            result = T.DINT if result.kind == "int" else T.LREAL
+        fn = stdlib.lookup(c.std, arg_types, result)
+        fname = self.bind(fn, f"_{c.std.lower()}")
+        # arguments in the signature's order (formal calls may list them in any order)
+        ordered = sorted(zip(names, args), key=lambda na: _param_rank(na[0]))
+        return f"{fname}({', '.join(self.expr(a.value) for _n, a in ordered)})"
+
+
+def _param_rank(name: str) -> tuple:
+    order = {"G": 0, "K": 0, "MN": 1, "IN": 2, "MX": 3, "N": 3, "L": 4, "P": 5}
+    stem = name.rstrip("0123456789")
+    num = name[len(stem):]
+    return (order.get(stem, 2), int(num) if num else 0)
+
+
+class _Locals:
+    """The local variables of one FUNCTION call (an object, so they can be passed by reference)."""
+
+
+class _NegRef:
+    """`NOT out => v`: stores the negation of an output."""
+
+    __slots__ = ("ref",)
+
+    def __init__(self, ref: Ref):
+        self.ref = ref
+
+    def set(self, value: Any) -> None:
+        self.ref.set(not value)
+
+
+def compile_unit(checked: CheckedUnit) -> CompiledProgram:
+    return Compiler(checked).compile()

@@ -1,0 +1,429 @@
+"""The soft PLC: program instances, tasks, the scan cycle, located I/O, faults and retain.
+
+One tick (the base tick is the GCD of the task intervals):
+  1. apply writes queued by Modbus faces, copy the input image into located variables
+  2. run the PROGRAM instances whose task is due, in RESOURCE declaration order
+  3. copy located outputs / memory into the image
+This is OpenPLC's scan cycle; the clock that timers read advances by one base tick per scan
+(virtual time) or follows the wall clock (real time, see plclab.runtime.realtime).
+"""
+from __future__ import annotations
+
+import math
+import struct
+import sys
+import time
+from dataclasses import dataclass
+from typing import Any, Callable, Iterable, Optional
+
+from plclab.errors import PlcLabError
+from plclab.frontend import ast as A
+from plclab.frontend.checker import CheckedUnit
+from plclab.iec import types as T
+from plclab.runtime import stdlib
+from plclab.runtime.compiler import CompiledProgram, compile_unit
+from plclab.runtime.faults import FaultRecord, PlcFault
+from plclab.runtime.image import ProcessImage
+
+DEFAULT_TICK_NS = 20_000_000          # OpenPLC's default scan time when no task gives one
+DEFAULT_WATCHDOG_S = 2.0              # wall-clock limit of one scan
+LOOP_CHECK_EVERY = 4096
+
+RUN, FAULT, STOP = "RUN", "FAULT", "STOP"
+
+
+@dataclass
+class LocatedBinding:
+    """One located variable: where it lives in the program and in the process image."""
+
+    address: str          # '%IX1.6'
+    area: str             # 'IX' | 'QX' | 'IW' | 'QW' | 'MW' | 'MD' | 'ML'
+    index: int            # element index in the area (8 * byte + bit for bits)
+    owner: Any            # object holding the variable
+    attr: str             # attribute name on the owner
+    ty: T.Type
+    name: str             # qualified variable name ('' for anonymous AT declarations)
+    to_raw: Callable[[Any], int]
+    from_raw: Callable[[int], Any]
+
+    @property
+    def is_input(self) -> bool:
+        return self.area[0] == "I"
+
+
+def _converters(ty: T.Type, bits: int) -> tuple[Callable[[Any], int], Callable[[int], Any]]:
+    b = T.base_of(ty)
+    mask = (1 << bits) - 1
+    if b is T.BOOL:
+        return (lambda v: 1 if v else 0), (lambda r: bool(r))
+    if b is T.REAL:
+        return (lambda v: struct.unpack("<I", struct.pack("<f", v))[0]), \
+               (lambda r: struct.unpack("<f", struct.pack("<I", r & mask))[0])
+    if b is T.LREAL:
+        return (lambda v: struct.unpack("<Q", struct.pack("<d", v))[0]), \
+               (lambda r: struct.unpack("<d", struct.pack("<Q", r & mask))[0])
+    wrap = T.wrapper_for(b) or (lambda v: v)
+    return (lambda v: int(v) & mask), (lambda r: wrap(r & mask))
+
+
+_AREA_BITS = {"X": 1, "W": 16, "D": 32, "L": 64}
+
+
+class ProgramInstance:
+    """A PROGRAM instance bound to its task."""
+
+    def __init__(self, name: str, obj: Any, task: Optional[str], interval_ns: Optional[int], decl: Any):
+        self.name, self.obj, self.task, self.interval_ns, self.decl = name, obj, task, interval_ns, decl
+
+
+class PLC:
+    """A loaded program, ready to scan. Time is in nanoseconds of PLC time."""
+
+    def __init__(self, compiled: CompiledProgram, image: Optional[ProcessImage] = None,
+                 tick_ns: Optional[int] = None, watchdog_s: float = DEFAULT_WATCHDOG_S,
+                 retain: Any = None, retain_period_ns: int = 1_000_000_000):
+        self.compiled = compiled
+        self.checked: CheckedUnit = compiled.checked
+        self.image = image if image is not None else ProcessImage()
+        self.watchdog_s = watchdog_s
+        self.retain_store = retain
+        self.retain_period_ns = retain_period_ns
+        self._last_persist_ns = 0
+        self.state = STOP
+        self.fault: Optional[FaultRecord] = None
+        self.now_ns = 0
+        self.ticks = 0
+        self._loop_count = 0
+        self._scan_started = 0.0
+        self.scan_hooks: list[Callable[["PLC"], None]] = []
+        ns = compiled.namespace
+        ns["_rt"] = self
+        self.G = ns["G"]
+        self._setup_instances()
+        self.tick_ns = tick_ns or self._base_tick()
+        self._schedule = self._make_schedule()
+        self.bindings = self._bind_located()
+        self._inputs = [b for b in self.bindings if b.is_input]
+        self._outputs = [b for b in self.bindings if not b.is_input]
+        if self.retain_store is not None:
+            self.restore_retain()
+        self.state = RUN
+
+    # ------------------------------------------------------------------ construction
+    def _setup_instances(self) -> None:
+        ns = self.compiled.namespace
+        ns["_init_globals"]()
+        self.instances: list[ProgramInstance] = []
+        config = self.checked.config
+        if config is not None:
+            for res in config.resources:
+                for p in res.programs:
+                    if p.pou is None:
+                        continue
+                    cls = ns[self.compiled.program_classes[p.pou.key]]
+                    interval = p.task_decl.interval_ns if p.task_decl is not None else None
+                    self.instances.append(ProgramInstance(p.name, cls(), p.task, interval, p))
+        else:
+            # No CONFIGURATION (e.g. `plclab sim` on a lone PROGRAM): every PROGRAM runs each tick.
+            for pou in self.checked.unit.pous:
+                if pou.kind == "PROGRAM" and pou.key in self.compiled.program_classes:
+                    cls = ns[self.compiled.program_classes[pou.key]]
+                    self.instances.append(ProgramInstance(pou.name, cls(), None, None, None))
+        self.instance_by_name = {i.name.upper(): i for i in self.instances}
+
+    def _base_tick(self) -> int:
+        intervals = [i.interval_ns for i in self.instances if i.interval_ns]
+        if not intervals:
+            return DEFAULT_TICK_NS
+        return math.gcd(*intervals)
+
+    def _make_schedule(self) -> list[tuple[int, Callable[[], None]]]:
+        """(period in ticks, callable) in declaration order; period 1 = every tick."""
+        sched = []
+        for inst in self.instances:
+            period = 1
+            if inst.interval_ns:
+                period = max(1, inst.interval_ns // self.tick_ns)
+            sched.append((period, inst.obj))
+        return sched
+
+    def _bind_located(self) -> list[LocatedBinding]:
+        out = []
+        for key, d in self.checked.globals.items():
+            if d.location is not None and d.ty is not None:
+                attr = key if not key.startswith("%") else \
+                    f"_AT_{d.location.area}{d.location.size}{'_'.join(map(str, d.location.parts))}"
+                out.append(self._binding(d, self.G, attr, d.name))
+        for inst in self.instances:
+            pou = self.compiled.checked.pous.get(type(inst.obj)._ST_NAME.upper())
+            for d in pou.decls if pou else []:
+                if d.location is not None and d.ty is not None:
+                    attr = d.key if d.name else f"_AT_{id(d)}"
+                    out.append(self._binding(d, inst.obj, attr, f"{inst.name}.{d.name}" if d.name else ""))
+        return out
+
+    def _binding(self, d: A.VarDecl, owner: Any, attr: str, name: str) -> LocatedBinding:
+        loc = d.location
+        area = loc.area + loc.size
+        if loc.size == "X":
+            index = loc.parts[0] * 8 + loc.parts[1]
+            address = f"%{loc.area}X{loc.parts[0]}.{loc.parts[1]}"
+        else:
+            index = loc.parts[0]
+            address = f"%{area}{index}"
+        to_raw, from_raw = _converters(d.ty, _AREA_BITS[loc.size])
+        return LocatedBinding(address, area, index, owner, attr, d.ty, name, to_raw, from_raw)
+
+    # ------------------------------------------------------------------ hooks used by compiled code
+    def clock(self) -> int:
+        """PLC time in ns, as the standard timers read it (constant during one scan)."""
+        return self.now_ns
+
+    def loop_check(self) -> None:
+        """Called on every loop iteration: a scan that runs too long is a watchdog fault."""
+        self._loop_count += 1
+        if self._loop_count % LOOP_CHECK_EVERY == 0 and \
+                time.perf_counter() - self._scan_started > self.watchdog_s:
+            raise PlcFault("watchdog", f"scan exceeded the watchdog limit of {self.watchdog_s:g} s "
+                                       f"(endless loop?)")
+
+    @staticmethod
+    def init_fb(inst: Any, values: dict) -> Any:
+        for k, v in values.items():
+            setattr(inst, k, T.copy_value(v))
+        return inst
+
+    # ------------------------------------------------------------------ the scan
+    def read_inputs(self) -> None:
+        image = self.image
+        external = image.apply_pending()
+        areas = image.areas
+        for b in self._inputs:
+            setattr(b.owner, b.attr, b.from_raw(areas[b.area][b.index]))
+        if external:
+            for b in self._outputs:
+                setattr(b.owner, b.attr, b.from_raw(areas[b.area][b.index]))
+
+    def write_outputs(self) -> None:
+        outs = self._outputs
+
+        def publish(areas: dict) -> None:
+            for b in outs:
+                areas[b.area][b.index] = b.to_raw(getattr(b.owner, b.attr))
+        self.image.publish(publish)
+
+    def scan(self) -> bool:
+        """Run one tick at the current PLC time; returns False if the PLC is (now) faulted."""
+        if self.state != RUN:
+            return False
+        self.read_inputs()
+        tick = self.ticks
+        self._scan_started = time.perf_counter()
+        self._loop_count = 0
+        try:
+            for period, run in self._schedule:
+                if period == 1 or tick % period == 0:
+                    run()
+        except (PlcFault, stdlib.PlcRuntimeFault, ZeroDivisionError, OverflowError, RecursionError,
+                IndexError, ValueError, TypeError, AttributeError) as exc:
+            self._enter_fault(exc)
+            return False
+        self.write_outputs()
+        if self.retain_store is not None and self.now_ns - self._last_persist_ns >= self.retain_period_ns:
+            self._last_persist_ns = self.now_ns
+            self.persist_retain()
+        for hook in self.scan_hooks:
+            hook(self)
+        return True
+
+    def advance(self) -> None:
+        """Move PLC time to the next tick (virtual time)."""
+        self.ticks += 1
+        self.now_ns = self.ticks * self.tick_ns
+
+    # ------------------------------------------------------------------ faults
+    def _enter_fault(self, exc: BaseException) -> None:
+        kind = getattr(exc, "kind", None) or {
+            ZeroDivisionError: "division_by_zero", RecursionError: "stack_overflow",
+            IndexError: "index_out_of_range", OverflowError: "overflow",
+        }.get(type(exc), "internal")
+        message = getattr(exc, "message", None) or str(exc) or type(exc).__name__
+        where = self._locate(exc)
+        self.fault = FaultRecord(kind, message, where.pou if where else None,
+                                 where.file if where else None, where.line if where else None, self.now_ns)
+        self.state = FAULT
+        self._safe_outputs()
+
+    def _locate(self, exc: BaseException):
+        tb = exc.__traceback__
+        found = None
+        while tb is not None:
+            if tb.tb_frame.f_code.co_filename == self.compiled.filename:
+                info = self.compiled.where(tb.tb_lineno)
+                if info is not None:
+                    found = info
+            tb = tb.tb_next
+        return found
+
+    def _safe_outputs(self) -> None:
+        """FAULT: every output to FALSE / 0, as an OpenPLC runtime stopping does."""
+        def clear(areas: dict) -> None:
+            for area in ("QX", "QW"):
+                a = areas[area]
+                for i in range(len(a)):
+                    a[i] = 0
+        self.image.publish(clear)
+
+    def restart(self) -> None:
+        """Cold restart after a fault or stop: variables re-initialised, retain restored."""
+        ns = self.compiled.namespace
+        self._setup_instances()
+        self._schedule = self._make_schedule()
+        self.bindings = self._bind_located()
+        self._inputs = [b for b in self.bindings if b.is_input]
+        self._outputs = [b for b in self.bindings if not b.is_input]
+        if self.retain_store is not None:
+            self.restore_retain()
+        self.fault = None
+        self.state = RUN
+        del ns
+
+    def stop(self) -> None:
+        if self.retain_store is not None and self.state == RUN:
+            self.persist_retain()
+        self.state = STOP
+
+    # ------------------------------------------------------------------ retain
+    def retained(self) -> list[tuple[str, Any, str, T.Type]]:
+        """(path, owner, attribute, type) of every retained variable."""
+        out = []
+        for key in self.compiled.retained_globals:
+            d = self.checked.globals[key]
+            out.append((key, self.G, key, d.ty))
+        for inst in self.instances:
+            pou = self.checked.pous.get(type(inst.obj)._ST_NAME.upper())
+            if pou is None:
+                continue
+            for d in pou.decls:
+                if d.retain and d.name and d.section in ("VAR", "VAR_INPUT", "VAR_OUTPUT"):
+                    out.append((f"{inst.name.upper()}.{d.key}", inst.obj, d.key, d.ty))
+        return out
+
+    def retain_snapshot(self) -> dict[str, Any]:
+        from plclab.runtime.retain import to_json_value
+        return {path: to_json_value(getattr(owner, attr)) for path, owner, attr, _t in self.retained()}
+
+    def retain_signature(self) -> str:
+        from plclab.runtime.retain import signature
+        return signature((path, ty) for path, _o, _a, ty in self.retained())
+
+    def persist_retain(self) -> None:
+        if self.retain_store is not None and self.retained():
+            self.retain_store.save(self.retain_signature(), self.retain_snapshot())
+
+    def restore_retain(self) -> None:
+        from plclab.runtime.retain import from_json_value
+        items = self.retained()
+        if not items:
+            return
+        data = self.retain_store.load(self.retain_signature())
+        if data is None:
+            return
+        for path, owner, attr, ty in items:
+            if path not in data:
+                continue
+            if isinstance(ty, T.FBType):
+                inst = getattr(owner, attr)
+                for k, v in (data[path] or {}).get("fb", {}).items():
+                    if hasattr(inst, k):
+                        setattr(inst, k, v)
+            else:
+                setattr(owner, attr, from_json_value(data[path], ty))
+
+    # ------------------------------------------------------------------ access by name
+    def resolve(self, name: str) -> tuple[Any, Any]:
+        """(owner, attribute) of a located address, global name or `instance.var[.field]` path."""
+        up = name.strip().upper()
+        if up.startswith("%"):
+            for b in self.bindings:
+                if b.address == up:
+                    return b.owner, b.attr
+            raise PlcLabError(f"no variable is located at {name}")
+        parts = up.split(".")
+        if len(parts) == 1:
+            if hasattr(self.G, parts[0]):
+                return self.G, parts[0]
+            for inst in self.instances:
+                if hasattr(inst.obj, parts[0]) and parts[0] in getattr(type(inst.obj), "__slots__", ()):
+                    return inst.obj, parts[0]
+            raise PlcLabError(f"unknown variable '{name}'")
+        owner: Any
+        if parts[0] in self.instance_by_name:
+            owner = self.instance_by_name[parts[0]].obj
+        elif hasattr(self.G, parts[0]):
+            owner = getattr(self.G, parts[0])
+            parts = parts[1:]
+            if not parts:
+                return self.G, name.upper()
+            parts = [None] + parts  # type: ignore[list-item]
+        else:
+            raise PlcLabError(f"unknown variable '{name}'")
+        for p in parts[1:-1]:
+            try:
+                owner = getattr(owner, p)
+            except AttributeError:
+                raise PlcLabError(f"unknown variable '{name}'") from None
+        if not hasattr(owner, parts[-1]):
+            raise PlcLabError(f"unknown variable '{name}'")
+        return owner, parts[-1]
+
+    def read(self, name: str) -> Any:
+        owner, attr = self.resolve(name)
+        return getattr(owner, attr)
+
+    def write(self, name: str, value: Any) -> None:
+        """Set a variable (for inputs prefer the image: the next scan samples it)."""
+        up = name.strip().upper()
+        if up.startswith("%"):
+            for b in self.bindings:
+                if b.address == up:
+                    self.image.areas[b.area][b.index] = b.to_raw(value)
+                    if not b.is_input:
+                        setattr(b.owner, b.attr, b.from_raw(b.to_raw(value)))
+                    return
+            self.write_address(up, value)
+            return
+        owner, attr = self.resolve(name)
+        setattr(owner, attr, value)
+
+    def write_address(self, address: str, value: Any) -> None:
+        """Write a raw value into the image at an address no variable is located at."""
+        area, index = parse_address(address)
+        self.image.areas[area][index] = int(value) & ((1 << image_bits(area)) - 1)
+
+
+def image_bits(area: str) -> int:
+    return {"IX": 1, "QX": 1, "IW": 16, "QW": 16, "MW": 16, "MD": 32, "ML": 64}[area]
+
+
+def parse_address(address: str) -> tuple[str, int]:
+    """'%IX1.6' -> ('IX', 14); '%QW3' -> ('QW', 3). Raises PlcLabError on anything else."""
+    import re
+    m = re.fullmatch(r"%([IQM])([XWDL])?(\d+)(?:\.(\d+))?", address.strip().upper())
+    if not m:
+        raise PlcLabError(f"malformed address '{address}' (e.g. %IX0.0, %QW1)")
+    area = m.group(1) + (m.group(2) or "X")
+    if area not in ("IX", "QX", "IW", "QW", "MW", "MD", "ML"):
+        raise PlcLabError(f"{address}: not an OpenPLC area (%IX %QX %IW %QW %MW %MD %ML)")
+    n = int(m.group(3))
+    if area[1] == "X":
+        if m.group(4) is None or int(m.group(4)) > 7 or n > 99:
+            raise PlcLabError(f"{address}: a bit address is %{area}byte.bit with byte 0..99, bit 0..7")
+        return area, n * 8 + int(m.group(4))
+    if m.group(4) is not None or n > 1023:
+        raise PlcLabError(f"{address}: a word address is %{area}0..1023")
+    return area, n
+
+
+def load_plc(checked: CheckedUnit, **kwargs: Any) -> PLC:
+    return PLC(compile_unit(checked), **kwargs)

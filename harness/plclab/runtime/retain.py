@@ -1,0 +1,122 @@
+"""Retained variables on disk: written atomically, checked on load, set aside when bad.
+
+File format: JSON {"format": "plclab-retain-1", "signature": ..., "values": {path: value}}.
+The signature is a hash of the retained variables' names and types, so a file written by a
+different program is recognised and not silently poured into the wrong variables.
+"""
+from __future__ import annotations
+
+import hashlib
+import json
+import os
+import time
+from pathlib import Path
+from typing import Any, Iterable, Optional
+
+from plclab.iec import types as T
+
+FORMAT = "plclab-retain-1"
+
+
+def signature(items: Iterable[tuple[str, T.Type]]) -> str:
+    h = hashlib.sha256()
+    for path, ty in items:
+        h.update(f"{path}:{_type_text(ty)};".encode())
+    return h.hexdigest()[:16]
+
+
+def _type_text(ty: T.Type) -> str:
+    b = T.base_of(ty)
+    if isinstance(b, T.ArrayType):
+        return f"ARRAY{list(b.dims)}OF{_type_text(b.elem)}"
+    if isinstance(b, T.StructType):
+        return "STRUCT(" + ",".join(f"{k}:{_type_text(t)}" for k, (t, _i) in b.fields.items()) + ")"
+    if isinstance(b, T.FBType):
+        return f"FB:{b.name}"
+    return b.name
+
+
+def to_json_value(v: Any) -> Any:
+    if isinstance(v, list):
+        return [to_json_value(x) for x in v]
+    if isinstance(v, T.StructValue):
+        return {k: to_json_value(x) for k, x in v.__dict__.items()}
+    if isinstance(v, float) and (v != v or v in (float("inf"), float("-inf"))):
+        return {"float": repr(v)}
+    if isinstance(v, (bool, int, float, str)):
+        return v
+    if hasattr(v, "__slots__") or hasattr(v, "__dict__"):   # FB instance: its variables
+        names = getattr(type(v), "__slots__", None) or list(vars(v))
+        return {"fb": {n: to_json_value(getattr(v, n)) for n in names
+                       if not n.startswith("_") and not callable(getattr(v, n, None))}}
+    return None
+
+
+def from_json_value(data: Any, ty: T.Type) -> Any:
+    b = T.base_of(ty)
+    if isinstance(b, T.ArrayType):
+        return [from_json_value(x, b.elem) for x in data]
+    if isinstance(b, T.StructType):
+        return T.StructValue(**{k: from_json_value(data[k], t) if k in data else T.default_value(t)
+                                for k, (t, _i) in b.fields.items()})
+    if isinstance(data, dict) and "float" in data:
+        return float(data["float"])
+    if b is T.BOOL:
+        return bool(data)
+    if isinstance(b, T.ElementaryType) and b.is_real:
+        return float(data)
+    return data
+
+
+class RetainError(Exception):
+    pass
+
+
+class RetainStore:
+    """One retain file. `save` is atomic (temp file, fsync, rename); `load` never trusts a bad file."""
+
+    def __init__(self, path: str | Path, report=None):
+        self.path = Path(path)
+        self.report = report or (lambda msg: None)
+        self.last_problem: Optional[str] = None
+
+    def save(self, sig: str, values: dict[str, Any]) -> None:
+        self.path.parent.mkdir(parents=True, exist_ok=True)
+        tmp = self.path.with_name(self.path.name + f".tmp{os.getpid()}")
+        data = json.dumps({"format": FORMAT, "signature": sig, "saved_at": time.time(), "values": values},
+                          separators=(",", ":"))
+        with open(tmp, "w", encoding="utf-8") as f:
+            f.write(data)
+            f.flush()
+            os.fsync(f.fileno())
+        os.replace(tmp, self.path)
+        try:
+            dfd = os.open(self.path.parent, os.O_RDONLY)
+            try:
+                os.fsync(dfd)
+            finally:
+                os.close(dfd)
+        except OSError:
+            pass
+
+    def load(self, sig: str) -> Optional[dict[str, Any]]:
+        """The saved values, or None (no file, or a bad one that is reported and set aside)."""
+        if not self.path.exists():
+            return None
+        try:
+            data = json.loads(self.path.read_text(encoding="utf-8"))
+            if not isinstance(data, dict) or data.get("format") != FORMAT or not isinstance(data.get("values"), dict):
+                raise RetainError("not a plclab retain file")
+            if data.get("signature") != sig:
+                raise RetainError("it was written by a different program (retained variables differ)")
+            return data["values"]
+        except (OSError, UnicodeDecodeError, json.JSONDecodeError, RetainError) as e:
+            reason = e if isinstance(e, RetainError) else "corrupt or unreadable"
+            aside = self.path.with_name(self.path.name + f".bad-{int(time.time())}")
+            try:
+                os.replace(self.path, aside)
+            except OSError:
+                aside = self.path
+            self.last_problem = f"retain file {self.path}: {reason}; set aside as {aside.name}, starting with initial values"
+            self.report(self.last_problem)
+            return None
