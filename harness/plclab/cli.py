@@ -20,6 +20,34 @@ def _cmd_check(args: argparse.Namespace) -> int:
     return 0
 
 
+def _seconds(text: str) -> float:
+    """A duration on the command line: `10`, `2.5s`, `500ms`, `T#1m30s`."""
+    from plclab.frontend.literals import LiteralError, parse_time
+
+    t = text.strip()
+    try:
+        if t.upper().startswith(("T#", "TIME#")):
+            return parse_time(t) / 1e9
+        for suffix, scale in (("ms", 1e-3), ("s", 1.0), ("min", 60.0), ("m", 60.0), ("h", 3600.0)):
+            if t.lower().endswith(suffix) and t[:-len(suffix)].replace(".", "", 1).isdigit():
+                return float(t[:-len(suffix)]) * scale
+        value = float(t)
+    except (ValueError, LiteralError):
+        raise argparse.ArgumentTypeError(f"not a duration: '{text}' (e.g. 10, 2.5s, 500ms, T#1m)") from None
+    if value < 0 or value != value:
+        raise argparse.ArgumentTypeError(f"not a duration: '{text}'")
+    return value
+
+
+def _cmd_sim(args: argparse.Namespace) -> int:
+    from plclab.runtime.simcmd import run_sim
+
+    result = run_sim(args.files, duration_s=args.duration, inputs=args.inputs, csv=args.csv, vcd=args.vcd,
+                     plot=args.plot, watch=args.watch, tick_s=args.tick)
+    print(result.summary)
+    return 0 if result.fault is None else 1
+
+
 def build_parser() -> argparse.ArgumentParser:
     p = argparse.ArgumentParser(prog="plclab", description="IEC 61131-3 ST lab programs and soft-PLC harness")
     sub = p.add_subparsers(dest="command", metavar="COMMAND")
@@ -28,6 +56,18 @@ def build_parser() -> argparse.ArgumentParser:
     c = sub.add_parser("check", help="parse and type-check ST files (one compilation unit)")
     c.add_argument("files", nargs="+", metavar="FILE.st")
     c.set_defaults(func=_cmd_check)
+
+    c = sub.add_parser("sim", help="run any ST program in virtual time with scripted inputs; write traces")
+    c.add_argument("files", nargs="+", metavar="FILE.st")
+    c.add_argument("--duration", type=_seconds, required=True, metavar="T", help="simulated time (e.g. 10s)")
+    c.add_argument("--inputs", metavar="IN.csv", help="input script: rows time_s,name,value")
+    c.add_argument("--csv", metavar="OUT.csv", help="write the trace as CSV (time_s,name,value)")
+    c.add_argument("--vcd", metavar="OUT.vcd", help="write the trace as VCD (GTKWave)")
+    c.add_argument("--plot", metavar="OUT.png", help="write a PNG plot of the trace")
+    c.add_argument("--watch", action="append", default=[], metavar="NAME",
+                   help="also trace an internal variable (instance.var), repeatable")
+    c.add_argument("--tick", type=_seconds, metavar="T", help="base tick (default: GCD of task intervals)")
+    c.set_defaults(func=_cmd_sim)
     return p
 
 

@@ -162,11 +162,13 @@ class Checker:
             td.ty = ty
         return ty
 
-    def resolve_type(self, ref: A.TypeRef) -> Optional[T.Type]:
-        """The Type a declaration names (anonymous types get a generated name)."""
-        return self._make_type(ref, None, None)
+    def resolve_type(self, ref: A.TypeRef, scope: Optional[_Scope] = None) -> Optional[T.Type]:
+        """The Type a declaration names (anonymous types get a generated name). `scope` gives
+        the constants an inline array bound or string length may use (`ARRAY[0..N-1]`)."""
+        return self._make_type(ref, None, None, scope)
 
-    def _make_type(self, ref: A.TypeRef, name: Optional[str], init: Any) -> Optional[T.Type]:
+    def _make_type(self, ref: A.TypeRef, name: Optional[str], init: Any,
+                   scope: Optional[_Scope] = None) -> Optional[T.Type]:
         if isinstance(ref, A.NamedType):
             base = self._lookup_type(ref)
             if base is None:
@@ -187,7 +189,7 @@ class Checker:
                 return None
             length = 126
             if ref.length is not None:
-                length = self.const_int(ref.length, "a string length")
+                length = self.const_int(ref.length, "a string length", scope)
                 if length is None:
                     return None
                 if not 1 <= length <= 126:
@@ -200,8 +202,8 @@ class Checker:
         if isinstance(ref, A.ArrayTypeRef):
             dims = []
             for lo_e, hi_e in ref.ranges:
-                lo = self.const_int(lo_e, "an array bound")
-                hi = self.const_int(hi_e, "an array bound")
+                lo = self.const_int(lo_e, "an array bound", scope)
+                hi = self.const_int(hi_e, "an array bound", scope)
                 if lo is None or hi is None:
                     return None
                 if hi < lo:
@@ -327,8 +329,8 @@ class Checker:
         return Checker._std_fb_cache[key]
 
     # ------------------------------------------------------------------ constants and initial values
-    def const_int(self, e: A.Expr, what: str) -> Optional[int]:
-        v = self.const_value(e)
+    def const_int(self, e: A.Expr, what: str, scope: Optional[_Scope] = None) -> Optional[int]:
+        v = self.const_value(e, scope)
         if v is None or isinstance(v, bool) or not isinstance(v, int):
             self.error(e, f"{what} must be a constant integer expression")
             return None
@@ -523,7 +525,7 @@ class Checker:
         if d.section == "VAR_EXTERNAL":
             self._check_external(d)
             return
-        ty = self.resolve_type(d.type_ref)
+        ty = self.resolve_type(d.type_ref, _Scope(pou, names))
         d.ty = ty
         if ty is None:
             return

@@ -8,8 +8,9 @@ Robustness rules (a SCADA lab network has confused and hostile clients):
 - a frame whose MBAP header cannot be trusted (protocol id != 0, length field < 2 or > 254)
   closes that connection: the byte stream cannot be resynchronised;
 - a well-delimited but malformed PDU gets exception 03, an unknown function 01;
-- every read of a frame and every drain is bounded by `idle_timeout`, so a silent or
+- a whole request must arrive within `idle_timeout` of the previous one, so a silent or
   half-sent client costs one connection slot for at most that long, and never delays others;
+- a client that does not read its replies is not read from until it does (flow control);
 - at most `max_clients` connections; more are closed on accept;
 - each response goes out with one write (OpenPLC's PSM client reads each response once).
 """
@@ -17,6 +18,7 @@ from __future__ import annotations
 
 import asyncio
 import logging
+import socket
 import threading
 from collections.abc import Iterable
 
@@ -99,7 +101,7 @@ class ModbusTcpServer:
         self._ready = threading.Event()
         self._stopped = threading.Event()
         self._error: OSError | None = None
-        self._tasks: set[asyncio.Task] = set()
+        self._connections: set[_Connection] = set()
 
     # -- public API -----------------------------------------------------------------------
     @property
@@ -120,8 +122,9 @@ class ModbusTcpServer:
             raise ServerError(f"{self.name}: did not start listening within {timeout} s")
         if self._error is not None:
             self._thread.join(timeout)
+            reason = self._error.strerror or str(self._error)
             raise ServerError(f"{self.name}: cannot listen on {self.host}:{self._requested_port}: "
-                              f"{self._error.strerror or self._error}")
+                              f"{reason}")
         return self
 
     def request_stop(self) -> None:
@@ -159,100 +162,145 @@ class ModbusTcpServer:
             self._stopped.set()
             self._ready.set()
 
-    async def _main(self) -> None:
-        loop = asyncio.get_running_loop()
-        self._loop = loop
-        self._stop_event = asyncio.Event()
-        transports: set[asyncio.BaseTransport] = set()
-
-        def protocol() -> asyncio.StreamReaderProtocol:
-            return _TrackedProtocol(asyncio.StreamReader(loop=loop), self._serve_client, transports)
+    def _listen(self) -> socket.socket:
+        family, kind, proto, _name, address = socket.getaddrinfo(
+            self.host, self._requested_port, type=socket.SOCK_STREAM, flags=socket.AI_PASSIVE)[0]
+        sock = socket.socket(family, kind, proto)
         try:
-            server = await loop.create_server(protocol, self.host, self._requested_port,
-                                              reuse_address=True, backlog=128)
+            sock.setsockopt(socket.SOL_SOCKET, socket.SO_REUSEADDR, 1)
+            sock.bind(address)
+            sock.listen(128)
+            sock.setblocking(False)
+        except OSError:
+            sock.close()
+            raise
+        return sock
+
+    async def _main(self) -> None:
+        self._loop = asyncio.get_running_loop()
+        self._stop_event = asyncio.Event()
+        try:
+            listener = self._listen()
         except OSError as exc:
             self._error = exc
             return
-        self._port = server.sockets[0].getsockname()[1]
+        self._port = listener.getsockname()[1]
         self._ready.set()
         log.info("%s: listening on %s:%d", self.name, self.host, self._port)
+        accepting = asyncio.create_task(self._accept(listener))
         try:
             if not self._stop_requested:
                 await self._stop_event.wait()
         finally:
-            server.close()
-            # A connection accepted just before the stop gets its transport one or two loop
-            # iterations later (asyncio's accept is itself a task); let those complete so
-            # that every accepted connection is closed below. (The kernel resets those never
-            # accepted when the listening socket closes.)
-            for _ in range(3):
-                await asyncio.sleep(0)
-            # close() (not abort) still flushes a reply already written (PSM stop).
-            for transport in list(transports):
-                transport.close()
-            for task in list(self._tasks):
-                task.cancel()
-            await asyncio.gather(*self._tasks, return_exceptions=True)
-            await server.wait_closed()
+            accepting.cancel()
+            await asyncio.gather(accepting, return_exceptions=True)
+            listener.close()       # the kernel resets connections never accepted
+            for conn in list(self._connections):
+                conn.close()       # flushes a reply already written (the PSM stop reply)
+            await asyncio.sleep(0)
             log.info("%s: stopped", self.name)
 
-    async def _serve_client(self, reader: asyncio.StreamReader,
-                            writer: asyncio.StreamWriter) -> None:
-        if len(self._tasks) >= self.max_clients or self._stop_requested:
-            self.stats["refused"] += 1
-            writer.transport.abort()
-            return
-        task = asyncio.current_task()
-        assert task is not None
-        self._tasks.add(task)
-        self.stats["connections"] += 1
-        try:
-            await self._session(reader, writer)
-        except (asyncio.IncompleteReadError, ConnectionError, TimeoutError):
-            pass  # the client went away, or idled past the timeout
-        except asyncio.CancelledError:
-            pass  # server stopping; ending normally keeps asyncio from logging the cancel
-        finally:
-            self._tasks.discard(task)
-            if writer.transport.get_write_buffer_size():
-                writer.transport.abort()   # a client that does not read gets no more time
-            else:
-                writer.close()
-
-    async def _session(self, reader: asyncio.StreamReader, writer: asyncio.StreamWriter) -> None:
+    async def _accept(self, listener: socket.socket) -> None:
+        """Accept loop of our own: asyncio's Server can leak a socket accepted while it closes."""
+        loop = asyncio.get_running_loop()
         while True:
-            async with asyncio.timeout(self.idle_timeout):
-                header = await reader.readexactly(MBAP_SIZE)
-                transaction, protocol, length, unit = MBAP.unpack(header)
-                if protocol != 0 or not 2 <= length <= MAX_LENGTH_FIELD:
-                    self.stats["bad_frames"] += 1
-                    log.info("%s: closing a connection: bad MBAP header %s", self.name,
-                             header.hex())
-                    return
-                pdu = await reader.readexactly(length - 1)
-            if self.unit_ids is not None and unit not in self.unit_ids:
-                self.stats["ignored"] += 1
+            try:
+                sock, _peer = await loop.sock_accept(listener)
+            except OSError as exc:   # e.g. out of file descriptors: back off, keep serving
+                log.warning("%s: accept failed: %s", self.name, exc)
+                await asyncio.sleep(0.1)
                 continue
-            response = handle_pdu(self.register_map, pdu)
-            self.stats["requests"] += 1
-            writer.write(frame(transaction, unit, response))
-            async with asyncio.timeout(self.idle_timeout):
-                await writer.drain()
+            if len(self._connections) >= self.max_clients or self._stop_requested:
+                self.stats["refused"] += 1
+                sock.close()
+                continue
+            self.stats["connections"] += 1
+            try:
+                await loop.connect_accepted_socket(lambda: _Connection(self), sock)
+            except OSError:
+                sock.close()
+
+    def _handle_frame(self, transaction: int, unit: int, pdu: bytes) -> bytes | None:
+        """The response ADU for one request frame, or None to send nothing."""
+        if self.unit_ids is not None and unit not in self.unit_ids:
+            self.stats["ignored"] += 1
+            return None
+        self.stats["requests"] += 1
+        return frame(transaction, unit, handle_pdu(self.register_map, pdu))
 
 
-class _TrackedProtocol(asyncio.StreamReaderProtocol):
-    """StreamReaderProtocol that records its transport, so stop() can close every connection."""
+class _Connection(asyncio.Protocol):
+    """One client: frames are cut from the byte stream by their MBAP length and answered in
+    order, synchronously (a request never waits on anything but the image lock)."""
 
-    def __init__(self, reader: asyncio.StreamReader, callback, transports: set):
-        super().__init__(reader, callback)
-        self._transports = transports
-        self._tracked: asyncio.BaseTransport | None = None
+    def __init__(self, server: ModbusTcpServer):
+        self.server = server
+        self.transport: asyncio.Transport | None = None
+        self.buffer = bytearray()
+        self.timer: asyncio.TimerHandle | None = None
 
     def connection_made(self, transport: asyncio.BaseTransport) -> None:
-        self._tracked = transport
-        self._transports.add(transport)
-        super().connection_made(transport)
+        assert isinstance(transport, asyncio.Transport)
+        self.transport = transport
+        transport.set_write_buffer_limits(high=64 * 1024)
+        sock = transport.get_extra_info("socket")
+        if sock is not None:
+            sock.setsockopt(socket.IPPROTO_TCP, socket.TCP_NODELAY, 1)
+        self.server._connections.add(self)
+        self._arm()
 
     def connection_lost(self, exc: Exception | None) -> None:
-        self._transports.discard(self._tracked)
-        super().connection_lost(exc)
+        if self.timer is not None:
+            self.timer.cancel()
+        self.server._connections.discard(self)
+
+    def data_received(self, data: bytes) -> None:
+        self.buffer += data
+        server = self.server
+        while len(self.buffer) >= MBAP_SIZE and not server._stop_requested:
+            transaction, protocol, length, unit = MBAP.unpack_from(self.buffer)
+            if protocol != 0 or not 2 <= length <= MAX_LENGTH_FIELD:
+                server.stats["bad_frames"] += 1
+                log.info("%s: closing a connection: bad MBAP header %s", server.name,
+                         bytes(self.buffer[:MBAP_SIZE]).hex())
+                self.close()
+                return
+            end = MBAP_SIZE - 1 + length
+            if len(self.buffer) < end:
+                break
+            pdu = bytes(self.buffer[MBAP_SIZE:end])
+            del self.buffer[:end]
+            reply = server._handle_frame(transaction, unit, pdu)
+            if reply is not None and self.transport is not None:
+                self.transport.write(reply)
+            self._arm()
+
+    def pause_writing(self) -> None:
+        """The client does not read its replies: stop reading its requests until it does."""
+        if self.transport is not None:
+            self.transport.pause_reading()
+
+    def resume_writing(self) -> None:
+        if self.transport is not None and not self.transport.is_closing():
+            self.transport.resume_reading()
+
+    def close(self) -> None:
+        transport = self.transport
+        if transport is None or transport.is_closing():
+            return
+        if transport.get_write_buffer_size():
+            transport.abort()      # a client that does not read gets no more time
+        else:
+            transport.close()
+
+    def _arm(self) -> None:
+        """(Re)start the idle timer: a whole request must arrive within idle_timeout."""
+        if self.timer is not None:
+            self.timer.cancel()
+        timeout = self.server.idle_timeout
+        if timeout is not None and self.transport is not None:
+            self.timer = asyncio.get_running_loop().call_later(timeout, self._idle)
+
+    def _idle(self) -> None:
+        log.debug("%s: closing an idle connection", self.server.name)
+        self.close()

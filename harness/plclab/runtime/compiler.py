@@ -22,10 +22,7 @@ from plclab.frontend.checker import CheckedUnit, EnumValue, _LitType
 from plclab.frontend.stdsigs import FBSig
 from plclab.iec import types as T
 from plclab.runtime import stdlib
-try:
-    from plclab.runtime import stdfb
-except ImportError:  # pragma: no cover - being written
-    stdfb = None
+from plclab.runtime import stdfb
 from plclab.runtime.faults import PlcFault
 
 
@@ -49,56 +46,11 @@ class Ref:
             setattr(o, self.attr, value)
 
 
-def _idiv(a: int, b: int) -> int:
-    """C integer division: truncates toward zero; division by zero is a runtime fault."""
-    if b == 0:
-        raise PlcFault("division_by_zero", "integer division by zero")
-    q = abs(a) // abs(b)
-    return q if (a < 0) == (b < 0) else -q
-
-
-def _imod(a: int, b: int) -> int:
-    """C `%`: the result has the dividend's sign; MOD by zero is a runtime fault."""
-    if b == 0:
-        raise PlcFault("division_by_zero", "MOD by zero")
-    r = abs(a) % abs(b)
-    return -r if a < 0 else r
-
-
-def _fdiv(a: float, b: float) -> float:
-    """REAL division as IEEE 754 does it in C (x/0.0 is +-inf or nan, not a fault)."""
-    try:
-        return a / b
-    except ZeroDivisionError:
-        if a == 0 or a != a:
-            return math.nan
-        return math.copysign(math.inf, a) * math.copysign(1.0, b)
-
-
-def _expt(a: float, b: float) -> float:
-    try:
-        return math.pow(a, b)
-    except (ValueError, OverflowError):
-        return math.nan if a < 0 else math.inf
-
-
 def _bound(i: int, lo: int, hi: int) -> int:
     """Array index check: out of range is a runtime fault (C would overrun memory)."""
     if lo <= i <= hi:
         return i - lo
     raise PlcFault("index_out_of_range", f"array index {i} outside {lo}..{hi}")
-
-
-def _time_mul(t: int, k: Any) -> int:
-    return int(t * k)
-
-
-def _time_div(t: int, k: Any) -> int:
-    if k == 0:
-        raise PlcFault("division_by_zero", "TIME division by zero")
-    if isinstance(k, float):
-        return int(t / k)
-    return _idiv(t, k)
 
 
 @dataclass
@@ -153,9 +105,9 @@ class Compiler:
         self.consts: dict[str, Any] = {}
         self.const_ids: dict[int, str] = {}
         self.ns: dict[str, Any] = {
-            "_idiv": _idiv, "_imod": _imod, "_fdiv": _fdiv, "_expt": _expt, "_bound": _bound,
+            "_bound": _bound,
             "_f32": T.to_f32, "_copy": T.copy_value, "Ref": Ref, "PlcFault": PlcFault,
-            "_time_mul": _time_mul, "_time_div": _time_div, "_StructValue": T.StructValue,
+            "_StructValue": T.StructValue,
             "_Locals": _Locals, "_NegRef": _NegRef,
         }
         self.tmp = itertools.count()
@@ -197,6 +149,9 @@ class Compiler:
         if isinstance(b, _LitType) or b is None:
             return code
         if isinstance(b, T.ElementaryType):
+            if b.kind in ("sint", "uint") and b.bits < 32:
+                # C promotes SINT/INT/USINT/UINT operands to int: the intermediate is 32-bit
+                return f"((({code}) + 2147483648) & 4294967295) - 2147483648"
             if b.kind == "sint":
                 half = 1 << (b.bits - 1)
                 return f"((({code}) + {half}) & {(1 << b.bits) - 1}) - {half}"
@@ -441,7 +396,7 @@ class Compiler:
                           f"or {step_v} == 0 and {var_code} != {end_v}: break", s)
         out.emit(ind + 1, "_rt.loop_check()", s)
         self.one_shot_body(s.body, f"_x{next(self.tmp)}", ind + 1)
-        self.assign(s.var, self.wrap(f"{var_code} + {step_v}", vt), ind + 1, s)
+        self.assign(s.var, self.narrow(self.wrap(f"{var_code} + {step_v}", vt), vt), ind + 1, s)
 
     # ------------------------------------------------------------------ assignment
     def assign(self, target: A.Expr, value_code: str, ind: int, node: Any, value: Optional[A.Expr] = None) -> None:
@@ -574,7 +529,23 @@ class Compiler:
 
     # ------------------------------------------------------------------ expressions
     def expr_as(self, e: A.Expr, ty: Optional[T.Type]) -> str:
-        return self.expr(e)
+        """`e` as stored into a variable of type `ty`: a promoted small-integer arithmetic
+        result is narrowed here, as the C assignment matiec generates narrows it."""
+        code = self.expr(e)
+        if isinstance(e, (A.Binary, A.Unary)):
+            return self.narrow(code, ty)
+        return code
+
+    @staticmethod
+    def narrow(code: str, ty: Optional[T.Type]) -> str:
+        b = T.base_of(ty) if ty is not None else None
+        if isinstance(b, T.ElementaryType) and b.kind in ("sint", "uint", "bits") and b.bits < 32:
+            mask = (1 << b.bits) - 1
+            if b.kind == "sint":
+                half = 1 << (b.bits - 1)
+                return f"((({code}) + {half}) & {mask}) - {half}"
+            return f"(({code}) & {mask})"
+        return code
 
     def expr(self, e: A.Expr) -> str:
         if isinstance(e, A.Literal):
@@ -607,33 +578,31 @@ class Compiler:
 
     _PYOP = {"=": "==", "<>": "!=", "<": "<", ">": ">", "<=": "<=", ">=": ">="}
 
+    def operator(self, op: str, arg_types: list, result: T.Type) -> str:
+        """A module-level name bound to the standard library's implementation of `op`."""
+        fn = stdlib.lookup_operator(op, arg_types, result)
+        return self.bind(fn, "_op")
+
     def binary(self, e: A.Binary) -> str:
         l, r = self.expr(e.left), self.expr(e.right)
         op = e.op
-        ot = T.base_of(e.operand_ty) if e.operand_ty is not None else T.base_of(e.ty)
+        lt = _concrete(e.left.ty)
+        rt_ = _concrete(e.right.ty)
+        ot = T.base_of(_concrete(e.operand_ty)) if e.operand_ty is not None else T.base_of(lt)
+        rt = _concrete(e.ty)
+        rb = T.base_of(rt)
         if op in self._PYOP:
+            if isinstance(ot, T.StringType):
+                return f"{self.operator(op, [lt, rt_], T.BOOL)}({l}, {r})"
             return f"({l} {self._PYOP[op]} {r})"
         if op in ("AND", "OR", "XOR"):
-            if ot is T.BOOL or T.base_of(e.ty) is T.BOOL:
+            if ot is T.BOOL or rb is T.BOOL:
                 if op == "XOR":
                     return f"({l} != {r})"
-                # both sides evaluated, like the C code matiec generates for BOOL (no side effects lost)
                 return f"({l} {'and' if op == 'AND' else 'or'} {r})"
             return f"({l} {'&' if op == 'AND' else '|' if op == 'OR' else '^'} {r})"
-        rt = e.ty
-        rb = T.base_of(rt)
-        if op == "**":
-            return self.wrap(f"_expt({l}, {r})", rt)
-        if op == "MOD":
-            return self.wrap(f"_imod({l}, {r})", rt)
-        if isinstance(rb, T.ElementaryType) and rb.kind == "time" and isinstance(ot, T.ElementaryType) and ot.is_num:
-            if op == "*":
-                return self.wrap(f"_time_mul({l}, {r})", rt)
-            return self.wrap(f"_time_div({l}, {r})", rt)
-        if op == "/":
-            if isinstance(ot, T.ElementaryType) and ot.is_real:
-                return self.wrap(f"_fdiv({l}, {r})", rt)
-            return self.wrap(f"_idiv({l}, {r})", rt)
+        if op in ("/", "MOD", "**") or (op == "*" and isinstance(rb, T.ElementaryType) and rb.kind == "time"):
+            return f"{self.operator(op, [lt, rt_], rt)}({l}, {r})"
         return self.wrap(f"({l} {op} {r})", rt)
 
     def call(self, c: A.Call) -> str:
@@ -693,7 +662,14 @@ class Compiler:
         fname = self.bind(fn, f"_{c.std.lower()}")
         # arguments in the signature's order (formal calls may list them in any order)
         ordered = sorted(zip(names, args), key=lambda na: _param_rank(na[0]))
-        return f"{fname}({', '.join(self.expr(a.value) for _n, a in ordered)})"
+        types = dict(zip(names, arg_types))
+        return f"{fname}({', '.join(self.expr_as(a.value, types.get(n)) for n, a in ordered)})"
+
+
+def _concrete(t: Optional[T.Type]) -> Optional[T.Type]:
+    if isinstance(t, _LitType):
+        return T.DINT if t.kind == "int" else T.LREAL
+    return t
 
 
 def _param_rank(name: str) -> tuple:

@@ -251,6 +251,10 @@ def _time_to_real(t: int) -> float:
     return float(sec) + float(nsec) / 1e9
 
 
+time_to_seconds = _time_to_real     # __time_to_real: TIME_TO_LREAL, used by stdfb too
+ieee_div = _fdiv                    # C float division, used by stdfb too
+
+
 def _real_to_time(x: float) -> int:
     """iec_std_lib.h __real_to_time: x is a number of *seconds*."""
     sec = _cvtt(x, 64)
@@ -792,6 +796,8 @@ def _make_add_mul(name: str) -> Builder:
         if not k:
             return None
         w = _wrapper(t)
+        if len(args) == 2:                             # the common case, without *args
+            return (lambda a, b: w(a + b)) if is_add else (lambda a, b: w(a * b))
         if k == "int":
             if is_add:
                 return lambda *xs: w(sum(xs))
@@ -1139,8 +1145,8 @@ def _make_compare(name: str) -> Builder:
                 return name == "NE"
             return test(c)
 
-        if name == "NE":
-            return lambda a, b: ok(a, b)
+        if name == "NE" or len(args) == 2:
+            return ok
 
         def chain(*xs: Any) -> bool:              # GT(a, b, c) = a > b AND b > c
             for a, b in zip(xs, xs[1:]):
@@ -1651,6 +1657,6 @@ def lookup_operator(op: str, arg_types: Sequence[Type], result_type: Type) -> Fn
 
 __all__ = [
     "FUNCTIONS", "NoSuchFunction", "Param", "PlcRuntimeFault", "Signature", "STR_MAX_LEN",
-    "c_double_to", "lookup", "lookup_operator", "match", "result_type", "short_name",
-    "type_matches",
+    "c_double_to", "ieee_div", "lookup", "lookup_operator", "match", "result_type", "short_name",
+    "time_to_seconds", "type_matches",
 ]

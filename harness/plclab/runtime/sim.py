@@ -1,0 +1,208 @@
+"""Virtual time: the PLC (and optionally a plant model) advanced in lockstep, with a trace.
+
+Timing convention (labs.md, OpenPLC's scan loop): the first scan runs at t = 0; an input
+event at time t is seen by the first scan at or after t; a change a scan produces is stamped
+with that scan's time. Plants are plain objects with `step(image, dt_ns)` that read outputs
+from and write inputs to the process image; they know nothing of ST.
+"""
+from __future__ import annotations
+
+import bisect
+from dataclasses import dataclass
+from typing import Any, Callable, Iterable, Optional, Protocol
+
+from plclab.errors import PlcLabError
+from plclab.iec import types as T
+from plclab.runtime.plc import PLC, RUN, image_bits, parse_address
+from plclab.trace import Recorder, Trace
+
+
+class Plant(Protocol):
+    def step(self, image: Any, dt_ns: int) -> None: ...
+
+
+@dataclass(frozen=True)
+class InputEvent:
+    time_ns: int
+    name: str
+    value: Any
+
+
+def _kind(ty: T.Type) -> tuple[str, Optional[int]]:
+    b = T.base_of(ty)
+    if b is T.BOOL:
+        return "bool", None
+    if isinstance(b, T.ElementaryType):
+        if b.is_real:
+            return "real", None
+        if b.kind in ("sint", "uint", "bits"):
+            return "int", b.bits
+        return "int", 64
+    if isinstance(b, T.EnumType) or isinstance(b, T.StringType):
+        return "str", None
+    return "str", None
+
+
+class Simulation:
+    """Drives one PLC (and plants) in virtual time and records a trace."""
+
+    def __init__(self, plc: PLC, plants: Iterable[Plant] = (), watch: Iterable[str] = (),
+                 record_located: bool = True, extra_addresses: Iterable[str] = ()):
+        self.plc = plc
+        self.plants = list(plants)
+        self.trace = Trace()
+        self._events: list[InputEvent] = []
+        self._event_times: list[int] = []
+        self._next_event = 0
+        self._names: list[str] = []
+        self._getters: list[Callable[[], Any]] = []
+        seen = set()
+        if record_located:
+            for b in sorted(plc.bindings, key=lambda b: (b.area[0] != "I", b.area, b.index)):
+                if b.address in seen:
+                    continue
+                seen.add(b.address)
+                self._add_signal(b.address, b.ty, self._binding_getter(b))
+        for addr in extra_addresses:
+            area, index = parse_address(addr)
+            norm = _format_address(area, index)
+            if norm in seen:
+                continue
+            seen.add(norm)
+            ty = T.BOOL if area[1] == "X" else {"W": T.WORD, "D": T.DWORD, "L": T.LWORD}[area[1]]
+            arr = plc.image.areas[area]
+            self._add_signal(norm, ty, (lambda a=arr, i=index: bool(a[i])) if area[1] == "X"
+                             else (lambda a=arr, i=index: a[i]))
+        for name in watch:
+            owner, attr = plc.resolve(name)
+            value = getattr(owner, attr)
+            ty = self._type_of(name, value)
+            self._add_signal(name, ty, lambda o=owner, a=attr: getattr(o, a))
+        self.recorder = Recorder(self.trace, names=self._names)
+        self.fault_reported = False
+
+    @staticmethod
+    def _binding_getter(b) -> Callable[[], Any]:
+        owner, attr = b.owner, b.attr
+        return lambda: getattr(owner, attr)
+
+    def _type_of(self, name: str, value: Any) -> T.Type:
+        if isinstance(value, bool):
+            return T.BOOL
+        if isinstance(value, int):
+            return T.LINT
+        if isinstance(value, float):
+            return T.LREAL
+        if isinstance(value, str):
+            return T.STRING
+        raise PlcLabError(f"'{name}' is not an elementary variable; watch one of its elements or fields")
+
+    def _add_signal(self, name: str, ty: T.Type, getter: Callable[[], Any]) -> None:
+        kind, width = _kind(ty)
+        self.trace.declare(name, kind, getter(), 0, width=width)
+        self._names.append(name)
+        self._getters.append(getter)
+
+    # ------------------------------------------------------------------ inputs
+    def schedule(self, events: Iterable[InputEvent]) -> None:
+        """Add scripted input events (applied before the first scan at or after their time)."""
+        for ev in events:
+            self._resolve_target(ev.name)   # fail now, with the name, not in the middle of a run
+            i = bisect.bisect_right(self._event_times, ev.time_ns)
+            self._event_times.insert(i, ev.time_ns)
+            self._events.insert(i, ev)
+
+    def _resolve_target(self, name: str) -> None:
+        if name.strip().startswith("%"):
+            parse_address(name)
+        else:
+            self.plc.resolve(name)
+
+    def set(self, name: str, value: Any) -> None:
+        """Set an input address or a variable now (seen by the next scan)."""
+        plc = self.plc
+        if name.strip().startswith("%"):
+            area, index = parse_address(name)
+            for b in plc.bindings:
+                if b.area == area and b.index == index:
+                    plc.image.areas[area][index] = b.to_raw(_coerce(value, b.ty))
+                    return
+            plc.image.areas[area][index] = int(value) & ((1 << image_bits(area)) - 1)
+        else:
+            owner, attr = plc.resolve(name)
+            current = getattr(owner, attr)
+            setattr(owner, attr, _coerce_like(value, current))
+
+    # ------------------------------------------------------------------ time
+    @property
+    def now_ns(self) -> int:
+        return self.plc.now_ns
+
+    @property
+    def now(self) -> float:
+        return self.plc.now_ns / 1e9
+
+    @property
+    def tick(self) -> float:
+        return self.plc.tick_ns / 1e9
+
+    def step(self, ticks: int = 1) -> None:
+        """Run `ticks` scans: plant, scripted inputs, scan, record, advance."""
+        plc = self.plc
+        dt = plc.tick_ns
+        events, times = self._events, self._event_times
+        getters = self._getters
+        record = self.recorder.record
+        for _ in range(ticks):
+            now = plc.now_ns
+            for plant in self.plants:
+                plant.step(plc.image, dt if plc.ticks else 0)
+            while self._next_event < len(events) and times[self._next_event] <= now:
+                ev = events[self._next_event]
+                self.set(ev.name, ev.value)
+                self._next_event += 1
+            plc.scan()
+            record(now, [g() for g in getters])
+            plc.advance()
+        self.trace.advance(plc.now_ns - dt if plc.ticks else 0)
+
+    def run(self, seconds: float) -> None:
+        """Advance by `seconds` of plant time (rounded up to whole ticks)."""
+        ticks = -(-round(seconds * 1e9) // self.plc.tick_ns)
+        self.step(ticks)
+
+    def run_until(self, predicate: Callable[["Simulation"], bool], timeout: float) -> bool:
+        """Scan until `predicate(sim)` holds (checked after each scan) or `timeout` s pass."""
+        end = self.plc.now_ns + round(timeout * 1e9)
+        while self.plc.now_ns <= end:
+            self.step(1)
+            if predicate(self):
+                return True
+        return False
+
+
+def _coerce(value: Any, ty: T.Type) -> Any:
+    b = T.base_of(ty)
+    if b is T.BOOL:
+        return bool(int(value)) if not isinstance(value, bool) else value
+    if isinstance(b, T.ElementaryType) and b.is_real:
+        return float(value)
+    if isinstance(b, T.ElementaryType):
+        return int(value)
+    return value
+
+
+def _coerce_like(value: Any, current: Any) -> Any:
+    if isinstance(current, bool):
+        return bool(int(value)) if not isinstance(value, bool) else value
+    if isinstance(current, int):
+        return int(value)
+    if isinstance(current, float):
+        return float(value)
+    return value
+
+
+def _format_address(area: str, index: int) -> str:
+    if area[1] == "X":
+        return f"%{area}{index // 8}.{index % 8}"
+    return f"%{area}{index}"
