@@ -48,6 +48,13 @@ def _cmd_sim(args: argparse.Namespace) -> int:
     return 0 if result.fault is None else 1
 
 
+def _cmd_bench(args: argparse.Namespace) -> int:
+    from plclab.bench import run_bench
+
+    run_bench(quick=args.quick)
+    return 0
+
+
 def build_parser() -> argparse.ArgumentParser:
     p = argparse.ArgumentParser(prog="plclab", description="IEC 61131-3 ST lab programs and soft-PLC harness")
     sub = p.add_subparsers(dest="command", metavar="COMMAND")
@@ -68,6 +75,10 @@ def build_parser() -> argparse.ArgumentParser:
                    help="also trace an internal variable (instance.var), repeatable")
     c.add_argument("--tick", type=_seconds, metavar="T", help="base tick (default: GCD of task intervals)")
     c.set_defaults(func=_cmd_sim)
+
+    c = sub.add_parser("bench", help="performance figures: front end, scan cost, virtual-time speed-up, Modbus")
+    c.add_argument("--quick", action="store_true", help="shorter runs")
+    c.set_defaults(func=_cmd_bench)
     return p
 
 

@@ -202,6 +202,11 @@ class Checker:
         if isinstance(ref, A.ArrayTypeRef):
             dims = []
             for lo_e, hi_e in ref.ranges:
+                bad = next((b for b in (lo_e, hi_e) if not (_is_signed_integer(b) or isinstance(b, A.Name))), None)
+                if bad is not None:
+                    self.error(bad, "an array bound must be an integer literal or the name of a constant "
+                                    "(OpenPLC's compiler accepts no expression here)")
+                    return None
                 lo = self.const_int(lo_e, "an array bound", scope)
                 hi = self.const_int(hi_e, "an array bound", scope)
                 if lo is None or hi is None:
@@ -262,7 +267,7 @@ class Checker:
                 self.error(ref, f"a subrange needs an integer base type, not {base.name}")
                 return None
             for bound in (ref.lo, ref.hi):
-                if not (isinstance(bound, A.Literal) and bound.kind == "int" and bound.type_name is None):
+                if not _is_signed_integer(bound):
                     self.error(bound, "a subrange bound must be an integer literal")
                     return None
             lo = self.const_int(ref.lo, "a subrange bound")
@@ -487,7 +492,7 @@ class Checker:
         if not block.decls:
             self.error(block, f"empty {sec} block: OpenPLC's compiler needs at least one declaration")
         located = [d for d in block.decls if d.location is not None]
-        if located and len(located) != len(block.decls):
+        if located and len(located) != len(block.decls) and sec != "VAR_GLOBAL":
             plain = next(d for d in block.decls if d.location is None)
             first = located[0]
             bad = plain if plain.line > first.line or (plain.line == first.line and plain.col > first.col) else first
@@ -511,7 +516,7 @@ class Checker:
             return
         if d.key in RESERVED_WORDS:
             self.error(d, f"'{d.name}' is a reserved word of OpenPLC's compiler; it cannot name a variable")
-            return
+            # still declared below, so its uses do not add a cascade of "undeclared" errors
         if d.key in T.ELEMENTARY:
             self.error(d, f"'{d.name}' is a type name; it cannot name a variable")
             return
@@ -681,6 +686,15 @@ class Checker:
             ret.init_value = T.default_value(pou.ret_ty)
             names[pou.key] = ret
             pou.ret_decl = ret  # type: ignore[attr-defined]
+        if pou.kind != "PROGRAM" and "ENO" not in names:
+            # matiec adds EN and ENO to every function and FB; the body may read and write ENO
+            # (a BOOL output, TRUE when the call starts). It is in `symbols`, not in `blocks`.
+            eno = A.VarDecl(line=pou.line, col=pou.col, file=pou.file, name="ENO",
+                            type_ref=A.NamedType(line=pou.line, col=pou.col, file=pou.file, name="BOOL"),
+                            section="VAR_OUTPUT")
+            eno.ty, eno.init_value = T.BOOL, True
+            names["ENO"] = eno
+            pou.eno_decl = eno  # type: ignore[attr-defined]
         pou.symbols = names
 
     # ------------------------------------------------------------------ bodies
@@ -1626,6 +1640,11 @@ class Checker:
         if isinstance(e, A.Call):
             return f"{e.name}(...)"
         return "expression"
+
+
+def _is_signed_integer(e: A.Expr) -> bool:
+    """A plain decimal integer literal, optionally signed (`5`, `-5`): matiec's signed_integer."""
+    return isinstance(e, A.Literal) and e.kind == "int" and e.type_name is None and "#" not in e.text
 
 
 def check_unit(unit: A.Unit) -> CheckedUnit:

@@ -500,6 +500,11 @@ class _Builder(Transformer):
         name = children[0]
         return A.Call(**self._tok(name), name=str(name), args=[a for a in children[1:] if a is not None])
 
+    def call_operator_name(self, meta, children):
+        # `AND(a, b)`, `MOD(a, b)`: standard functions whose names are also operator keywords
+        name = children[0]
+        return A.Call(**self._tok(name), name=str(name).upper(), args=[a for a in children[1:] if a is not None])
+
     def name(self, meta, children):
         (tok,) = children
         return A.Name(**self._tok(tok), name=str(tok))
@@ -587,7 +592,24 @@ def _grammar() -> str:
 
 @lru_cache(maxsize=1)
 def _parser_for_errors() -> Lark:
-    return Lark(_grammar(), parser="lalr", lexer="contextual", propagate_positions=True)
+    return Lark(_grammar(), parser="lalr", lexer="contextual", propagate_positions=True,
+                lexer_callbacks={"IDENT": _reject_keyword})
+
+
+@lru_cache(maxsize=1)
+def _keywords() -> frozenset[str]:
+    """Every word the grammar uses as a keyword (never an identifier). Elementary type names
+    may reach the parser as IDENT in type positions; the checker refuses them as names."""
+    words = set(re.findall(r'^[A-Z_]+:\s*"([A-Z_]+)"i', _grammar(), re.M))
+    return frozenset(words)
+
+
+def _reject_keyword(tok: Token) -> Token:
+    # The contextual lexer lets `IF` through as an identifier where no keyword fits (e.g. a
+    # variable name); matiec's lexer never does, so neither do we.
+    if tok.value.upper() in _keywords():
+        raise _Positioned(tok.line, tok.column, f"'{tok.value}' is a reserved word; it cannot be used as a name")
+    return tok
 
 
 def _make_parser(file: str) -> Lark:
@@ -647,6 +669,8 @@ def parse_source(text: str, file: str) -> tuple[A.Unit | None, list[Diagnostic]]
         return None, [_syntax_error(file, e, text)]
     except UnexpectedEOF as e:
         return None, [Diagnostic(file, text.count("\n") + 1, 1, "unexpected end of file")]
+    except _Positioned as e:
+        return None, [Diagnostic(file, e.line, e.col, e.message)]
     except VisitError as e:
         orig = e.orig_exc
         if isinstance(orig, _Positioned):

@@ -242,11 +242,15 @@ def wrap_int(value: int, t: ElementaryType) -> int:
     return value
 
 
+_F32 = struct.Struct("f")
+_f32_pack, _f32_unpack = _F32.pack, _F32.unpack
+
+
 def to_f32(x: float) -> float:
-    """Round a Python float to IEEE single precision (REAL)."""
+    """Round a Python float to IEEE single precision (REAL); on the hot path of every REAL operation."""
     try:
-        return struct.unpack("f", struct.pack("f", x))[0]
-    except OverflowError:
+        return _f32_unpack(_f32_pack(x))[0]
+    except OverflowError:   # beyond the REAL range: C's float conversion gives +-inf
         return float("inf") if x > 0 else float("-inf")
 
 

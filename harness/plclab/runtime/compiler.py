@@ -580,7 +580,7 @@ class Compiler:
 
     def operator(self, op: str, arg_types: list, result: T.Type) -> str:
         """A module-level name bound to the standard library's implementation of `op`."""
-        fn = stdlib.lookup_operator(op, arg_types, result)
+        fn = stdlib.lookup_operator(op, [_lib_type(t) for t in arg_types], _lib_type(result))
         return self.bind(fn, "_op")
 
     def binary(self, e: A.Binary) -> str:
@@ -653,12 +653,8 @@ class Compiler:
         args = [a for a in c.args if a.key not in ("EN", "ENO")]
         names = getattr(c, "bound_params", [a.key for a in args])
         arg_types = list(c.arg_types or [a.value.ty for a in args])
-        arg_types = [T.DINT if isinstance(t, _LitType) and t.kind == "int" else
-                     T.LREAL if isinstance(t, _LitType) else t for t in arg_types]
-        result = c.ty
-        if isinstance(result, _LitType):
-            result = T.DINT if result.kind == "int" else T.LREAL
-        fn = stdlib.lookup(c.std, arg_types, result)
+        arg_types = [_concrete(t) for t in arg_types]
+        fn = stdlib.lookup(c.std, [_lib_type(t) for t in arg_types], _lib_type(c.ty))
         fname = self.bind(fn, f"_{c.std.lower()}")
         # arguments in the signature's order (formal calls may list them in any order)
         ordered = sorted(zip(names, args), key=lambda na: _param_rank(na[0]))
@@ -669,6 +665,16 @@ class Compiler:
 def _concrete(t: Optional[T.Type]) -> Optional[T.Type]:
     if isinstance(t, _LitType):
         return T.DINT if t.kind == "int" else T.LREAL
+    return t
+
+
+def _lib_type(t: Optional[T.Type]) -> Optional[T.Type]:
+    """The type the standard library knows `t` by: literal types made concrete, and every
+    STRING / STRING[n] (the checker makes one StringType per declaration) as T.STRING,
+    since the library's functions do not depend on the declared length."""
+    t = _concrete(t)
+    if t is not None and isinstance(T.base_of(t), T.StringType):
+        return T.STRING
     return t
 
 

@@ -1,0 +1,63 @@
+"""`plclab bench`: the performance figures (targets live here, not in timed tests).
+
+Goals (issues 2, 3, 4): parse + check of a 5,000-line program under 0.5 s; a 10 ms-tick
+program of about 300 statements at least 500 times faster than real time in virtual time;
+Modbus requests per second and latency for 1 and 10 clients, and scan jitter under that load.
+"""
+from __future__ import annotations
+
+import time
+from pathlib import Path
+from typing import Callable, Optional
+
+PROGRAMS_DIR = Path(__file__).resolve().parents[2] / "tests" / "programs"
+
+
+def bench_program(path: Path, sim_seconds: float = 20.0) -> dict:
+    """Microseconds per scan and virtual-time speed-up of one program (best of 3 runs)."""
+    from plclab.frontend import load_files
+    from plclab.runtime.compiler import compile_unit
+    from plclab.runtime.plc import PLC
+    from plclab.runtime.sim import Simulation
+
+    checked = load_files([path])
+    best = None
+    for _ in range(3):
+        plc = PLC(compile_unit(checked))
+        sim = Simulation(plc)
+        t0 = time.perf_counter()
+        sim.run(sim_seconds)
+        elapsed = time.perf_counter() - t0
+        best = elapsed if best is None or elapsed < best else best
+    scans = round(sim_seconds * 1e9 / plc.tick_ns)
+    return {"program": path.name, "tick_ms": plc.tick_ns / 1e6, "scans": scans,
+            "us_per_scan": best / scans * 1e6, "speedup": sim_seconds / best}
+
+
+def run_bench(report: Callable[[str], None] = print, quick: bool = False,
+              programs: Optional[list[Path]] = None) -> dict:
+    results: dict = {}
+    try:
+        from plclab.frontend.bench import bench_frontend
+        fe = bench_frontend(5000)
+        results["frontend"] = fe
+        report(f"front end: parse + check of {fe['lines']} lines: {fe['parse_check_s'] * 1000:.0f} ms "
+               f"(goal < {fe['goal_s'] * 1000:.0f} ms)")
+    except ImportError:
+        report("front end: benchmark not available")
+    results["programs"] = []
+    for path in programs or sorted(PROGRAMS_DIR.glob("*.st")):
+        r = bench_program(path, 5.0 if quick else 20.0)
+        results["programs"].append(r)
+        goal = "  (goal >= 500x)" if path.name == "bench300.st" else ""
+        report(f"scan: {r['program']}: {r['us_per_scan']:.1f} us/scan at {r['tick_ms']:g} ms tick, "
+               f"{r['speedup']:.0f}x real time{goal}")
+    try:
+        from plclab.modbus.bench import bench_modbus
+        mb = bench_modbus(1.0 if quick else 3.0)
+        results["modbus"] = mb
+        for key, value in mb.items():
+            report(f"modbus: {key}: {value}")
+    except ImportError:
+        report("modbus: benchmark not available")
+    return results

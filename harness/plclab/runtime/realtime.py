@@ -1,0 +1,97 @@
+"""Real time: scan on the wall clock, drift-compensated, overruns counted.
+
+The deadline of tick k is `start + k * tick` (not "last scan + tick"), so a late scan does
+not shift every later one; a scan that starts more than one tick late is an overrun, and the
+missed ticks are skipped (counted), as a PLC's cyclic task would. PLC time (what the timers
+read) is the wall-clock time since start, like OpenPLC's __CURRENT_TIME.
+"""
+from __future__ import annotations
+
+import threading
+import time
+from dataclasses import dataclass, field
+from typing import Any, Callable, Iterable, Optional
+
+from plclab.runtime.plc import PLC
+
+
+@dataclass
+class RealTimeStats:
+    ticks: int = 0
+    overruns: int = 0
+    skipped_ticks: int = 0
+    max_lateness_s: float = 0.0
+    lateness: list[float] = field(default_factory=list)   # per-scan start lateness (bounded)
+
+    def jitter_s(self) -> tuple[float, float]:
+        """(p50, p99) of the scan start lateness, seconds."""
+        if not self.lateness:
+            return 0.0, 0.0
+        xs = sorted(self.lateness)
+        return xs[len(xs) // 2], xs[min(len(xs) - 1, int(len(xs) * 0.99))]
+
+
+class RealTimeRunner:
+    """Runs a PLC (and plants) on the wall clock in a background thread."""
+
+    MAX_SAMPLES = 100_000
+
+    def __init__(self, plc: PLC, plants: Iterable[Any] = (), on_scan: Optional[Callable[[PLC], None]] = None,
+                 clock: Callable[[], float] = time.monotonic, sleep: Callable[[float], None] = time.sleep):
+        self.plc = plc
+        self.plants = list(plants)
+        self.on_scan = on_scan
+        self.stats = RealTimeStats()
+        self._clock, self._sleep = clock, sleep
+        self._stop = threading.Event()
+        self._thread: Optional[threading.Thread] = None
+
+    def start(self) -> None:
+        self._thread = threading.Thread(target=self._loop, name="plc-scan", daemon=True)
+        self._thread.start()
+
+    def stop(self, timeout: float = 5.0) -> None:
+        self._stop.set()
+        if self._thread is not None:
+            self._thread.join(timeout)
+        self.plc.stop()
+
+    def run_for(self, seconds: float) -> None:
+        """Run in the calling thread for `seconds` of wall time (tests, benchmarks)."""
+        self._loop(until=self._clock() + seconds)
+
+    def _loop(self, until: Optional[float] = None) -> None:
+        plc = self.plc
+        tick_s = plc.tick_ns / 1e9
+        start = self._clock()
+        k = 0
+        last_scan_ns = 0
+        stats = self.stats
+        while not self._stop.is_set():
+            deadline = start + k * tick_s
+            now = self._clock()
+            if until is not None and deadline > until:
+                break
+            if now < deadline:
+                self._sleep(deadline - now)
+                now = self._clock()
+            late = now - deadline
+            if late > tick_s:
+                missed = int(late // tick_s)
+                stats.overruns += 1
+                stats.skipped_ticks += missed
+                k += missed
+            stats.max_lateness_s = max(stats.max_lateness_s, late)
+            if len(stats.lateness) < self.MAX_SAMPLES:
+                stats.lateness.append(late)
+            now_ns = int((now - start) * 1e9)
+            for plant in self.plants:
+                plant.step(plc.image, now_ns - last_scan_ns)
+            last_scan_ns = now_ns
+            plc.now_ns = now_ns
+            plc.ticks = k
+            plc.scan()
+            if self.on_scan is not None:
+                self.on_scan(plc)
+            stats.ticks += 1
+            k += 1

@@ -1,0 +1,131 @@
+"""Retain: persisted atomically, restored on start, a bad file is reported and set aside."""
+from __future__ import annotations
+
+import json
+import os
+import random
+import signal
+import subprocess
+import sys
+import textwrap
+import time
+from pathlib import Path
+
+import pytest
+
+from plclab.frontend import check_sources
+from plclab.runtime.compiler import compile_unit
+from plclab.runtime.plc import PLC
+from plclab.runtime.retain import RetainStore
+
+COUNTER = """
+PROGRAM main
+VAR RETAIN count : DINT; frames : ARRAY[1..4] OF INT; END_VAR
+VAR scratch : INT; END_VAR
+count := count + 1;
+frames[1] := DINT_TO_INT(count MOD 1000);
+scratch := scratch + 1;
+END_PROGRAM
+CONFIGURATION Config0 RESOURCE Res0 ON PLC
+TASK t (INTERVAL := T#10ms, PRIORITY := 0);
+PROGRAM inst WITH t : main;
+END_RESOURCE END_CONFIGURATION
+"""
+
+
+def make_plc(src: str, path: Path, **kw) -> PLC:
+    return PLC(compile_unit(check_sources([("retain.st", src)])), retain=RetainStore(path), **kw)
+
+
+def run_scans(plc: PLC, n: int) -> None:
+    for _ in range(n):
+        plc.scan()
+        plc.advance()
+
+
+def test_retained_values_survive_a_restart_and_plain_ones_do_not(tmp_path):
+    path = tmp_path / "retain.json"
+    plc = make_plc(COUNTER, path)
+    run_scans(plc, 25)
+    plc.stop()                                   # stop flushes
+    again = make_plc(COUNTER, path)
+    assert again.read("inst.count") == 25
+    assert again.read("inst.frames")[0] == 25
+    assert again.read("inst.scratch") == 0       # not RETAIN: back to its initial value
+
+
+def test_values_are_persisted_every_period_without_a_stop(tmp_path):
+    path = tmp_path / "retain.json"
+    plc = make_plc(COUNTER, path, retain_period_ns=100_000_000)   # every 100 ms of PLC time
+    run_scans(plc, 35)                                            # t = 0 .. 340 ms
+    saved = json.loads(path.read_text())["values"]["INST.COUNT"]
+    assert saved == 31        # last persisted at the scan of t = 300 ms (the 31st scan)
+
+
+def test_corrupt_file_is_reported_and_set_aside(tmp_path):
+    path = tmp_path / "retain.json"
+    path.write_text('{"format": "plclab-retain-1", "signature": "x", "values": {')   # truncated JSON
+    problems = []
+    plc = PLC(compile_unit(check_sources([("retain.st", COUNTER)])), retain=RetainStore(path, report=problems.append))
+    assert plc.read("inst.count") == 0
+    assert len(problems) == 1 and "corrupt" in problems[0] and "set aside" in problems[0]
+    assert not path.exists()
+    assert len(list(tmp_path.glob("retain.json.bad-*"))) == 1
+
+
+def test_file_of_another_program_is_not_used(tmp_path):
+    path = tmp_path / "retain.json"
+    plc = make_plc(COUNTER, path)
+    run_scans(plc, 5)
+    plc.stop()
+    other = COUNTER.replace("count : DINT", "count : INT").replace("count := count + 1", "count := count + 2") \
+        .replace("DINT_TO_INT(count MOD 1000)", "count MOD 1000")
+    problems = []
+    plc2 = PLC(compile_unit(check_sources([("retain.st", other)])), retain=RetainStore(path, report=problems.append))
+    assert plc2.read("inst.count") == 0
+    assert problems and "different program" in problems[0]
+
+
+CHILD = textwrap.dedent("""
+    import sys
+    from plclab.frontend import check_sources
+    from plclab.runtime.compiler import compile_unit
+    from plclab.runtime.plc import PLC
+    from plclab.runtime.retain import RetainStore
+    src = open(sys.argv[1]).read()
+    store = RetainStore(sys.argv[2])
+    plc = PLC(compile_unit(check_sources([("retain.st", src)])), retain=store, retain_period_ns=10_000_000)
+    print("start", plc.read("inst.count"), flush=True)
+    while True:
+        plc.scan(); plc.advance()
+        print(plc.read("inst.count"), flush=True)   # after the save of this scan completed
+""")
+
+
+def test_kill_9_at_random_moments_never_corrupts_the_file(tmp_path):
+    """Repeatedly kill a PLC that persists every scan; each time the file must load and hold
+    the last persisted state or the one being persisted at the kill."""
+    src = tmp_path / "retain.st"
+    src.write_text(COUNTER)
+    child = tmp_path / "child.py"
+    child.write_text(CHILD)
+    store_path = tmp_path / "retain.json"
+    rng = random.Random(1234)
+    sig = make_plc(COUNTER, tmp_path / "probe.json").retain_signature()
+    previous = 0
+    for _round in range(12):
+        proc = subprocess.Popen([sys.executable, str(child), str(src), str(store_path)],
+                                stdout=subprocess.PIPE, text=True)
+        first = proc.stdout.readline().split()
+        assert first[0] == "start" and int(first[1]) == previous      # restored what was persisted
+        time.sleep(rng.uniform(0.02, 0.25))
+        os.kill(proc.pid, signal.SIGKILL)
+        out, _ = proc.communicate(timeout=10)
+        printed = [int(x) for x in out.split()]
+        last_printed = printed[-1] if printed else previous
+        values = RetainStore(store_path).load(sig)
+        assert values is not None, "retain file unreadable after kill -9"
+        assert values["INST.COUNT"] in (last_printed, last_printed + 1)
+        assert not list(tmp_path.glob("retain.json.bad-*"))
+        previous = values["INST.COUNT"]
+    assert previous > 0
