@@ -477,3 +477,10 @@ def test_unknown_or_untyped_calls_raise_no_such_function():
         lookup("MOD", [REAL, REAL], REAL)
     with pytest.raises(NoSuchFunction):
         lookup_operator("*", [INT, TIME], TIME)  # __time_mul(number, TIME) does not compile
+
+
+def test_sized_strings_are_strings_for_every_lookup():
+    s20 = T.StringType("STRING", 20)          # STRING[20] is its own type object
+    assert call("STRING_TO_INT", [s20], INT, "42") == 42
+    assert call("MAX_STRING", [s20, STRING], STRING, "A", "B") == "B"
+    assert call("LEN", [s20], INT, "abc") == 3

@@ -43,6 +43,7 @@ ANY_BIT ANY_STRING ANY_DATE VAR_CONFIG VAR_ACCESS ACTION END_ACTION TRANSITION E
 INITIAL_STEP STEP END_STEP READ_WRITE READ_ONLY REF DREF REF_TO NULL""".split())
 DEFAULT_INT = T.DINT
 DEFAULT_REAL = T.LREAL
+_GENERIC_RESULT_DEFAULT = {"ANY_INT": T.DINT, "ANY_NBIT": T.DWORD}
 
 
 @dataclass(eq=False)
@@ -1118,10 +1119,13 @@ class Checker:
                     return None
         c.arg_types = [a.value.ty for _pn, _g, a in bound]
         c.bound_params = [pn for pn, _g, _a in bound]  # type: ignore[attr-defined]
-        if sig.name == "TRUNC" and expected is not None and T.in_generic(expected, "ANY_INT"):
-            return expected
         if sig.result == "T":
             return gen_t
+        if sig.result in T.GENERICS:
+            # TRUNC, UINT_TO_BCD...: the result type comes from where the call is used
+            if expected is not None and not isinstance(expected, _LitType) and T.in_generic(expected, sig.result):
+                return expected
+            return _GENERIC_RESULT_DEFAULT[sig.result]
         return T.ELEMENTARY[sig.result]
 
     # ------------------------------------------------------------------ lvalues

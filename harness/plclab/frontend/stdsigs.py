@@ -67,7 +67,10 @@ def _build() -> dict[str, FuncSig]:
         for t in ["USINT", "UINT", "UDINT", "ULINT"]:
             add(_f(f"{b}_BCD_TO_{t}", [("IN", b)], t))
             add(_f(f"{t}_TO_BCD_{b}", [("IN", t)], b))
-    add(_f("TRUNC", [("IN", "ANY_REAL")], "DINT"))
+    for t in ["USINT", "UINT", "UDINT", "ULINT"]:   # the overloaded BCD conversions
+        add(_f(f"BCD_TO_{t}", [("IN", "ANY_NBIT")], t))
+        add(_f(f"{t}_TO_BCD", [("IN", t)], "ANY_NBIT"))
+    add(_f("TRUNC", [("IN", "ANY_REAL")], "ANY_INT"))
 
     # Numeric, Table 23
     add(_f("ABS", [("IN", "ANY_NUM")], "T", ("IN",)))

@@ -187,38 +187,50 @@ class ModbusTcpServer:
         self._port = listener.getsockname()[1]
         self._ready.set()
         log.info("%s: listening on %s:%d", self.name, self.host, self._port)
-        accepting = asyncio.create_task(self._accept(listener))
+        loop = self._loop
+        attaching: set[asyncio.Task] = set()
+        loop.add_reader(listener.fileno(), self._accept, listener, attaching)
         try:
             if not self._stop_requested:
                 await self._stop_event.wait()
         finally:
-            accepting.cancel()
-            await asyncio.gather(accepting, return_exceptions=True)
+            # Nothing that holds an accepted socket is ever cancelled (a cancelled accept or
+            # attach can drop the socket unclosed): stop accepting, let attaches finish,
+            # then close every connection.
+            loop.remove_reader(listener.fileno())
             listener.close()       # the kernel resets connections never accepted
+            if attaching:
+                await asyncio.wait(attaching, timeout=5.0)
             for conn in list(self._connections):
                 conn.close()       # flushes a reply already written (the PSM stop reply)
             await asyncio.sleep(0)
             log.info("%s: stopped", self.name)
 
-    async def _accept(self, listener: socket.socket) -> None:
-        """Accept loop of our own: asyncio's Server can leak a socket accepted while it closes."""
-        loop = asyncio.get_running_loop()
-        while True:
+    def _accept(self, listener: socket.socket, attaching: set[asyncio.Task]) -> None:
+        """Reader callback of the listening socket: accept what is waiting, without awaiting."""
+        for _ in range(64):        # a burst at most, then let the loop serve the others
             try:
-                sock, _peer = await loop.sock_accept(listener)
-            except OSError as exc:   # e.g. out of file descriptors: back off, keep serving
+                sock, _peer = listener.accept()
+            except (BlockingIOError, InterruptedError):
+                return
+            except OSError as exc:  # e.g. out of file descriptors: keep serving the others
                 log.warning("%s: accept failed: %s", self.name, exc)
-                await asyncio.sleep(0.1)
-                continue
-            if len(self._connections) >= self.max_clients or self._stop_requested:
+                return
+            if len(self._connections) + len(attaching) >= self.max_clients or self._stop_requested:
                 self.stats["refused"] += 1
                 sock.close()
                 continue
             self.stats["connections"] += 1
-            try:
-                await loop.connect_accepted_socket(lambda: _Connection(self), sock)
-            except OSError:
-                sock.close()
+            sock.setblocking(False)
+            task = asyncio.get_running_loop().create_task(self._attach(sock))
+            attaching.add(task)
+            task.add_done_callback(attaching.discard)
+
+    async def _attach(self, sock: socket.socket) -> None:
+        try:
+            await asyncio.get_running_loop().connect_accepted_socket(lambda: _Connection(self), sock)
+        except OSError:
+            sock.close()
 
     def _handle_frame(self, transaction: int, unit: int, pdu: bytes) -> bytes | None:
         """The response ADU for one request frame, or None to send nothing."""

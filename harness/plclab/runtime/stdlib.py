@@ -1499,7 +1499,7 @@ def _build(name: str, args: tuple[Type, ...], res: Type) -> Fn:
     if m:
         src = T.ELEMENTARY[m.group(1)]
         dst = T.ELEMENTARY[m.group(2)] if m.group(2) else res
-        f = _bcd_encoder(src, dst) if (not args or base_of(args[0]) is base_of(src)) else None
+        f = _bcd_encoder(src, dst) if (not args or T.same_type(args[0], src)) else None
         if f is None:
             raise missing()
         return f
@@ -1514,7 +1514,7 @@ def _build(name: str, args: tuple[Type, ...], res: Type) -> Fn:
     m = _RE_CONV.match(name)
     if m:
         src, dst = T.ELEMENTARY[m.group(1)], T.ELEMENTARY[m.group(2)]
-        if args and base_of(args[0]) is not base_of(src):
+        if args and not T.same_type(args[0], src):    # STRING[n] is a STRING too
             raise missing()
         f = _converter(src, dst)
         if f is None:
@@ -1524,7 +1524,7 @@ def _build(name: str, args: tuple[Type, ...], res: Type) -> Fn:
     if m and m.group(1) in _BUILDERS:
         typed = base_of(T.ELEMENTARY[m.group(2)])
         generic = m.group(1)
-        if generic == "MUX" or not any(base_of(a) is typed for a in args):
+        if generic == "MUX" or not any(T.same_type(a, typed) for a in args):
             raise missing()
         return _build(generic, args, res)
     raise NoSuchFunction(f"{name} is not a standard function of OpenPLC's library")
