@@ -13,6 +13,7 @@ from modbus_support import TIMEOUT
 from plclab.errors import PlcLabError
 from plclab.modbus.psm import (ERROR_LIMIT, PsmClient, PsmError, PsmServer, drive_plant,
                                parse_location, psm_script)
+from plclab.modbus.rawclient import RawModbusClient, RawModbusError
 from plclab.runtime.image import ProcessImage
 
 
@@ -109,7 +110,6 @@ def test_openplc_psm_client_scan_exchange_and_stop(plant_image, psm_server):
 
 def test_register_50_only_stops_on_127_and_is_outside_qw(plant_image, psm_server):
     with PsmClient("127.0.0.1", psm_server.port, timeout=TIMEOUT) as client:
-        from plclab.modbus.rawclient import RawModbusClient, RawModbusError
         with RawModbusClient("127.0.0.1", psm_server.port, unit=0) as raw:
             raw.write_register(50, 5)
             assert raw.read_holding_registers(49, 2) == [0, 5]
@@ -181,7 +181,7 @@ def test_drive_plant_against_psm_server_until_stop(plant_image, psm_server):
         client.write_outputs(plc)
         for _ in range(int(TIMEOUT / 0.01)):
             client.read_inputs(plc)
-            if plc.get("IW", 0) == 42:
+            if plc.get_bit("IX", 0, 0) and plc.get("IW", 0) == 42:
                 break
             threading.Event().wait(0.01)
         assert plc.get_bit("IX", 0, 0) and plc.get("IW", 0) == 42

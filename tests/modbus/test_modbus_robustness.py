@@ -143,6 +143,16 @@ def test_silent_client_neither_blocks_others_nor_stays_forever(server, scan):
         assert scan.ticks > ticks
 
 
+def test_client_that_never_reads_its_replies_blocks_nobody(server, scan):
+    with connect(server.port) as hog:
+        hog.sendall(READ_QW0 * 8000)                        # ~90 kB of replies, never read
+        ticks = scan.ticks
+        for _ in range(20):
+            assert still_serves(server.port)
+        scan.sync()
+        assert scan.ticks > ticks
+
+
 def test_unit_id_filter_and_client_limit(image):
     with ModbusTcpServer(OpenPlcMap(image), "127.0.0.1", 0, unit_ids=[1], max_clients=2) as server:
         a = RawModbusClient("127.0.0.1", server.port, unit=1, timeout=TIMEOUT)

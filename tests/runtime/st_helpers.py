@@ -40,8 +40,8 @@ def once(decls: str, body: str, extra: str = "", **kw: Any) -> Simulation:
 
 
 def val(sim: Simulation, name: str) -> Any:
-    """Read `main.<name>` (or a qualified name / address if it contains '.' or '%')."""
-    if "." in name or name.startswith("%"):
+    """Read `main.<name>` (`name` may be `fb.out`); an address or `main.x` is read as is."""
+    if name.startswith("%") or name.upper().startswith("MAIN."):
         return sim.plc.read(name)
     return sim.plc.read(f"main.{name}")
 

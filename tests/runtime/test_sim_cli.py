@@ -39,7 +39,8 @@ def test_sim_writes_trace_with_input_seen_at_next_scan_and_timer_to_the_tick(fil
     rc = main(["sim", str(files["st"]), "--duration", "1s", "--inputs", str(files["in"]), "--csv", str(out)])
     assert rc == 0
     assert "100 scans of 10 ms" in capsys.readouterr().out
-    rows = list(csv.reader(out.open()))
+    with out.open() as f:
+        rows = list(csv.reader(f))
     assert rows[0] == ["time_s", "name", "value"]
     trace = read_csv(out)
     # the input changed at 0.055 s is seen by the first scan at or after it: 0.06 s

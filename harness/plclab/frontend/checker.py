@@ -661,7 +661,11 @@ class Checker:
     def _check_pou_decls(self, pou: A.PouDecl) -> None:
         names: dict[str, Any] = {}
         if pou.kind == "FUNCTION":
-            pou.ret_ty = self.resolve_type(pou.return_type)
+            ret = pou.return_type
+            if not (isinstance(ret, A.NamedType) or (isinstance(ret, A.StringTypeRef) and ret.length is None)):
+                self.error(ret, "a FUNCTION's return type must be a type name (declare an ARRAY, STRING[n], "
+                                "enumeration or subrange as a TYPE first)")
+            pou.ret_ty = self.resolve_type(ret)
             if isinstance(pou.ret_ty, T.FBType):
                 self.error(pou.return_type, "a FUNCTION cannot return a function block")
                 pou.ret_ty = None
@@ -678,8 +682,9 @@ class Checker:
                     self.error(d, f"'{d.name}' is the function's own name (its return value)")
                     continue
                 self._declare_var(d, names, pou)
-        if pou.kind == "FUNCTION" and not pou.blocks:
-            self.error(pou, f"FUNCTION '{pou.name}' declares no variables: OpenPLC's compiler needs at least one VAR block")
+        if not pou.blocks:
+            self.error(pou, f"{pou.kind} '{pou.name}' declares no variables: OpenPLC's compiler needs at least one "
+                            f"VAR block")
         if pou.kind == "FUNCTION" and pou.ret_ty is not None:
             ret = A.VarDecl(line=pou.line, col=pou.col, file=pou.file, name=pou.name,
                             type_ref=pou.return_type, section="RETURN")

@@ -1,0 +1,12 @@
+"""Modbus TCP faces of the soft PLC and OpenPLC's PSM I/O protocol.
+
+protocol  MBAP framing and PDU codec (exception codes 01/02/03 exactly)
+profiles  Twido register tables as data (THERMO)
+maps      register maps over the process image: OpenPlcMap, TwidoMap
+server    ModbusTcpServer: asyncio in its own thread, never blocking the scan
+psm       PSM plant-side server, PLC-side client, psm_script()
+rawclient a small independent client (tests, bench)
+bench     bench_modbus() for `plclab bench`
+
+Nothing is imported here, so `import plclab.modbus.psm` stays cheap and dependency-free.
+"""

@@ -8,6 +8,7 @@ ModbusException before anything is queued, so a refused write changes nothing.
 from __future__ import annotations
 
 import abc
+from collections.abc import Iterator
 from typing import Protocol
 
 from plclab.runtime.image import AREAS, WORD_AREA_SIZE
@@ -85,7 +86,8 @@ class OpenPlcMap(RegisterMap):
 
     A write to part of a %MD/%ML merges into the element's current value (read from a
     snapshot); two clients writing different halves of one element within the same tick can
-    lose one half. A write spanning two areas is queued per area.
+    lose one half. A request spanning two areas (e.g. holding 1020..1030) is read and queued
+    per area, so it is consistent within each area, not across them.
     """
 
     def __init__(self, image: ImageLike):
@@ -137,7 +139,7 @@ class OpenPlcMap(RegisterMap):
             raise _address_error(table, start, count, f"outside 0..{size - 1}")
 
     @staticmethod
-    def _segments(start: int, count: int):
+    def _segments(start: int, count: int) -> Iterator[tuple[int, str, int, int, int]]:
         """(segment start, area, words per element, lo, hi) for each area the span touches."""
         end = start + count
         bounds = [s for s, _a, _w in _HOLDING[1:]] + [_HOLDING_END]

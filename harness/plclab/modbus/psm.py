@@ -369,9 +369,9 @@ _SCRIPT = '''\
 # core/psm/main.py). OpenPLC starts this script and connects to it 2 s later, so the PSM
 # server is started first and the plant model imported afterwards.
 #
-# The plant reads the PLC outputs ({outputs}) with psm.get_var() and sets the PLC inputs
-# with psm.set_var(), once per plant period, until OpenPLC sends its stop request
-# (psm.should_quit()). The plant code is plain Python (no pymodbus needed) found in:
+# Once per plant period the plant reads PLC outputs ({outputs})
+# with psm.get_var() and sets PLC inputs with psm.set_var(), until OpenPLC sends its stop
+# request (psm.should_quit()). The plant code is plain Python (no pymodbus needed) found in:
 #     {harness}
 # Use contiguous %QW from %QW0: OpenPLC packs analog outputs without gaps.
 

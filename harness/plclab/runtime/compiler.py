@@ -151,10 +151,10 @@ class Compiler:
         if isinstance(b, T.ElementaryType):
             if b.kind in ("sint", "uint") and b.bits < 32:
                 # C promotes SINT/INT/USINT/UINT operands to int: the intermediate is 32-bit
-                return f"((({code}) + 2147483648) & 4294967295) - 2147483648"
+                return f"(((({code}) + 2147483648) & 4294967295) - 2147483648)"
             if b.kind == "sint":
                 half = 1 << (b.bits - 1)
-                return f"((({code}) + {half}) & {(1 << b.bits) - 1}) - {half}"
+                return f"(((({code}) + {half}) & {(1 << b.bits) - 1}) - {half})"
             if b.kind in ("uint", "bits"):
                 return f"(({code}) & {(1 << b.bits) - 1})"
             if b is T.REAL:
@@ -325,7 +325,8 @@ class Compiler:
                 self.block(s.else_body, ind + 1)
         elif isinstance(s, A.Case):
             sel = f"_c{next(self.tmp)}"
-            out.emit(ind, f"{sel} = {self.expr(s.selector)}", s)
+            # matiec: `<type> __case_expression = <selector>;` narrows a promoted value
+            out.emit(ind, f"{sel} = {self.expr_as(s.selector, s.selector.ty)}", s)
             first = True
             for br in s.branches:
                 conds = []
@@ -382,21 +383,26 @@ class Compiler:
         out.emit(ind, f"if {flag}: break")
 
     def for_(self, s: A.For, ind: int) -> None:
+        """FOR as matiec's generate_c_st.cc emits it: `v := start`, then a loop that tests
+        `v <= end` (with BY: `(step) > 0 ? v <= end : v >= end`, so BY 0 tests `>=`),
+        runs the body and does `v := v + step` (narrowed to v's type, so it can wrap). END
+        and BY are re-evaluated on every test, as C int expressions (not narrowed)."""
         out = self.out
         var_code = self.lvalue_get(s.var)
         vt = s.var.ty
-        start = self.expr_as(s.start, vt)
-        end_v = f"_e{next(self.tmp)}"
-        step_v = f"_s{next(self.tmp)}"
-        out.emit(ind, f"{step_v} = {self.expr_as(s.step, vt) if s.step is not None else '1'}", s)
-        self.assign(s.var, start, ind, s)
-        out.emit(ind, f"while True:", s)
-        out.emit(ind + 1, f"{end_v} = {self.expr_as(s.end, vt)}", s)
-        out.emit(ind + 1, f"if ({step_v} > 0 and {var_code} > {end_v}) or ({step_v} < 0 and {var_code} < {end_v}) "
-                          f"or {step_v} == 0 and {var_code} != {end_v}: break", s)
+        self.assign(s.var, self.expr_as(s.start, vt), ind, s)
+        out.emit(ind, "while True:", s)
+        end = self.expr(s.end)
+        if s.step is None:
+            test = f"{var_code} <= {end}"
+            step = "1"
+        else:
+            step = self.expr(s.step)
+            test = f"({var_code} <= {end}) if ({step}) > 0 else ({var_code} >= {end})"
+        out.emit(ind + 1, f"if not ({test}): break", s)
         out.emit(ind + 1, "_rt.loop_check()", s)
         self.one_shot_body(s.body, f"_x{next(self.tmp)}", ind + 1)
-        self.assign(s.var, self.narrow(self.wrap(f"{var_code} + {step_v}", vt), vt), ind + 1, s)
+        self.assign(s.var, self.narrow(self.wrap(f"{var_code} + ({step})", vt), vt), ind + 1, s)
 
     # ------------------------------------------------------------------ assignment
     def assign(self, target: A.Expr, value_code: str, ind: int, node: Any, value: Optional[A.Expr] = None) -> None:
@@ -533,7 +539,9 @@ class Compiler:
         result is narrowed here, as the C assignment matiec generates narrows it."""
         code = self.expr(e)
         if isinstance(e, (A.Binary, A.Unary)):
-            return self.narrow(code, ty)
+            code = self.narrow(code, ty)
+        if _is_double(e) and ty is not None and T.base_of(ty) is T.REAL:
+            code = f"_f32({code})"
         return code
 
     @staticmethod
@@ -543,7 +551,7 @@ class Compiler:
             mask = (1 << b.bits) - 1
             if b.kind == "sint":
                 half = 1 << (b.bits - 1)
-                return f"((({code}) + {half}) & {mask}) - {half}"
+                return f"(((({code}) + {half}) & {mask}) - {half})"
             return f"(({code}) & {mask})"
         return code
 
@@ -551,7 +559,7 @@ class Compiler:
         if isinstance(e, A.Literal):
             v = e.value
             tb = T.base_of(e.ty) if e.ty is not None else None
-            if tb is T.REAL and isinstance(v, (int, float)):
+            if tb is T.REAL and isinstance(v, (int, float)) and not _is_double(e):
                 v = T.to_f32(float(v))
             elif tb is not None and isinstance(tb, T.ElementaryType) and tb.is_real:
                 v = float(v)
@@ -568,7 +576,12 @@ class Compiler:
             if e.op == "NOT":
                 if b is T.BOOL:
                     return f"(not {inner})"
+                if b.bits < 32:
+                    # C's `~` on a promoted BYTE/WORD: an int (NOT 16#FF is -256 until stored)
+                    return f"(~({inner}))"
                 return f"(~({inner}) & {(1 << b.bits) - 1})"
+            if b is T.REAL and _is_double(e):
+                return f"(-({inner}))"
             return self.wrap(f"-({inner})", e.ty)
         if isinstance(e, A.Binary):
             return self.binary(e)
@@ -601,6 +614,14 @@ class Compiler:
                     return f"({l} != {r})"
                 return f"({l} {'and' if op == 'AND' else 'or'} {r})"
             return f"({l} {'&' if op == 'AND' else '|' if op == 'OR' else '^'} {r})"
+        if isinstance(rb, T.ElementaryType) and rb.kind in ("sint", "uint") and rb.bits < 32 \
+                and op in ("/", "MOD"):
+            # C computes SINT/INT/USINT/UINT operands as int: (a + b) / 2 does not overflow
+            lt = rt_ = rt = T.DINT
+        elif rb is T.REAL and _is_double(e):
+            # a REAL operand mixed with a double (untyped real literal, `**`): C double maths,
+            # rounded to REAL only where it is stored or passed
+            lt = rt_ = rt = T.LREAL
         if op in ("/", "MOD", "**") or (op == "*" and isinstance(rb, T.ElementaryType) and rb.kind == "time"):
             return f"{self.operator(op, [lt, rt_], rt)}({l}, {r})"
         return self.wrap(f"({l} {op} {r})", rt)
@@ -666,6 +687,24 @@ def _concrete(t: Optional[T.Type]) -> Optional[T.Type]:
     if isinstance(t, _LitType):
         return T.DINT if t.kind == "int" else T.LREAL
     return t
+
+
+def _is_double(e: A.Expr) -> bool:
+    """Whether the C that matiec generates computes REAL expression `e` as a double: an
+    untyped real literal is a C double constant (`0.1`, not `0.1f`), `**` is
+    `__expt((LREAL)a, (LREAL)b)`, and C promotes the other float operand of + - * / to
+    double. (So `r = 0.1` is FALSE for a REAL r even right after `r := 0.1`.)"""
+    if isinstance(e, A.Literal):
+        return e.kind == "real" and e.type_name is None
+    if isinstance(e, A.Binary):
+        if e.op == "**":
+            return True
+        if e.op in ("+", "-", "*", "/"):
+            return _is_double(e.left) or _is_double(e.right)
+        return False
+    if isinstance(e, A.Unary):
+        return e.op != "NOT" and _is_double(e.operand)
+    return False
 
 
 def _lib_type(t: Optional[T.Type]) -> Optional[T.Type]:
