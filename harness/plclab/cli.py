@@ -55,6 +55,102 @@ def _cmd_bench(args: argparse.Namespace) -> int:
     return 0
 
 
+def _load_config(path: Optional[str]):
+    from pathlib import Path
+
+    from plclab import config
+
+    if path is None:
+        default = Path("openplc.conf")
+        return config.load(default) if default.exists() else config.defaults()
+    if not Path(path).exists():
+        raise PlcLabError(f"{path}: no such configuration file")
+    return config.load(path)
+
+
+def _program_sources(stand_name: str, variant: Optional[str], program: Optional[list[str]], cfg) -> list:
+    from pathlib import Path
+
+    from plclab.frontend import read_source
+    from plclab.stands import get_stand, sources
+
+    files = program or ([str(cfg.program)] if cfg.program else None)
+    if files:
+        out = []
+        for f in files:
+            text, errs = read_source(f)
+            if errs:
+                raise CompileError(errs)
+            out.append((f, text))
+        return out
+    return sources(get_stand(stand_name), variant or cfg.variant)
+
+
+def _cmd_serve(args: argparse.Namespace) -> int:
+    import dataclasses
+
+    from plclab.serve import ServeOptions, serve_forever
+
+    conf = _load_config(args.config)
+    stand_cfg = conf.stand(args.stand)
+    modbus = conf.modbus
+    if args.port is not None:
+        modbus = dataclasses.replace(modbus, port=args.port)
+    if args.bind is not None:
+        modbus = dataclasses.replace(modbus, bind=args.bind)
+    srcs = _program_sources(args.stand, args.variant, args.program, stand_cfg)
+    plant = None
+    if stand_cfg.io == "inprocess":
+        from plclab.plants import make_plant
+        try:
+            plant = make_plant(args.stand)
+        except ModuleNotFoundError:
+            plant = None
+    profile = None
+    if stand_cfg.profile == "twido":
+        from plclab.modbus.profiles import TWIDO_PROFILES
+        profile = TWIDO_PROFILES[args.stand]
+    opts = ServeOptions(srcs, stand_cfg, modbus, plant, stand_cfg.profile, profile)
+    return serve_forever(opts, duration=args.duration)
+
+
+def _cmd_plant(args: argparse.Namespace) -> int:
+    from plclab.modbus.psm import PsmServer, drive_plant
+    from plclab.plants import make_plant
+    from plclab.runtime.image import ProcessImage
+
+    host, port = "127.0.0.1", 2605
+    if args.psm:
+        host, _, p = args.psm.rpartition(":")
+        try:
+            port = int(p)
+        except ValueError:
+            raise PlcLabError(f"--psm {args.psm}: expected HOST:PORT, e.g. 127.0.0.1:2605") from None
+        host = host or "127.0.0.1"
+    try:
+        plant = make_plant(args.stand)
+    except ModuleNotFoundError:
+        raise PlcLabError(f"stand '{args.stand}' has no plant model yet") from None
+    server = PsmServer(ProcessImage(), host, port).start()
+    print(f"{args.stand} plant serving OpenPLC PSM I/O on {host}:{server.port}; "
+          f"stops on 127 in holding register 50 or Ctrl-C", flush=True)
+    try:
+        drive_plant(plant, server)
+    except KeyboardInterrupt:
+        pass
+    finally:
+        server.stop()
+    print("plant stopped", flush=True)
+    return 0
+
+
+def _cmd_psm_script(args: argparse.Namespace) -> int:
+    from plclab.modbus.psm import psm_script
+
+    sys.stdout.write(psm_script(args.stand))
+    return 0
+
+
 def build_parser() -> argparse.ArgumentParser:
     p = argparse.ArgumentParser(prog="plclab", description="IEC 61131-3 ST lab programs and soft-PLC harness")
     sub = p.add_subparsers(dest="command", metavar="COMMAND")
@@ -75,6 +171,26 @@ def build_parser() -> argparse.ArgumentParser:
                    help="also trace an internal variable (instance.var), repeatable")
     c.add_argument("--tick", type=_seconds, metavar="T", help="base tick (default: GCD of task intervals)")
     c.set_defaults(func=_cmd_sim)
+
+    stands = ("mp9c", "tur10", "thermo")
+    c = sub.add_parser("serve", help="real time: soft PLC + plant + Modbus face until Ctrl-C")
+    c.add_argument("stand", choices=stands)
+    c.add_argument("--variant", choices=("baseline", "task1", "task2", "task3", "full"))
+    c.add_argument("--config", metavar="FILE", help="openplc.conf to use (default: ./openplc.conf)")
+    c.add_argument("--port", type=int, metavar="P", help="Modbus TCP port (overrides the config)")
+    c.add_argument("--bind", metavar="ADDR", help="address to listen on (default 127.0.0.1)")
+    c.add_argument("--program", nargs="+", metavar="FILE.st", help="run these ST files instead of the variant")
+    c.add_argument("--duration", type=_seconds, metavar="T", help="stop by itself after T (for scripts)")
+    c.set_defaults(func=_cmd_serve)
+
+    c = sub.add_parser("plant", help="only the plant model, as an OpenPLC PSM I/O server")
+    c.add_argument("stand", choices=stands)
+    c.add_argument("--psm", nargs="?", const="127.0.0.1:2605", default="127.0.0.1:2605", metavar="HOST:PORT")
+    c.set_defaults(func=_cmd_plant)
+
+    c = sub.add_parser("psm-script", help="print an OpenPLC PSM script (core/psm/main.py) running the plant")
+    c.add_argument("stand", choices=stands)
+    c.set_defaults(func=_cmd_psm_script)
 
     c = sub.add_parser("bench", help="performance figures: front end, scan cost, virtual-time speed-up, Modbus")
     c.add_argument("--quick", action="store_true", help="shorter runs")

@@ -45,10 +45,13 @@ def test_dint_and_udint_wrap_at_32_bits():
 def test_int_intermediates_are_promoted_to_c_int():
     # (a + b) / 2 with INT a = b = 30000: a + b = 60000 in C int, not -5536
     sim = once("VAR a : INT := 30000; b : INT := 30000; avg : INT; big : BOOL; m : INT;"
-               " p : INT := 300; q : INT := 200; r : INT; END_VAR",
-               "avg := (a + b) / 2; big := a + b > 32767; m := (a + b) MOD 7; r := (p * q) / 100;")
+               " p : INT := 300; q : INT := 200; r : INT; big2 : BOOL; s2 : INT; END_VAR",
+               "avg := (a + b) / 2; big := a + b > 32767; m := (a + b) MOD 7; r := (p * q) / 100;"
+               " big2 := (a + b) / 1 > 32767; s2 := (a + b) * 2 / 4;")
     assert val(sim, "avg") == 30000
     assert val(sim, "big") is True
+    assert val(sim, "big2") is True            # the quotient is an int too
+    assert val(sim, "s2") == 30000
     assert val(sim, "m") == 60000 % 7          # 1; wrapped first it would be -5536 MOD 7 = -6
     assert val(sim, "r") == 600
 

@@ -73,8 +73,8 @@ END_FUNCTION_BLOCK
 INOUT_FB = """
 FUNCTION_BLOCK Bump
 VAR_IN_OUT v : INT; END_VAR
-VAR_INPUT by : INT; END_VAR
-v := v + by;
+VAR_INPUT amount : INT; END_VAR
+v := v + amount;
 END_FUNCTION_BLOCK
 
 FUNCTION_BLOCK Swap
@@ -94,7 +94,7 @@ END_FUNCTION_BLOCK
 
 def test_in_out_scalar_is_passed_by_reference():
     sim = once("VAR x : INT := 5; y : INT := 1; b : Bump; END_VAR",
-               "b(v := x, by := 3); b(v := y, by := 4); b(v := x, by := 10);", INOUT_FB)
+               "b(v := x, amount := 3); b(v := y, amount := 4); b(v := x, amount := 10);", INOUT_FB)
     assert val(sim, "x") == 18
     assert val(sim, "y") == 5
 
@@ -121,7 +121,7 @@ Twice := n > 10;
 END_FUNCTION
 """
     sim = once("VAR p : Pt := (x := 3, y := 7); b : Bump; big : BOOL; END_VAR",
-               "b(v := p.y, by := 1); big := Twice(p.x); big := Twice(p.x);", extra)
+               "b(v := p.y, amount := 1); big := Twice(p.x); big := Twice(p.x);", extra)
     assert val(sim, "p.y") == 8
     assert val(sim, "p.x") == 12
     assert val(sim, "big") is True
@@ -199,10 +199,10 @@ END_FUNCTION
 # --------------------------------------------------------------------------- initial values
 
 def test_array_initial_values_with_repetition_and_2d():
-    sim = once("VAR a : ARRAY[1..8] OF INT := [1, 2, 3(7), 2(0, 5)]; m : ARRAY[0..1, 0..2] OF INT :="
+    sim = once("VAR a : ARRAY[1..8] OF INT := [1, 2, 3(7), 2(-1), 5]; m : ARRAY[0..1, 0..2] OF INT :="
                " [1, 2, 3, 4, 5, 6]; x : INT; part : ARRAY[0..4] OF INT := [9, 9]; END_VAR",
                "x := m[1, 0];")
-    assert val(sim, "main.a") == [1, 2, 7, 7, 7, 0, 5, 0][:5] + [5, 0, 5]
+    assert val(sim, "main.a") == [1, 2, 7, 7, 7, -1, -1, 5]
     assert val(sim, "x") == 4                  # row-major
     assert val(sim, "main.part") == [9, 9, 0, 0, 0]
 
@@ -258,4 +258,6 @@ END_FUNCTION_BLOCK
         sim.set("main.x", True); sim.step(3)
         sim.set("main.x", False); sim.step(3)
     assert val(sim, "e.ups") == 3              # level held 3 scans counts once
-    assert val(sim, "e.downs") == 3            # no fall counted at start-up (x FALSE)
+    # no fall at start-up although x is FALSE: like OpenPLC's F_TRIG (edge_detection.txt,
+    # M starts FALSE), which an F_EDGE input stands for
+    assert val(sim, "e.downs") == 3

@@ -135,6 +135,31 @@ def test_for_end_is_reevaluated_every_iteration():
     assert val(sim, "n") == 5
 
 
+def test_for_by_is_reevaluated_at_every_increment():
+    # matiec re-evaluates the BY expression at each increment (and in the test)
+    sim = once("VAR i : INT; s : INT := 1; n : INT; END_VAR",
+               "FOR i := 0 TO 100 BY s DO s := s * 2; n := n + 1; END_FOR;")
+    assert val(sim, "n") == 6                  # i = 0, 2, 6, 14, 30, 62
+    assert val(sim, "i") == 126
+
+
+def test_for_by_zero_tests_greater_or_equal():
+    # `(step) > 0 ? i <= end : i >= end`: BY 0 with start above end loops (until EXIT)
+    sim = once("VAR i : INT; n : INT; m : INT; END_VAR",
+               "FOR i := 5 TO 1 BY 0 DO n := n + 1; IF n >= 10 THEN EXIT; END_IF; END_FOR;"
+               " FOR i := 1 TO 5 BY 0 DO m := m + 1; END_FOR;")
+    assert val(sim, "n") == 10
+    assert val(sim, "m") == 0                  # 1 >= 5 is false: no iteration
+
+
+def test_for_end_is_a_c_int_expression_not_narrowed():
+    # TO k * 2 with INT k = -20000 is the C int -40000: no iteration (narrowed to INT it
+    # would be 25536 and the loop would run 25537 times)
+    sim = once("VAR i : INT; k : INT := -20000; n : INT; END_VAR",
+               "FOR i := 0 TO k * 2 DO n := n + 1; END_FOR;")
+    assert val(sim, "n") == 0
+
+
 def test_for_loop_in_dint_over_array():
     sim = once("VAR i : DINT; a : ARRAY[1..5] OF DINT := [10, 20, 30, 40, 50]; mx : DINT; END_VAR",
                "FOR i := 1 TO 5 DO IF a[i] > mx THEN mx := a[i]; END_IF; END_FOR;")

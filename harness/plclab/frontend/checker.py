@@ -915,6 +915,8 @@ class Checker:
                                   f"or as {self._path_text(s.target)}.{a.name}")
                     continue
                 if sec == "VAR_IN_OUT":
+                    if not self._is_variable(a.value, a.name):
+                        continue
                     tt = self.lvalue(a.value, scope)
                     if tt is not None and not self._decl_types_match(T.base_of(tt), T.base_of(pty)) \
                             and not T.same_type(tt, pty):
@@ -1012,6 +1014,8 @@ class Checker:
             self.expr(a.value, scope, None)
             return
         if d.section == "VAR_IN_OUT":
+            if not self._is_variable(a.value, d.name):
+                return
             tt = self.lvalue(a.value, scope)
             if tt is not None and not self._decl_types_match(T.base_of(tt), T.base_of(d.ty)):
                 self.error(a.value, f"VAR_IN_OUT '{d.name}' of '{fname}' is {d.ty.name}, not {self._tname(tt)}")
@@ -1134,6 +1138,14 @@ class Checker:
         return T.ELEMENTARY[sig.result]
 
     # ------------------------------------------------------------------ lvalues
+    def _is_variable(self, e: A.Expr, param: str) -> bool:
+        """A VAR_IN_OUT is passed by reference: its argument must be a variable."""
+        if isinstance(e, (A.Name, A.Member, A.Index)):
+            return True
+        self.error(e, f"VAR_IN_OUT '{param}' is passed by reference: give it a variable, not an expression "
+                      f"or a literal")
+        return False
+
     def lvalue(self, e: A.Expr, scope: _Scope) -> Optional[T.Type]:
         t = self.expr(e, scope, None)
         if t is None:
@@ -1378,6 +1390,10 @@ class Checker:
             self.error(e, f"'{e.name}' is a value of several enumerated types; qualify it (e.g. "
                           f"{values[0].ty.name}#{e.name})")
             return None
+        if e.key == "EN":
+            self.error(e, "EN cannot be read inside a function or function block (OpenPLC's compiler has no "
+                          "variable EN; it only decides whether the call runs)")
+            return None
         if e.key in self.globals:
             self.error(e, f"'{e.name}' is a global variable: declare it in VAR_EXTERNAL to use it here")
             return None
@@ -1619,9 +1635,12 @@ class Checker:
                     continue
                 seen_progs.add(prog.key)
                 pou = self.pous.get(prog.type_name.upper())
-                if pou is None or pou.kind != "PROGRAM":
-                    what = "unknown program" if pou is None else f"'{prog.type_name}' is a {pou.kind.lower()}, not a PROGRAM;"
-                    self.error(prog, f"{what} '{prog.type_name}'" if pou is None else what)
+                if pou is None:
+                    self.error(prog, f"unknown program '{prog.type_name}'")
+                    continue
+                if pou.kind != "PROGRAM":
+                    kind = pou.kind.lower().replace("_", " ")
+                    self.error(prog, f"'{prog.type_name}' is a {kind}, not a PROGRAM: only programs run in a task")
                     continue
                 prog.pou = pou
                 if prog.task is not None:

@@ -24,7 +24,8 @@ MAX_NESTING = 200   # statement/expression nesting deeper than this is refused, 
 _PRETTY = {
     "SEMICOLON": "';'", "COLON": "':'", "COMMA": "','", "LPAR": "'('", "RPAR": "')'",
     "LSQB": "'['", "RSQB": "']'", "DOT": "'.'", "__ANON_0": "':='", "IDENT": "an identifier",
-    "INTEGER": "a number", "REAL_NUMBER": "a number", "$END": "end of file",
+    "INTEGER": "a number", "REAL_NUMBER": "a number", "$END": "end of file", "ELEMENTARY": "a type name",
+    "STRING_KW": "STRING", "WSTRING_KW": "WSTRING",
 }
 
 
@@ -607,7 +608,11 @@ def _keywords() -> frozenset[str]:
 def _reject_keyword(tok: Token) -> Token:
     # The contextual lexer lets `IF` through as an identifier where no keyword fits (e.g. a
     # variable name); matiec's lexer never does, so neither do we.
-    if tok.value.upper() in _keywords():
+    word = tok.value.upper()
+    if word == "STRUCT":
+        raise _Positioned(tok.line, tok.column, "a STRUCT must be declared in TYPE ... END_TYPE; a variable "
+                                                "then uses the type's name")
+    if word in _keywords():
         raise _Positioned(tok.line, tok.column, f"'{tok.value}' is a reserved word; it cannot be used as a name")
     return tok
 
@@ -691,9 +696,15 @@ def _lex_error(text: str, file: str, e: UnexpectedCharacters) -> Diagnostic:
         return Diagnostic(file, e.line, e.column, "unterminated string literal")
     if text[e.pos_in_stream:e.pos_in_stream + 2] == "//":
         return Diagnostic(file, e.line, e.column, "'//' comments are not IEC 61131-3; use (* ... *)")
-    if ch == "_" or (text[e.pos_in_stream - 1:e.pos_in_stream] == "_" and ch.isalnum()):
-        return Diagnostic(file, e.line, e.column, "malformed identifier: '_' only between letters or digits, "
-                                                  "never two in a row or at the end")
+    word = re.match(r"[A-Za-z0-9_]*", text[e.pos_in_stream:]).group(0)
+    if ch == "_" or (text[e.pos_in_stream - 1:e.pos_in_stream] == "_" and ch.isalnum()) or \
+            (word[:1].isalpha() and ("__" in word or word.endswith("_"))):
+        shown = f" '{word}'" if word and word != "_" else ""
+        return Diagnostic(file, e.line, e.column, f"malformed identifier{shown}: '_' only between letters or "
+                                                  f"digits, never two in a row or at the end")
+    if ch == "#" and text[e.pos_in_stream - 1:e.pos_in_stream].isdigit():
+        return Diagnostic(file, e.line, e.column, "based numbers are written 2#..., 8#... or 16#... "
+                                                  "(no other base exists)")
     if ch == "{":
         return Diagnostic(file, e.line, e.column, "pragmas '{...}' are not supported (OpenPLC pastes them "
                                                   "into C code); remove it")
@@ -739,12 +750,66 @@ def _unclosed_block(text: str, err: Token) -> tuple[str, Token] | None:
                     top = stack.pop()
                     if _OPENERS.get(top.type, "END_VAR") == t:
                         break
-    except LarkError:
+    except (LarkError, _Positioned):
         return None
     if not stack:
         return None
     top = stack[-1]
     return _OPENERS.get(top.type, "END_VAR"), top
+
+
+def _tokens_before(text: str, err: Token, n: int = 2) -> list[Token]:
+    """The last `n` tokens before `err` (error reporting only)."""
+    out: list[Token] = []
+    try:
+        for tok in _parser_for_errors().lex(text):
+            if err.type != "$END" and (tok.line, tok.column) >= (err.line, err.column):
+                break
+            out.append(tok)
+            del out[:-n]
+    except (LarkError, _Positioned):
+        pass
+    return out
+
+
+_HEADERS = {"IF": "THEN", "ELSIF": "THEN", "WHILE": "DO", "FOR": "DO", "CASE": "OF"}
+_HEADER_ENDS = {"THEN", "DO", "OF", "SEMICOLON", "END_IF", "END_WHILE", "END_FOR", "END_CASE"}
+
+
+def _open_header(text: str, err: Token) -> tuple[str, str, Token] | None:
+    """(`IF`, `THEN`, the IF token) when `err` stands in an IF/ELSIF/WHILE/FOR/CASE header whose
+    THEN/DO/OF has not come yet. (LALR merges lookaheads, so `expected` alone cannot tell.)"""
+    for tok in reversed(_tokens_before(text, err, 200)):
+        if tok.type in _HEADERS:
+            return tok.type, _HEADERS[tok.type], tok
+        if tok.type in _HEADER_ENDS:
+            return None
+    return None
+
+
+def _nested_comment(text: str, err: Token) -> tuple[str, int, int] | None:
+    """If `err` comes right after a comment that contains '(*' (comments do not nest), the
+    message and the position of the first code after that comment."""
+    err_pos = len(text) if err.type == "$END" else err.start_pos
+    for m in _SCAN.finditer(text, 0, err_pos):
+        body = m.group(0)
+        if not body.startswith("(*") or "(*" not in body[2:]:
+            continue
+        end = m.end()
+        code = re.compile(r"\s*").match(text, end).end()
+        if code <= err_pos and "\n" not in text[end:err_pos].strip(" \t") and ";" not in text[end:err_pos]:
+            line = text.count("\n", 0, m.start()) + 1
+            col = m.start() - (text.rfind("\n", 0, m.start()) + 1) + 1
+            cline = text.count("\n", 0, code) + 1
+            ccol = code - (text.rfind("\n", 0, code) + 1) + 1
+            return (f"comments do not nest in OpenPLC: the '(*' at line {line}, column {col} ends at the "
+                    f"first '*)', so the text after it is read as code", cline, ccol)
+    return None
+
+
+_STATEMENT_START = {"IDENT", "IF", "CASE", "FOR", "WHILE", "REPEAT", "RETURN", "EXIT", "CONTINUE"} | _CLOSERS
+_NOT_SUPPORTED_WORDS = {"VAR_ACCESS", "VAR_CONFIG", "ACTION", "TRANSITION", "STEP", "INITIAL_STEP", "REF", "DREF",
+                        "REF_TO", "NULL"}
 
 
 def _syntax_error(file: str, e: UnexpectedToken, text: str) -> Diagnostic:
@@ -758,6 +823,9 @@ def _syntax_error(file: str, e: UnexpectedToken, text: str) -> Diagnostic:
         col = len(text) - (text.rfind("\n") + 1) + 1
     else:
         line, col = tok.line, tok.column
+    nested = _nested_comment(text, tok)
+    if nested:
+        return Diagnostic(file, nested[1], nested[2], nested[0])
     if tok.type == "$END" or tok.type in _CLOSERS:
         unclosed = _unclosed_block(text, tok)
         if unclosed:
@@ -769,6 +837,9 @@ def _syntax_error(file: str, e: UnexpectedToken, text: str) -> Diagnostic:
                                                f"(the {opener} at line {opener.line}, column {opener.column} is not closed)")
         if tok.type == "$END":
             return Diagnostic(file, line, col, "unexpected end of file")
+    hint = _syntax_hint(text, tok, expected)
+    if hint:
+        return Diagnostic(file, hint[1], hint[2], hint[0])
     if tok.type != "IDENT" and "IDENT" in expected and re.fullmatch(r"[A-Za-z_]\w*", str(tok)):
         return Diagnostic(file, line, col, f"'{tok}' is a reserved word; it cannot be used as a name")
     if "SEMICOLON" in expected and len(expected) <= 16:
@@ -776,3 +847,36 @@ def _syntax_error(file: str, e: UnexpectedToken, text: str) -> Diagnostic:
     return Diagnostic(file, line, col, f"unexpected {_token_text(tok)}{_describe_expected(expected)}")
 
 
+def _syntax_hint(text: str, tok: Token, expected: set[str]) -> tuple[str, int, int] | None:
+    """A precise message for the syntax errors students make most, else None."""
+    line, col = tok.line, tok.column
+    prev = _tokens_before(text, tok)
+    last = prev[-1] if prev else None
+    if last is not None and last.type == "IDENT" and str(last).upper() in _NOT_SUPPORTED_WORDS:
+        return (f"'{last}' is a reserved word of OpenPLC's compiler (and this construct is not supported)",
+                last.line, last.column)
+    if str(tok) == "=" and text[tok.start_pos - 1:tok.start_pos] == ":" and len(prev) == 2:
+        unclosed = _unclosed_block(text, tok)
+        if unclosed and unclosed[0] == "END_VAR":
+            opener = unclosed[1]
+            return (f"missing END_VAR before this statement (the {opener} at line {opener.line}, column "
+                    f"{opener.column} is not closed)", prev[0].line, prev[0].column)
+    if last is not None and last.type == "RETURN":
+        return ("RETURN takes no value: assign the result to the function's name, then RETURN", line, col)
+    if tok.type == "IDENT" and re.fullmatch(r"[eE][0-9_]+", str(tok)) and text[tok.start_pos - 1:tok.start_pos].isdigit():
+        return (f"a real literal needs a decimal point: write e.g. 1.0{tok}", line, col)
+    if str(tok) == "." and text[tok.start_pos + 1:tok.start_pos + 2].isdigit():
+        return ("a real literal needs a digit before the '.': write e.g. 0.5", line, col)
+    if str(tok) == ":=" and expected and expected <= {"RPAR", "COMMA"}:
+        return ("enumerated values cannot be given numbers in OpenPLC's compiler: write (A, B, C)", line, col)
+    if str(tok) == ";" and last is not None and last.type == "SEMICOLON":
+        return ("a second ';': remove it (OpenPLC's compiler rejects empty declarations and statements)", line, col)
+    opener = _open_header(text, tok)
+    if opener is not None and opener[1] in expected and tok.type != opener[1]:
+        return (f"missing {opener[1]} before {_token_text(tok)} (after the condition of the {opener[0]} at "
+                f"line {opener[2].line}, column {opener[2].column})", line, col)
+    if "RPAR" in expected and tok.type in ("SEMICOLON", "THEN", "DO", "OF", "$END"):
+        return (f"missing ')' before {_token_text(tok)}", line, col)
+    if "SEMICOLON" in expected and tok.type in _STATEMENT_START:
+        return (f"missing ';' before {_token_text(tok)}", line, col)
+    return None

@@ -110,6 +110,11 @@ class ModbusTcpServer:
         return self._port if self._port is not None else self._requested_port
 
     @property
+    def active_clients(self) -> int:
+        """Connections open right now (for status lines)."""
+        return len(self._connections)
+
+    @property
     def running(self) -> bool:
         return self._thread is not None and self._ready.is_set() and not self._stopped.is_set()
 

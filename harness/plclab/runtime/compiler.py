@@ -253,7 +253,10 @@ class Compiler:
                 continue
             out.emit(2, f"self.{d.key} = {self.var_init(d)}", d)
         for d in edges:
-            out.emit(2, f"self._EDGE_{d.key} = {d.edge == 'F_EDGE'}", d)
+            # the previous input value, FALSE at start-up for both edges: as OpenPLC's
+            # R_TRIG / F_TRIG (edge_detection.txt, M starts FALSE), so an F_EDGE input that
+            # is FALSE on the first call is not a falling edge
+            out.emit(2, f"self._EDGE_{d.key} = False", d)
         for d in located:
             if not d.name:
                 out.emit(2, f"self._AT_{id(d)} = {self.var_init(d)}", d)

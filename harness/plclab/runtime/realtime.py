@@ -12,6 +12,7 @@ import time
 from dataclasses import dataclass, field
 from typing import Any, Callable, Iterable, Optional
 
+from plclab.runtime.plantio import PlantBinding
 from plclab.runtime.plc import PLC
 
 
@@ -39,8 +40,9 @@ class RealTimeRunner:
     def __init__(self, plc: PLC, plants: Iterable[Any] = (), on_scan: Optional[Callable[[PLC], None]] = None,
                  clock: Callable[[], float] = time.monotonic, sleep: Callable[[float], None] = time.sleep):
         self.plc = plc
-        self.plants = list(plants)
+        self.plants = [PlantBinding(p, plc.image) for p in plants]
         self.on_scan = on_scan
+        self.before_scan: Optional[Callable[[PLC], None]] = None
         self.stats = RealTimeStats()
         self._clock, self._sleep = clock, sleep
         self._stop = threading.Event()
@@ -86,10 +88,12 @@ class RealTimeRunner:
                 stats.lateness.append(late)
             now_ns = int((now - start) * 1e9)
             for plant in self.plants:
-                plant.step(plc.image, now_ns - last_scan_ns)
+                plant.step((now_ns - last_scan_ns) / 1e9)
             last_scan_ns = now_ns
             plc.now_ns = now_ns
             plc.ticks = k
+            if self.before_scan is not None:
+                self.before_scan(plc)
             plc.scan()
             if self.on_scan is not None:
                 self.on_scan(plc)

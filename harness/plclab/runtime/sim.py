@@ -2,23 +2,21 @@
 
 Timing convention (labs.md, OpenPLC's scan loop): the first scan runs at t = 0; an input
 event at time t is seen by the first scan at or after t; a change a scan produces is stamped
-with that scan's time. Plants are plain objects with `step(image, dt_ns)` that read outputs
-from and write inputs to the process image; they know nothing of ST.
+with that scan's time. Each tick the plants step first (from the outputs of the previous
+scan, over one tick), then scripted inputs apply, then the PLC scans. Plants are plain
+objects (plclab.runtime.plantio) that know nothing of ST.
 """
 from __future__ import annotations
 
 import bisect
 from dataclasses import dataclass
-from typing import Any, Callable, Iterable, Optional, Protocol
+from typing import Any, Callable, Iterable, Optional
 
 from plclab.errors import PlcLabError
 from plclab.iec import types as T
-from plclab.runtime.plc import PLC, RUN, image_bits, parse_address
+from plclab.runtime.plantio import Plant, PlantBinding
+from plclab.runtime.plc import PLC, image_bits, parse_address
 from plclab.trace import Recorder, Trace
-
-
-class Plant(Protocol):
-    def step(self, image: Any, dt_ns: int) -> None: ...
 
 
 @dataclass(frozen=True)
@@ -49,7 +47,7 @@ class Simulation:
     def __init__(self, plc: PLC, plants: Iterable[Plant] = (), watch: Iterable[str] = (),
                  record_located: bool = True, extra_addresses: Iterable[str] = ()):
         self.plc = plc
-        self.plants = list(plants)
+        self.plants = [PlantBinding(p, plc.image) for p in plants]
         self.trace = Trace()
         self._events: list[InputEvent] = []
         self._event_times: list[int] = []
@@ -150,13 +148,14 @@ class Simulation:
         """Run `ticks` scans: plant, scripted inputs, scan, record, advance."""
         plc = self.plc
         dt = plc.tick_ns
+        dt_s = dt / 1e9
         events, times = self._events, self._event_times
         getters = self._getters
         record = self.recorder.record
         for _ in range(ticks):
             now = plc.now_ns
-            for plant in self.plants:
-                plant.step(plc.image, dt if plc.ticks else 0)
+            for plant in self.plants:      # at t = 0 with dt = 0: the plant's power-up state
+                plant.step(dt_s if plc.ticks else 0.0)
             while self._next_event < len(events) and times[self._next_event] <= now:
                 ev = events[self._next_event]
                 self.set(ev.name, ev.value)

@@ -1,0 +1,71 @@
+"""What every plant model has: the I/O it touches, stepping, injectable faults, events.
+
+Contract (plclab.runtime.plantio uses it in-process, plclab.modbus.psm over PSM):
+  outputs  PLC outputs the plant reads, OpenPLC location names ("QX0.1", "QW0")
+  inputs   PLC inputs the plant drives ("IX0.0", "IW0")
+  period   seconds between steps when it runs on its own in real time (PSM)
+  step(outputs, dt) -> inputs   values are raw: bits 0/1, words unsigned 16-bit; dt seconds
+Standard library only (see the package docstring).
+"""
+from __future__ import annotations
+
+from dataclasses import dataclass, field
+from typing import Any
+
+
+@dataclass(frozen=True)
+class PlantEvent:
+    """Something notable the plant saw (a fault it detected, an injected fault), with its time."""
+
+    time: float          # plant seconds since power-up
+    kind: str            # e.g. 'valve_conflict', 'collision', 'overvoltage', 'fault_injected'
+    detail: str
+
+
+class PlantError(ValueError):
+    """A bad request to a plant (unknown fault, bad parameter): one line for the user."""
+
+
+class PlantModel:
+    """Base class: keeps plant time, the event log and the injected faults."""
+
+    outputs: list[str] = []
+    inputs: list[str] = []
+    period: float = 0.01
+    FAULTS: dict[str, str] = {}          # fault name -> what it does (for help texts)
+
+    def __init__(self) -> None:
+        self.time = 0.0
+        self.events: list[PlantEvent] = []
+        self.faults: dict[str, dict[str, Any]] = {}
+
+    def step(self, outputs: dict[str, int], dt: float) -> dict[str, int]:
+        raise NotImplementedError
+
+    def event(self, kind: str, detail: str) -> None:
+        self.events.append(PlantEvent(self.time, kind, detail))
+
+    def inject(self, fault: str, **params: Any) -> None:
+        """Inject a fault by name (see FAULTS); parameters say where and how much."""
+        if fault not in self.FAULTS:
+            raise PlantError(f"unknown fault {fault!r}; this plant has: {', '.join(sorted(self.FAULTS))}")
+        self.faults[fault] = dict(params)
+        self.event("fault_injected", f"{fault} {params}" if params else fault)
+
+    def clear(self, fault: str | None = None) -> None:
+        """Remove one injected fault, or all of them."""
+        if fault is None:
+            self.faults.clear()
+        else:
+            self.faults.pop(fault, None)
+
+
+def signed16(raw: int) -> int:
+    """A raw register value as the signed INT the PLC wrote."""
+    raw &= 0xFFFF
+    return raw - 0x10000 if raw & 0x8000 else raw
+
+
+def unsigned16(value: int) -> int:
+    """A signed value as the raw register content."""
+    return int(value) & 0xFFFF

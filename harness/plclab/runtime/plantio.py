@@ -1,0 +1,51 @@
+"""Connecting plant models to the process image.
+
+A plant is a plain object (style.md): `outputs` (the PLC outputs it reads, OpenPLC location
+names such as "QX0.1" or "QW0"), `period` (seconds between steps in real time) and
+`step(outputs, dt) -> inputs`, where both dicts map location names to raw values (bits 0/1,
+words unsigned 16-bit) and dt is in seconds. The same object runs in-process here and in a
+real OpenPLC runtime through the PSM protocol (plclab.modbus.psm), which uses the same names.
+"""
+from __future__ import annotations
+
+from typing import Any, Protocol
+
+from plclab.runtime.image import ProcessImage
+
+
+class Plant(Protocol):
+    outputs: list[str]
+    period: float
+
+    def step(self, outputs: dict[str, int], dt: float) -> dict[str, int]: ...
+
+
+def location_index(loc: str) -> tuple[str, int]:
+    """'QX1.0' -> ('QX', 8); 'IW3' -> ('IW', 3)."""
+    loc = loc.lstrip("%").upper()
+    area = loc[:2]
+    rest = loc[2:]
+    if area[1] == "X":
+        byte, bit = rest.split(".")
+        return area, int(byte) * 8 + int(bit)
+    return area, int(rest)
+
+
+class PlantBinding:
+    """One plant stepped against one image: reads its outputs, writes the inputs it returns."""
+
+    def __init__(self, plant: Plant, image: ProcessImage):
+        self.plant = plant
+        self.image = image
+        self._outs = [(loc, *location_index(loc)) for loc in plant.outputs]
+        self._index_cache: dict[str, tuple[str, int]] = {}
+
+    def step(self, dt: float) -> None:
+        areas = self.image.areas
+        outputs = {loc: areas[a][i] for loc, a, i in self._outs}
+        for loc, value in self.plant.step(outputs, dt).items():
+            where = self._index_cache.get(loc)
+            if where is None:
+                where = self._index_cache[loc] = location_index(loc)
+            a, i = where
+            areas[a][i] = int(value) & (1 if a[1] == "X" else 0xFFFF)

@@ -1,0 +1,138 @@
+"""`plclab serve`: the soft PLC in real time with its plant and Modbus face, until stopped.
+
+The pieces are the library's own: a PLC (runtime.plc) scanned on the wall clock
+(runtime.realtime), the plant model stepped in-process before each scan or reached over
+OpenPLC's PSM protocol, and a Modbus TCP server face on the process image. Stopping (Ctrl-C,
+SIGTERM) ends the scan loop, closes the server and flushes retained variables.
+"""
+from __future__ import annotations
+
+import signal
+import sys
+import threading
+import time
+from dataclasses import dataclass
+from pathlib import Path
+from typing import Any, Callable, Optional, Sequence, TextIO
+
+from plclab.config import ModbusConfig, StandConfig
+from plclab.errors import PlcLabError
+from plclab.frontend import check_sources
+from plclab.runtime.compiler import compile_unit
+from plclab.runtime.plc import PLC
+from plclab.runtime.realtime import RealTimeRunner
+from plclab.runtime.retain import RetainStore
+
+
+@dataclass
+class ServeOptions:
+    sources: Sequence[tuple[str, str]]   # (file name, ST text) of the program: one compilation unit
+    stand: StandConfig
+    modbus: ModbusConfig
+    plant: Any = None                # in-process plant model, or None (io = psm or no plant)
+    register_map: str = "openplc"    # "openplc" | "twido"
+    twido_profile: Any = None
+
+
+class Service:
+    """A running soft PLC: start(), then stop() from any thread (or a signal)."""
+
+    def __init__(self, opts: ServeOptions, report: Callable[[str], None] = print):
+        self.opts = opts
+        self.report = report
+        st = opts.stand
+        checked = check_sources(opts.sources)
+        store = RetainStore(st.retain_file, report=report)
+        self.plc = PLC(compile_unit(checked), tick_ns=st.tick_ms * 1_000_000 if st.tick_ms else None,
+                       watchdog_s=st.watchdog_ms / 1000 if st.watchdog_ms else 1e9, retain=store,
+                       retain_period_ns=st.retain_period_ms * 1_000_000)
+        self.psm = None
+        plants = []
+        if st.io == "psm":
+            from plclab.modbus.psm import PsmClient
+            self.psm = PsmClient(st.psm.host, st.psm.port).connect()
+        elif opts.plant is not None:
+            plants.append(opts.plant)
+        self.runner = RealTimeRunner(self.plc, plants, on_scan=self._after_scan if self.psm else None)
+        if self.psm is not None:
+            self.runner.before_scan = self._before_scan   # type: ignore[attr-defined]
+        self.server = None
+        if opts.modbus.enabled:
+            self.server = self._make_server()
+        self._stopped = threading.Event()
+
+    def _make_server(self):
+        from plclab.modbus.maps import OpenPlcMap, TwidoMap
+        from plclab.modbus.server import ModbusTcpServer
+
+        m = self.opts.modbus
+        if self.opts.register_map == "twido":
+            rmap = TwidoMap(self.plc.image, self.opts.twido_profile)
+        else:
+            rmap = OpenPlcMap(self.plc.image)
+        return ModbusTcpServer(rmap, m.bind, m.port, unit_ids=m.unit_ids, idle_timeout=m.idle_timeout_s,
+                               max_clients=m.max_clients)
+
+    def _before_scan(self, plc: PLC) -> None:
+        self.psm.read_inputs(plc.image)
+
+    def _after_scan(self, plc: PLC) -> None:
+        self.psm.write_outputs(plc.image)
+
+    def start(self) -> None:
+        if self.server is not None:
+            self.server.start()
+        self.runner.start()
+
+    def status(self) -> str:
+        s = self.runner.stats
+        clients = self.server.active_clients if self.server is not None else 0
+        state = self.plc.state if self.plc.fault is None else f"FAULT: {self.plc.fault}"
+        return (f"t={self.plc.now_ns / 1e9:9.2f} s  scans={s.ticks}  overruns={s.overruns}  "
+                f"clients={clients}  {state}")
+
+    def stop(self) -> None:
+        if self._stopped.is_set():
+            return
+        self._stopped.set()
+        self.runner.stop()            # also stops the PLC, which flushes retain
+        if self.server is not None:
+            self.server.stop()
+        if self.psm is not None:
+            self.psm.close()
+
+    def wait(self, duration: Optional[float] = None, status: Optional[TextIO] = None) -> None:
+        """Block until stop() (or `duration` seconds), refreshing a status line on a terminal."""
+        end = None if duration is None else time.monotonic() + duration
+        tty = status is not None and status.isatty()
+        while not self._stopped.is_set():
+            if end is not None and time.monotonic() >= end:
+                break
+            self._stopped.wait(0.5)
+            if tty:
+                status.write("\r" + self.status() + "   ")
+                status.flush()
+        if tty:
+            status.write("\n")
+
+
+def serve_forever(opts: ServeOptions, duration: Optional[float] = None) -> int:
+    """The CLI's `serve`: start, print where it listens, run until Ctrl-C / SIGTERM."""
+    service = Service(opts)
+    service.start()
+    where = f"modbus on {opts.modbus.bind}:{service.server.port}" if service.server else "modbus disabled"
+    print(f"serving {opts.stand.name} ({opts.sources[0][0]}{' ...' if len(opts.sources) > 1 else ''}): "
+          f"tick {service.plc.tick_ns / 1e6:g} ms, {where}; Ctrl-C stops", flush=True)
+
+    def on_signal(signum, frame):   # noqa: ARG001 - signal handler signature
+        service._stopped.set()
+    old = {sig: signal.signal(sig, on_signal) for sig in (signal.SIGINT, signal.SIGTERM)}
+    try:
+        service.wait(duration, sys.stderr)
+    finally:
+        service._stopped.clear()
+        service.stop()
+        for sig, handler in old.items():
+            signal.signal(sig, handler)
+    print(f"stopped: {service.status()}", flush=True)
+    return 0 if service.plc.fault is None else 1
