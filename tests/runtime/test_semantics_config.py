@@ -348,3 +348,22 @@ END_PROGRAM
     f = sim.plc.fault
     assert sim.plc.state == "FAULT"
     assert (f.kind, f.pou.upper(), f.file, f.line) == ("division_by_zero", "RATIO", "fn.st", 4)
+
+
+def test_for_loop_up_to_the_type_maximum_never_ends():
+    # `k := k + 1` is stored back into the USINT, so after 255 comes 0 and `k <= 255` holds
+    # forever (the C matiec generates loops forever too): the watchdog stops it
+    src = """
+PROGRAM main
+VAR k : USINT; n : DINT; END_VAR
+FOR k := 250 TO 255 DO
+  n := n + 1;
+END_FOR;
+END_PROGRAM
+"""
+    sim = load(src, name="loop.st", watchdog_s=0.1)
+    sim.step(1)
+    f = sim.plc.fault
+    assert sim.plc.state == "FAULT"
+    assert (f.kind, f.file, f.line) == ("watchdog", "loop.st", 4)
+    assert sim.plc.read("main.n") > 256          # it went round more than once

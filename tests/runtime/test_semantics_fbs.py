@@ -4,6 +4,7 @@ Reference: OpenPLC v3's library, `utils/matiec_src/lib/*.txt` (bistable.txt,
 edge_detection.txt, counter.txt, timer.txt) compiled into `webserver/core/lib/iec_std_FB.h`.
 Timers read `__CURRENT_TIME`, which is the same for the whole scan and advances by one tick
 between scans (webserver/core/main.cpp `updateTime()`); the first scan runs at t = 0.
+The facts are collected in docs/openplc-stdlib-notes.md.
 """
 from __future__ import annotations
 
@@ -190,7 +191,7 @@ def test_ton_et_runs_and_short_pulse_never_sets_q():
     assert val(sim, "et") == 50 * MS and val(sim, "q") is False
     sim.set("main.x", False); sim.step(1)
     assert val(sim, "et") == 0
-    sim.set("main.x", True); sim.step(9)        # 90 ms after the restart: still off
+    sim.set("main.x", True); sim.step(9)        # restarted at 70 ms; at 150 ms only 80 ms ran
     assert val(sim, "q") is False
     sim.set("main.x", False); sim.step(20)
     assert val(sim, "q") is False

@@ -2,6 +2,7 @@
 
 Reference: OpenPLC v3's C library `webserver/core/lib/iec_std_lib.h` and
 `iec_std_functions.h` (the same files as `utils/matiec_src/lib/C/`).
+The facts are collected in docs/openplc-stdlib-notes.md.
 """
 from __future__ import annotations
 
@@ -161,6 +162,17 @@ def test_string_length_limit_and_comparison():
     assert val(sim, "less") is True
     assert val(sim, "same") is True
     assert val(sim, "gt2") is True
+
+
+def test_string_equality_compares_only_the_common_prefix():
+    # iec_std_lib.h: __STR_CMP is memcmp over the *shorter* length, so in OpenPLC
+    # 'AB' = 'ABC' is TRUE and '' equals every string
+    sim = once("VAR a : STRING := 'AB'; b : STRING := 'ABC'; e : STRING; r1, r2, r3, r4 : BOOL; END_VAR",
+               "r1 := a = b; r2 := e = 'XYZ'; r3 := a < b; r4 := 'ABD' = b;")
+    assert val(sim, "r1") is True
+    assert val(sim, "r2") is True
+    assert val(sim, "r3") is False
+    assert val(sim, "r4") is False
 
 
 # --------------------------------------------------------------------------- numeric

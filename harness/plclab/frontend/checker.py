@@ -514,7 +514,7 @@ class Checker:
         if d.key in RESERVED_NAMES:
             self.error(d, f"'{d.name}' is the name of a standard function or function block; "
                           f"it cannot name a variable")
-            return
+            # still declared below, so its uses do not add a cascade of errors
         if d.key in RESERVED_WORDS:
             self.error(d, f"'{d.name}' is a reserved word of OpenPLC's compiler; it cannot name a variable")
             # still declared below, so its uses do not add a cascade of "undeclared" errors
@@ -1308,7 +1308,7 @@ class Checker:
                 et = self.types.get(tn)
                 if not isinstance(et, T.EnumType) or e.value not in et.values:
                     if tn in self.types and isinstance(self.types[tn], T.EnumType):
-                        self.error(e, f"'{e.value}' is not a value of '{tn}'")
+                        self.error(e, f"'{e.value}' is not a value of '{self.types[tn].name}'")
                     else:
                         self.error(e, f"unknown enumerated type '{tn}'")
                     return None
@@ -1588,9 +1588,10 @@ class Checker:
     @staticmethod
     def _conversion_hint(src: T.Type, dst: T.Type) -> str:
         s, d = T.base_of(src), T.base_of(dst)
-        if isinstance(s, T.ElementaryType) and isinstance(d, T.ElementaryType):
-            sn = "TOD" if s is T.TOD else "DT" if s is T.DT else s.name
-            dn = "TOD" if d is T.TOD else "DT" if d is T.DT else d.name
+        if isinstance(s, (T.ElementaryType, T.StringType)) and isinstance(d, (T.ElementaryType, T.StringType)):
+            short = {T.TOD: "TOD", T.DT: "DT"}
+            sn = "STRING" if isinstance(s, T.StringType) else short.get(s, s.name)
+            dn = "STRING" if isinstance(d, T.StringType) else short.get(d, d.name)
             if f"{sn}_TO_{dn}" in FUNCTIONS:
                 return f" (use {sn}_TO_{dn})"
         return ""
@@ -1609,7 +1610,8 @@ class Checker:
                 if task.interval is not None:
                     t = self.expr(task.interval, sc, T.TIME)
                     if t is not None and T.base_of(t) is not T.TIME:
-                        self.error(task.interval, f"INTERVAL must be a TIME, not {self._tname(t)}")
+                        what = f"an {t.name}" if isinstance(t, _LitType) else self._tname(t)
+                        self.error(task.interval, f"INTERVAL must be a TIME (e.g. T#20ms), not {what}")
                     else:
                         v = self.const_value(task.interval)
                         if isinstance(v, int) and v > 0:

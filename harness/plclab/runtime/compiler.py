@@ -6,9 +6,17 @@ tree walking:
                               the variable's upper-case key) and __call__ = the body
   FUNCTION                 -> a Python function; VAR_OUTPUT / VAR_IN_OUT are Ref cells
   globals                  -> attributes of one `G` object
-Integer results are wrapped to their C width inline, REAL results rounded to single
-precision, as the C code matiec generates would. A line map from generated Python lines to
-ST lines lets a runtime fault name the POU, file and line without any cost on the hot path.
+Expressions compute what the C that matiec generates (stage4/generate_c/generate_c_st.cc:
+plain C operators, no casts) computes:
+  * SINT/INT/USINT/UINT/BYTE/WORD operands are promoted to C `int`: intermediates (also of
+    `/`, `MOD` and `NOT` on BYTE/WORD) are 32-bit and only narrowed where the value is stored
+    or passed (assignment, parameter, CASE selector);
+  * REAL is single precision, except that an untyped real literal is a C double constant and
+    `**` returns an LREAL, so an expression mixing them is computed in double and rounded to
+    REAL once, where it is stored or passed (`r = 0.1` is FALSE after `r := 0.1`);
+  * FOR is matiec's while(1) loop: END and BY re-evaluated on every pass, BY 0 tests `>=`.
+A line map from generated Python lines to ST lines lets a runtime fault name the POU, file
+and line without any cost on the hot path.
 """
 from __future__ import annotations
 
