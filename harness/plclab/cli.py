@@ -151,6 +151,22 @@ def _cmd_psm_script(args: argparse.Namespace) -> int:
     return 0
 
 
+def _cmd_run(args: argparse.Namespace) -> int:
+    from plclab.runner import run_scenario
+
+    r = run_scenario(args.stand, args.variant, args.scenario, args.csv, args.vcd, args.plot)
+    print("\n".join(r.timeline))
+    for f in r.files:
+        print(f"wrote {f}")
+    if r.session.fault is not None:
+        print(r.session.fault)
+    if r.failure:
+        print(f"scenario FAILED: {r.failure}")
+        return 1
+    print(f"scenario {args.scenario or 'demo'} passed ({r.session.now:.1f} s of plant time)")
+    return 0
+
+
 def build_parser() -> argparse.ArgumentParser:
     p = argparse.ArgumentParser(prog="plclab", description="IEC 61131-3 ST lab programs and soft-PLC harness")
     sub = p.add_subparsers(dest="command", metavar="COMMAND")
@@ -173,6 +189,16 @@ def build_parser() -> argparse.ArgumentParser:
     c.set_defaults(func=_cmd_sim)
 
     stands = ("mp9c", "tur10", "thermo")
+
+    c = sub.add_parser("run", help="run a scenario of a stand in virtual time; timeline and traces")
+    c.add_argument("stand", choices=stands)
+    c.add_argument("--variant", choices=("baseline", "task1", "task2", "task3", "full"))
+    c.add_argument("--scenario", metavar="NAME", help="default: the demo")
+    c.add_argument("--csv", metavar="F")
+    c.add_argument("--vcd", metavar="F")
+    c.add_argument("--plot", metavar="F")
+    c.set_defaults(func=_cmd_run)
+
     c = sub.add_parser("serve", help="real time: soft PLC + plant + Modbus face until Ctrl-C")
     c.add_argument("stand", choices=stands)
     c.add_argument("--variant", choices=("baseline", "task1", "task2", "task3", "full"))

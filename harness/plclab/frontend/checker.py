@@ -886,8 +886,18 @@ class Checker:
             formal = positional
         seen = set()
         for a in formal:
+            if a.key == "EN" and not a.is_output:      # matiec gives every FB an EN input...
+                t = self.expr(a.value, scope, T.BOOL)
+                if t is not None:
+                    self.assignable(T.BOOL, a.value, t, what="EN")
+                continue
+            if a.key == "ENO" and a.is_output:         # ...and an ENO output
+                t = self.lvalue(a.value, scope)
+                if t is not None and T.base_of(t) is not T.BOOL:
+                    self.error(a.value, "ENO is BOOL")
+                continue
             if a.key in ("EN", "ENO"):
-                self.error(a, f"{a.name} is not supported on function block calls here")
+                self.error(a, f"{a.name} is {'an input: use :=' if a.key == 'EN' else 'an output: use =>'}")
                 continue
             if a.key in seen:
                 self.error(a, f"parameter '{a.name}' given twice")
@@ -1505,6 +1515,8 @@ class Checker:
         ob = T.base_of(other)
         if isinstance(ob, T.ElementaryType) and ob.kind == "time" and op in ("*", "/"):
             return self.settle(lit_e, lit_t, DEFAULT_REAL if lit_t.kind == "real" else DEFAULT_INT)
+        if isinstance(other, T.SubrangeType):
+            other = other.base      # arithmetic on a subrange value happens in its base type
         if not self.assignable(other, lit_e, lit_t, what=f"operand of '{op}'"):
             return None
         return lit_e.ty

@@ -508,8 +508,20 @@ class Compiler:
         iv = f"_i{next(self.tmp)}"
         out.emit(ind, f"{iv} = {inst}", s)
         outputs = []
+        en = next((a for a in s.args if a.key == "EN" and not a.is_output), None)
+        eno = next((a for a in s.args if a.key == "ENO" and a.is_output), None)
+        if en is not None or eno is not None:
+            # EN/ENO, which matiec gives every FB: the block runs only when EN is TRUE
+            flag = f"_en{next(self.tmp)}"
+            out.emit(ind, f"{flag} = {self.expr(en.value) if en is not None else 'True'}", s)
+            if eno is not None:
+                self.assign(eno.value, flag, ind, eno)
+            out.emit(ind, f"if {flag}:")
+            ind += 1
         for a in s.args:
             key = a.key
+            if key in ("EN", "ENO"):
+                continue
             if a.is_output:
                 outputs.append(a)
                 continue

@@ -1,0 +1,202 @@
+"""Scenarios: a stand (PLC program + plant) driven like the lab instructions, in virtual time.
+
+Modelled on cocotb and pytest (style.md):
+
+    s = Session.for_stand("mp9c", "full")
+    s.console.set(SA1=0, SA5=1)                     # manual mode, arm down
+    s.wait_until(lambda io: io.SQ2, timeout=2.0)    # the arm reached the lower stop
+    s.console.press("SB1", hold=0.3)                # record a frame
+    assert s.trace.first(lambda io: io.SQ2) < 1.0
+
+Names are the console and wiring labels of the stand's GVL (`SB1`, `SQ2`, `L3`, `HL1`); times
+are plant seconds. A session records a trace of every located I/O point (with the labels as
+aliases) plus chosen internal variables, and a log of the console actions for the timeline.
+"""
+from __future__ import annotations
+
+from dataclasses import dataclass, field
+from pathlib import Path
+from typing import Any, Callable, Iterable, Optional, Sequence
+
+from plclab.errors import CompileError, PlcLabError
+from plclab.frontend import check_sources
+from plclab.runtime.compiler import compile_unit
+from plclab.runtime.plc import PLC
+from plclab.runtime.retain import RetainStore
+from plclab.runtime.sim import Simulation
+from plclab.trace import Trace
+
+
+class ScenarioFailure(AssertionError):
+    """A scenario step that did not happen as the lab instructions expect."""
+
+
+@dataclass(frozen=True)
+class Action:
+    time: float
+    text: str
+
+
+class IO:
+    """Current values by label (`io.SQ2`), read from the process image."""
+
+    def __init__(self, session: "Session"):
+        object.__setattr__(self, "_s", session)
+
+    def __getattr__(self, name: str) -> Any:
+        s = object.__getattribute__(self, "_s")
+        return s.value(name)
+
+    def __getitem__(self, name: str) -> Any:
+        return self.__getattr__(name)
+
+
+class Console:
+    """The operator: switches and buttons, through the plant's console (with its bounce)."""
+
+    def __init__(self, session: "Session"):
+        self._s = session
+
+    def set(self, **values: Any) -> None:
+        """Set switches now: console.set(SA1=1, SA6=0). Seen by the next scan."""
+        plant = self._s.plant
+        for name, value in values.items():
+            plant.set_input(name, int(value))
+        self._s.log(", ".join(f"{k}={int(v)}" for k, v in values.items()))
+
+    def press(self, name: str = "SB1", hold: float = 0.2) -> None:
+        """Press `name`, keep it pressed `hold` seconds (time runs), release it."""
+        plant = self._s.plant
+        plant.press(name)
+        self._s.log(f"{name} pressed ({hold:g} s)")
+        self._s.run(hold)
+        plant.release(name)
+
+    def hold(self, name: str = "SB1") -> None:
+        """Press and keep pressed (release later with `release`)."""
+        self._s.plant.press(name)
+        self._s.log(f"{name} pressed")
+
+    def release(self, name: str = "SB1") -> None:
+        self._s.plant.release(name)
+        self._s.log(f"{name} released")
+
+
+class Session:
+    """One stand in virtual time: PLC program, plant model, trace and console."""
+
+    def __init__(self, sources: Sequence[tuple[str, str]], plant: Any, labels: dict[str, str],
+                 watch: Iterable[str] = (), retain_path: Optional[Path] = None, tick_s: Optional[float] = None,
+                 name: str = "stand"):
+        self.name = name
+        self.sources = list(sources)
+        self.plant = plant
+        self.labels = dict(labels)                    # label -> address ('SQ2' -> '%IX0.1')
+        self.watch = list(watch)
+        self.retain_path = retain_path
+        self.tick_ns = round(tick_s * 1e9) if tick_s else None
+        self.checked = check_sources(self.sources)
+        self.actions: list[Action] = []
+        self.console = Console(self)
+        self.io = IO(self)
+        self.trace = Trace()
+        self._offset_ns = 0                       # PLC restarts keep one continuous trace time
+        self._start_plc()
+
+    # ------------------------------------------------------------------ set-up
+    def _start_plc(self) -> None:
+        store = RetainStore(self.retain_path) if self.retain_path else None
+        self.plc = PLC(compile_unit(self.checked), tick_ns=self.tick_ns, retain=store)
+        self.plc.now_ns = self.plc.ticks = 0
+        self.sim = Simulation(self.plc, plants=[self.plant], watch=self.watch)
+        self._merge_pending = True
+
+    @property
+    def tick(self) -> float:
+        return self.plc.tick_ns / 1e9
+
+    @property
+    def now(self) -> float:
+        return (self._offset_ns + self.plc.now_ns) / 1e9
+
+    def log(self, text: str) -> None:
+        self.actions.append(Action(self.now, text))
+
+    # ------------------------------------------------------------------ time
+    def run(self, seconds: float) -> None:
+        """Let `seconds` of plant time pass (whole scans)."""
+        before = self.plc.ticks
+        self.sim.run(seconds)
+        self._copy_trace(before)
+
+    def wait(self, seconds: float) -> None:
+        self.run(seconds)
+
+    def wait_until(self, predicate: Callable[[IO], Any], timeout: float, what: str = "") -> float:
+        """Scan until `predicate(io)` holds; returns the time. Fails with a clear message."""
+        end = self.plc.now_ns + round(timeout * 1e9)
+        while self.plc.now_ns <= end:
+            before = self.plc.ticks
+            self.sim.step(1)
+            self._copy_trace(before)
+            if predicate(self.io):
+                return self.now - self.tick
+        raise ScenarioFailure(f"t={self.now:.2f} s: {what or 'condition'} not reached within {timeout:g} s")
+
+    def _copy_trace(self, first_tick: int) -> None:
+        """Append what the simulation recorded since `first_tick` to the session's trace."""
+        src = self.sim.trace
+        if self._merge_pending:
+            self._merge_pending = False
+            for name in src.signals():
+                if name not in self.trace:
+                    info = src.info(name)
+                    self.trace.declare(name, info.kind, src.changes(name)[0][1], self._offset_ns,
+                                       width=info.width)
+            for label, address in self.labels.items():
+                if address in self.trace and label not in self.trace:
+                    self.trace.alias(label, address)
+        since = first_tick * self.plc.tick_ns
+        for name in src.signals():
+            for t, v in src.changes(name):
+                if t >= since:
+                    self.trace.change(self._offset_ns + t, name, v)
+        self.trace.advance(self.now)
+
+    # ------------------------------------------------------------------ state
+    def value(self, name: str) -> Any:
+        address = self.labels.get(name, name)
+        if address.startswith("%"):
+            from plclab.runtime.plc import parse_address
+            area, index = parse_address(address)
+            raw = self.plc.image.areas[area][index]
+            return bool(raw) if area[1] == "X" else raw
+        return self.plc.read(name)
+
+    def inject(self, fault: str, **params: Any) -> None:
+        self.plant.inject(fault, **params)
+        self.log(f"fault injected: {fault} {params if params else ''}".rstrip())
+
+    def clear_faults(self) -> None:
+        self.plant.clear()
+        self.log("faults cleared")
+
+    def restart_plc(self, off_time: float = 0.0) -> None:
+        """Stop the PLC (retain flushed), keep the plant, start it again: a power cycle of
+        the controller only. The trace goes on in the same time axis."""
+        self.plc.stop()
+        self.log("PLC stopped")
+        self._offset_ns += self.plc.now_ns
+        if off_time:
+            self.plant.step({}, off_time)
+            self._offset_ns += round(off_time * 1e9)
+        self._start_plc()
+        self.log("PLC restarted")
+
+    @property
+    def fault(self):
+        return self.plc.fault
+
+
+def compile_error_lines(exc: CompileError) -> list[str]:
+    return [str(d) for d in exc.diagnostics]

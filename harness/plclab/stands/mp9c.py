@@ -1,0 +1,287 @@
+"""The MP-9C pneumatic robot stand: program variants, labels, timeline and scenarios.
+
+Scenarios are written like the lab instructions (style.md) and check what they claim: a
+scenario that does not see what the manual says raises ScenarioFailure with the time and
+the reason. None may ever show a valve conflict (both coils of one valve energized).
+"""
+from __future__ import annotations
+
+import re
+from pathlib import Path
+from typing import Callable, Optional
+
+from plclab.scenario import ScenarioFailure, Session
+from plclab.stands import PLC_DIR, Stand, Task, Variant, sources
+
+SHARED = ("FC_PackBits7", "FC_BitOf", "FB_Sb1Button", "FB_FrameStore", "FB_PauseTimer",
+          "FB_FrameWatchdog", "FB_Blink", "FB_FrameSequencer", "FB_Mp9cRobot")
+
+
+def _variant(name: str, prg: str, doc: str) -> Variant:
+    return Variant(name, SHARED + (prg,), (Task("MainTask", "T#10ms", 1, (("Main", prg),)),), doc)
+
+
+STAND = Stand(
+    name="mp9c",
+    title="MP-9C pneumatic robot",
+    gvl=("GVL_MP9C",),
+    types=("T_ControlProgram",),
+    variants={
+        "baseline": _variant("baseline", "PRG_Mp9cBaseline", "Appendix 1: only the lift in manual mode."),
+        "task1": _variant("task1", "PRG_Mp9cTask1", "Task 1: all four mechanisms in manual mode."),
+        "task2": _variant("task2", "PRG_Mp9cTask2", "Task 2: I0.7 selects the recorded pause."),
+        "task3": _variant("task3", "PRG_Mp9cTask3", "Task 3: I0.7 enables automatic execution."),
+        "full": _variant("full", "PRG_Mp9cFull", "Tasks 1 + 2 + 3."),
+    },
+)
+
+VALVES = [f"L{i}" for i in range(1, 8)]
+SENSORS = [f"SQ{i}" for i in range(1, 8)]
+FRAME_PTR = "Main.Robot.Sequencer.Ptr"
+FRAME_START = "Main.Robot.Sequencer.StartFrame"
+FRAME_COUNT = "Main.Cp.Count"
+
+
+def labels() -> dict[str, str]:
+    """Console and wiring labels -> addresses, read from the GVL (the single source)."""
+    text = (PLC_DIR / "GVL" / "GVL_MP9C.st").read_text(encoding="utf-8")
+    return {m.group(1): m.group(2).upper() for m in re.finditer(r"(\w+)\s+AT\s+(%\w+(?:\.\d+)?)", text)}
+
+
+def session(variant: str = "full", program: Optional[list[tuple[str, str]]] = None,
+            retain_path: Optional[Path] = None, watch_internals: bool = True, **plant_params) -> Session:
+    """A fresh MP-9C: the shipped `variant` (or a student's `program` sources) and a plant."""
+    srcs = program if program is not None else sources(STAND, variant)
+    watch = [FRAME_PTR, FRAME_COUNT] if watch_internals else []
+    return Session(srcs, STAND.make_plant(**plant_params), labels(), watch=watch, retain_path=retain_path,
+                   name=f"mp9c {variant if program is None else 'program'}")
+
+
+# --------------------------------------------------------------------------- timeline
+
+def bits(trace, names: list[str], t: float) -> str:
+    return "".join("1" if trace.value_at(n, t) else "0" for n in names)
+
+
+def timeline(s: Session) -> list[str]:
+    """Rows: time, console action or event, valves L1..L7, switches SQ1..SQ7, frame, HL1.
+    A row is printed for every console action and every change of valves, switches, frame
+    or HL1 (a blinking HL1 is one row per blink)."""
+    tr = s.trace
+    times = {a.time for a in s.actions}
+    for name in VALVES + SENSORS + ["HL1"]:
+        times.update(t / 1e9 for t, _v in tr.changes(name)[1:])
+    if FRAME_PTR in tr:
+        times.update(t / 1e9 for t, _v in tr.changes(FRAME_PTR)[1:])
+    acts: dict[float, list[str]] = {}
+    for a in s.actions:
+        acts.setdefault(round(a.time, 6), []).append(a.text)
+    rows = [f"{'time s':>8}  {'console / event':<36} {'L1..L7':<8} {'SQ1..SQ7':<8} {'frame':>5}  HL1"]
+    last = None
+    for t in sorted(times):
+        valves, sensors = bits(tr, VALVES, t), bits(tr, SENSORS, t)
+        hl1 = "on" if tr.value_at("HL1", t) else "-"
+        auto = bool(tr.value_at("SA1", t))
+        frame = str(tr.value_at(FRAME_PTR, t)) if auto and FRAME_PTR in tr else "-"
+        text = "; ".join(acts.get(round(t, 6), []))
+        if not text and last is not None and auto and valves != last[0]:
+            text = f"frame {frame} starts"
+        key = (valves, sensors, frame, hl1)
+        if not text and key == last:
+            continue
+        last = key
+        rows.append(f"{t:8.2f}  {text[:36]:<36} {valves:<8} {sensors:<8} {frame:>5}  {hl1}")
+    return rows
+
+
+def check_never(s: Session) -> None:
+    """What no scenario of any variant may ever show: a valve conflict."""
+    conflicts = [e for e in s.plant.events if e.kind == "valve_conflict"]
+    if conflicts:
+        e = conflicts[0]
+        raise ScenarioFailure(f"t={e.time:.2f} s: valve conflict: {e.detail}")
+
+
+# --------------------------------------------------------------------------- lab steps
+
+def move(s: Session, what: str, timeout: float = 5.0, **switches: int) -> float:
+    """Set switches and wait until the sensors show the robot got there."""
+    s.console.set(**switches)
+    targets = {"SA5": ("SQ2", "SQ1"), "SA3": ("SQ5", "SQ4"), "SA4": ("SQ6", "SQ7"), "SA2": (None, "SQ3")}
+
+    def arrived(io) -> bool:
+        for sw, value in switches.items():
+            on, off = targets.get(sw, (None, None))
+            want = on if value else off
+            if sw == "SA2":
+                if value and io.SQ3:
+                    return False
+                if not value and not io.SQ3:
+                    return False
+                continue
+            if want and not io[want]:
+                return False
+        return True
+    t = s.wait_until(arrived, timeout, what)
+    if "SA2" in switches:
+        s.run(0.4)   # the gripper has no "clamped" switch: give it its 0.3 s
+    return t
+
+
+def record(s: Session, pause_select: Optional[int] = None) -> None:
+    """A short SB1 press records a frame (optionally choosing the pause with I0.7 first)."""
+    if pause_select is not None:
+        s.console.set(I07=pause_select)
+    before = s.plc.read(FRAME_COUNT)
+    s.console.press("SB1", hold=0.2)
+    s.run(0.05)
+    after = s.plc.read(FRAME_COUNT)
+    if after != before + 1:
+        raise ScenarioFailure(f"t={s.now:.2f} s: a short SB1 press did not record a frame "
+                              f"(frames {before} -> {after})")
+
+
+def teach_pick_and_place(s: Session, pause_select: int = 0) -> None:
+    """Manual mode: four frames of a pick-and-place (Task 1 needs all four mechanisms)."""
+    s.console.set(SA1=0, SA6=0, I07=pause_select)
+    s.run(0.1)
+    move(s, "arm down at the pick position", SA5=1)
+    record(s)
+    move(s, "gripper clamped, arm up", SA2=1, SA5=0)
+    record(s)
+    move(s, "rotated right, forward, down", SA3=1, SA4=1, SA5=1)
+    record(s)
+    move(s, "released, up, backward, left", SA2=0, SA5=0, SA4=0, SA3=0)
+    record(s)
+
+
+def start_automatic(s: Session, step: bool = False, enable: int = 1) -> None:
+    s.console.set(SA1=1, SA6=int(step), I07=enable)
+    s.run(0.1)
+    s.console.press("SB1", hold=0.2)
+
+
+# --------------------------------------------------------------------------- scenarios
+
+def demo(s: Session) -> None:
+    """Teach a 4-frame pick-and-place in manual mode (0.5 s pauses), run it continuously for
+    3 cycles, stop it with SB1."""
+    teach_pick_and_place(s, pause_select=0)
+    start_automatic(s)
+    cycles = 0
+    while cycles < 3:
+        s.wait_until(lambda io: s.plc.read(FRAME_PTR) == 4, 30, "frame 4")
+        s.wait_until(lambda io: s.plc.read(FRAME_PTR) == 1, 30, "back to frame 1")
+        cycles += 1
+    s.console.press("SB1", hold=0.2)
+    s.run(3.0)
+    if s.plc.read("Main.Robot.Sequencer.Running"):
+        raise ScenarioFailure(f"t={s.now:.2f} s: SB1 did not stop continuous execution")
+
+
+def step_mode(s: Session) -> None:
+    """Teach two frames; in step mode each SB1 press runs exactly one frame and its pause."""
+    s.console.set(SA1=0, I07=0)
+    s.run(0.1)
+    move(s, "arm down", SA5=1)
+    record(s)
+    move(s, "arm up", SA5=0)
+    record(s)
+    start_automatic(s, step=True)
+    s.wait_until(lambda io: io.SQ2, 3, "frame 1 (arm down)")
+    s.run(3.0)
+    if not s.io.SQ2:
+        raise ScenarioFailure(f"t={s.now:.2f} s: step mode went on to frame 2 without a press")
+    s.console.press("SB1", hold=0.2)
+    s.wait_until(lambda io: io.SQ1, 3, "frame 2 (arm up) after the step press")
+
+
+def long_press_reset(s: Session) -> None:
+    """Teach two frames, hold SB1: at 3.0 s the program is reset (HL1 on) while still held."""
+    s.console.set(SA1=0)
+    s.run(0.1)
+    move(s, "arm down", SA5=1)
+    record(s)
+    move(s, "arm up", SA5=0)
+    record(s)
+    if s.io.HL1:
+        raise ScenarioFailure(f"t={s.now:.2f} s: HL1 on although the program has frames")
+    pressed = s.now
+    s.console.hold("SB1")
+    t = s.wait_until(lambda io: io.HL1, 4, "HL1 after holding SB1")
+    if abs((t - pressed) - 3.0) > 2 * s.tick:
+        raise ScenarioFailure(f"t={t:.2f} s: reset {t - pressed:.2f} s after the press, expected 3.0 s")
+    s.run(0.5)
+    s.console.release("SB1")
+    s.run(0.5)
+    if s.plc.read(FRAME_COUNT) != 0:
+        raise ScenarioFailure(f"t={s.now:.2f} s: program not empty after the reset")
+
+
+def bounce(s: Session) -> None:
+    """With contact bounce on the console, each short press still records exactly one frame."""
+    s.inject("bounce", duration=0.02)
+    s.console.set(SA1=0)
+    s.run(0.1)
+    for _ in range(3):
+        record(s)
+        s.run(0.2)
+
+
+def retain(s: Session) -> None:
+    """A recorded program survives a PLC restart (power cycle of the controller)."""
+    s.console.set(SA1=0, I07=0)
+    s.run(0.1)
+    move(s, "arm down", SA5=1)
+    record(s)
+    move(s, "arm up", SA5=0)
+    record(s)
+    s.restart_plc(off_time=1.0)
+    s.run(0.2)
+    if s.plc.read(FRAME_COUNT) != 2:
+        raise ScenarioFailure(f"t={s.now:.2f} s: {s.plc.read(FRAME_COUNT)} frames after the restart, expected 2")
+    start_automatic(s)
+    s.wait_until(lambda io: io.SQ2, 3, "frame 1 played after the restart")
+
+
+def jammed(s: Session) -> None:
+    """A jammed cylinder: the frame times out after 10 s, execution stops, HL1 blinks 2 Hz
+    until manual mode."""
+    s.console.set(SA1=0, I07=0)
+    s.run(0.1)
+    move(s, "arm down", SA5=1)
+    record(s)
+    move(s, "arm up", SA5=0)
+    record(s)
+    s.inject("jammed", mechanism="lift")
+    start_automatic(s)
+    started = s.now
+    s.wait_until(lambda io: s.plc.read("Main.Robot.Sequencer.Fault"), 12, "the frame timeout")
+    if abs(s.now - started - 10.0) > 0.5:
+        raise ScenarioFailure(f"t={s.now:.2f} s: timeout after {s.now - started:.2f} s, expected about 10 s")
+    s.run(2.0)
+    edges = s.trace.edges("HL1", "rising", after=s.now - 2.0)
+    if not 3 <= len(edges) <= 5:
+        raise ScenarioFailure(f"t={s.now:.2f} s: HL1 rose {len(edges)} times in 2 s, expected a 2 Hz blink")
+    s.clear_faults()
+    s.console.set(SA1=0)
+    s.run(1.0)
+    if s.trace.edges("HL1", "rising", after=s.now - 0.7):
+        raise ScenarioFailure(f"t={s.now:.2f} s: HL1 still blinking in manual mode")
+
+
+def empty_program(s: Session) -> None:
+    """Automatic mode with an empty program: SB1 starts nothing, HL1 stays on."""
+    start_automatic(s)
+    s.run(2.0)
+    if s.trace.next_change(VALVES, after=0.05, default=None) is not None:
+        raise ScenarioFailure(f"t={s.now:.2f} s: a valve moved with an empty program")
+    if not s.io.HL1:
+        raise ScenarioFailure(f"t={s.now:.2f} s: HL1 off with an empty program")
+
+
+SCENARIOS: dict[str, Callable[[Session], None]] = {
+    "demo": demo, "step": step_mode, "reset": long_press_reset, "bounce": bounce,
+    "retain": retain, "jammed": jammed, "empty": empty_program,
+}
+PLOT_SIGNALS = ["SB1", "SA1", "I07"] + VALVES + SENSORS + ["HL1", FRAME_PTR]
