@@ -161,7 +161,7 @@ class Session:
             for t, v in src.changes(name):
                 if t >= since:
                     self.trace.change(self._offset_ns + t, name, v)
-        self.trace.advance(self.now)
+        self.trace.advance(self._offset_ns + self.plc.now_ns - self.plc.tick_ns)
 
     # ------------------------------------------------------------------ state
     def value(self, name: str) -> Any:

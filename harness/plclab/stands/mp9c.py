@@ -280,7 +280,28 @@ def empty_program(s: Session) -> None:
         raise ScenarioFailure(f"t={s.now:.2f} s: HL1 off with an empty program")
 
 
+def lift_cycle(s: Session) -> None:
+    """For every variant: wiggle the rotation switch (only Task 1 wires it), record two lift
+    frames (I0.7 = 0 then 1), play them with I0.7 = 1 for two cycles, then drop I0.7 and see
+    what each variant does (Task 3 stops after the last frame, the others go on)."""
+    s.console.set(SA1=0, SA6=0, I07=0)
+    s.run(0.1)
+    s.console.set(SA3=1)
+    s.run(1.5)
+    s.console.set(SA3=0)
+    s.run(1.5)
+    move(s, "arm down", SA5=1)
+    record(s, pause_select=0)
+    move(s, "arm up", SA5=0)
+    record(s, pause_select=1)
+    start_automatic(s, enable=1)
+    s.run(12.0)
+    s.console.set(I07=0)
+    s.run(8.0)
+
+
 SCENARIOS: dict[str, Callable[[Session], None]] = {
+    "lift": lift_cycle,
     "demo": demo, "step": step_mode, "reset": long_press_reset, "bounce": bounce,
     "retain": retain, "jammed": jammed, "empty": empty_program,
 }
