@@ -113,7 +113,7 @@ class Compiler:
         self.consts: dict[str, Any] = {}
         self.const_ids: dict[int, str] = {}
         self.ns: dict[str, Any] = {
-            "_bound": _bound,
+            "_bound": _bound, "_cmod": _cmod,
             "_f32": T.to_f32, "_copy": T.copy_value, "Ref": Ref, "PlcFault": PlcFault,
             "_StructValue": T.StructValue,
             "_Locals": _Locals, "_NegRef": _NegRef,
@@ -560,6 +560,10 @@ class Compiler:
     def expr_as(self, e: A.Expr, ty: Optional[T.Type]) -> str:
         """`e` as stored into a variable of type `ty`: a promoted small-integer arithmetic
         result is narrowed here, as the C assignment matiec generates narrows it."""
+        b = T.base_of(ty) if ty is not None else None
+        if self._ring_int(e) is not None and isinstance(b, T.ElementaryType) and b.bits < 32 \
+                and b.kind in ("sint", "uint", "bits"):
+            return self.narrow(self.raw(e), ty)     # the low bits of the exact result
         code = self.expr(e)
         if isinstance(e, (A.Binary, A.Unary)):
             code = self.narrow(code, ty)
@@ -605,6 +609,8 @@ class Compiler:
                 return f"(~({inner}) & {(1 << b.bits) - 1})"
             if b is T.REAL and _is_double(e):
                 return f"(-({inner}))"
+            if self._ring_int(e) is not None:
+                return self.wrap(self.raw(e), _concrete(e.ty))
             return self.wrap(f"-({inner})", e.ty)
         if isinstance(e, A.Binary):
             return self.binary(e)
@@ -619,7 +625,32 @@ class Compiler:
         fn = stdlib.lookup_operator(op, [_lib_type(t) for t in arg_types], _lib_type(result))
         return self.bind(fn, "_op")
 
+    def _ring_int(self, e: A.Expr) -> Optional[T.ElementaryType]:
+        """The integer type of a + - * or unary - node (a ring operation), else None.
+
+        Wrapping commutes with ring operations, so a chain of them is computed with Python's
+        exact integers and wrapped once, where the value leaves the chain."""
+        if (isinstance(e, A.Binary) and e.op in ("+", "-", "*")) or (isinstance(e, A.Unary) and e.op == "-"):
+            b = T.base_of(_concrete(e.ty))
+            if isinstance(b, T.ElementaryType) and b.kind in ("sint", "uint", "bits"):
+                return b
+        return None
+
+    def raw(self, e: A.Expr) -> str:
+        """Code of `e` without the final wrap when it is an integer ring operation."""
+        b = self._ring_int(e)
+        if b is None:
+            return self.expr(e)
+        if isinstance(e, A.Unary):
+            return f"(-{self._ring_child(e.operand, b)})"
+        return f"({self._ring_child(e.left, b)} {e.op} {self._ring_child(e.right, b)})"
+
+    def _ring_child(self, e: A.Expr, b: T.ElementaryType) -> str:
+        return self.raw(e) if self._ring_int(e) is b else self.expr(e)
+
     def binary(self, e: A.Binary) -> str:
+        if self._ring_int(e) is not None:
+            return self.wrap(self.raw(e), _concrete(e.ty))
         l, r = self.expr(e.left), self.expr(e.right)
         op = e.op
         lt = _concrete(e.left.ty)
@@ -645,6 +676,8 @@ class Compiler:
             # a REAL operand mixed with a double (untyped real literal, `**`): C double maths,
             # rounded to REAL only where it is stored or passed
             lt = rt_ = rt = T.LREAL
+        if op == "MOD" and isinstance(rb, T.ElementaryType) and rb.kind in ("sint", "uint"):
+            return f"_cmod({l}, {r})"      # |result| < |divisor|: no wrap needed
         if op in ("/", "MOD", "**") or (op == "*" and isinstance(rb, T.ElementaryType) and rb.kind == "time"):
             return f"{self.operator(op, [lt, rt_], rt)}({l}, {r})"
         return self.wrap(f"({l} {op} {r})", rt)
@@ -703,7 +736,40 @@ class Compiler:
         # arguments in the signature's order (formal calls may list them in any order)
         ordered = sorted(zip(names, args), key=lambda na: _param_rank(na[0]))
         types = dict(zip(names, arg_types))
-        return f"{fname}({', '.join(self.expr_as(a.value, types.get(n)) for n, a in ordered)})"
+        codes = [self.expr_as(a.value, types.get(n)) for n, a in ordered]
+        inline = _inline_conversion(c.std, arg_types, _concrete(c.ty), codes)
+        if inline is not None:
+            return inline
+        return f"{fname}({', '.join(codes)})"
+
+
+def _inline_conversion(name: str, arg_types: list, result: Optional[T.Type], codes: list[str]) -> Optional[str]:
+    """Conversions that need no code at run time (on the hot path of every scan): an integer
+    widened to a type that holds all its values, BOOL to an integer, a <= 16-bit integer to
+    REAL or a <= 32-bit one to LREAL (exact in the float). Everything else calls the library."""
+    if "_TO_" not in name or len(codes) != 1 or len(arg_types) != 1:
+        return None
+    src, dst = T.base_of(arg_types[0]), T.base_of(result) if result is not None else None
+    if not isinstance(src, T.ElementaryType) or not isinstance(dst, T.ElementaryType):
+        return None
+    ints = ("sint", "uint", "bits")
+    if src.kind in ints and dst.kind in ints and dst.min <= src.min and src.max <= dst.max:
+        return codes[0]
+    if src is T.BOOL and dst.kind in ints:
+        return f"int({codes[0]})"
+    if src.kind in ints and dst.is_real and src.bits <= (16 if dst is T.REAL else 32):
+        return f"float({codes[0]})"
+    return None
+
+
+def _cmod(a: int, b: int) -> int:
+    """C's `%` as matiec emits MOD: (b == 0) ? 0 : a % b, the sign of the dividend."""
+    if b == 0:
+        return 0
+    r = a % b
+    if r and (a < 0) != (b < 0):
+        r -= b
+    return r
 
 
 def _concrete(t: Optional[T.Type]) -> Optional[T.Type]:
