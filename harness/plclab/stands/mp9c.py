@@ -14,7 +14,7 @@ from plclab.scenario import ScenarioFailure, Session
 from plclab.stands import PLC_DIR, Stand, Task, Variant, sources
 
 SHARED = ("FC_PackBits7", "FC_BitOf", "FB_Sb1Button", "FB_FrameStore", "FB_PauseTimer",
-          "FB_FrameWatchdog", "FB_Blink", "FB_FrameSequencer", "FB_Mp9cRobot")
+          "FB_FrameWatchdog", "FB_Blink", "FB_ResetIndicator", "FB_FrameSequencer", "FB_Mp9cRobot")
 
 
 def _variant(name: str, prg: str, doc: str) -> Variant:
