@@ -61,7 +61,7 @@ class Console:
         """Set switches now: console.set(SA1=1, SA6=0). Seen by the next scan."""
         plant = self._s.plant
         for name, value in values.items():
-            plant.set_input(name, int(value))
+            plant.set_switch(name, int(value))
         self._s.log(", ".join(f"{k}={int(v)}" for k, v in values.items()))
 
     def press(self, name: str = "SB1", hold: float = 0.2) -> None:

@@ -43,7 +43,11 @@ def check_sources(sources: Iterable[tuple[str, str]]) -> CheckedUnit:
             merged.gvls.extend(unit.gvls)
     if diags:
         raise CompileError(diags)
-    checked = check_unit(merged)
+    try:
+        checked = check_unit(merged)
+    except RecursionError:   # declarations nested beyond Python's stack (bodies are guarded per statement)
+        first = merged.pous[0].file if merged.pous else ""
+        raise CompileError([Diagnostic(first, 1, 1, "declarations nested too deeply")]) from None
     if checked.diagnostics:
         raise CompileError(checked.diagnostics)
     return checked

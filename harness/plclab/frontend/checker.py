@@ -64,6 +64,7 @@ class CheckedUnit:
     globals: dict[str, A.VarDecl]
     config: Optional[A.Configuration]
     diagnostics: list[Diagnostic] = field(default_factory=list)
+    scope_count: int = 1     # global scopes (several GVL files of different stands, no CONFIGURATION)
 
 
 class _Scope:
@@ -110,24 +111,40 @@ class Checker:
         if len(u.configs) > 1:
             for c in u.configs[1:]:
                 self.error(c, "only one CONFIGURATION is allowed in a program")
-        global_blocks = list(u.gvls)
+        # Global scopes. Inside a CONFIGURATION there is one. Without one, each GVL file is a
+        # scope of its own: the files of several stands can be checked together (`plclab
+        # check plc/GVL/*.st plc/POUs/*.st`), each POU against the GVL that declares its
+        # VAR_EXTERNALs, although two stands' consoles both have an SB1.
+        config_blocks = []
         if config:
-            global_blocks += config.globals
+            config_blocks += config.globals
             for res in config.resources:
-                global_blocks += res.globals
-        for block in global_blocks:
-            self._check_block_rules(block, None)
-            for d in block.decls:
-                self._declare_var(d, self.globals, None)
+                config_blocks += res.globals
+        scopes: dict[str, list[A.VarBlock]] = {}
+        for block in u.gvls:
+            scopes.setdefault("" if config else block.file, []).append(block)
+        if config or not scopes:
+            scopes = {"": list(u.gvls) + config_blocks}
+        self.global_scopes: list[dict[str, A.VarDecl]] = []
+        for blocks in scopes.values():
+            self.globals = {}
+            for block in blocks:
+                self._check_block_rules(block, None)
+                for d in block.decls:
+                    self._declare_var(d, self.globals, None)
+            self.global_scopes.append(self.globals)
         for pou in u.pous:
             if pou.key in self.pous and self.pous[pou.key] is pou:
+                self.globals = self._scope_for(pou)
                 self._check_pou_decls(pou)
+        self.globals = self.global_scopes[0]
         for pou in u.pous:
             if pou.key in self.pous and self.pous[pou.key] is pou:
                 self._check_pou_body(pou)
         if config:
             self._check_config(config)
-        return CheckedUnit(u, self.types, self.pous, self.globals, config, sorted(set(self.diags)))
+        return CheckedUnit(u, self.types, self.pous, self.globals, config, sorted(set(self.diags)),
+                           len(self.global_scopes))
 
     def _declare_name(self, node: Any, name: str, what: str) -> bool:
         key = name.upper()
@@ -408,6 +425,10 @@ class Checker:
                 self.error(init, f"an array initializer needs an ARRAY, not {ty.name}")
                 return None
             values: list[Any] = []
+            count = sum(1 if n_e is None else n_e.value for n_e, _item in init.items)
+            if count > base.size:
+                self.error(init, f"{count} initial values for an array of {base.size} elements")
+                return None
             for count_e, item in init.items:
                 n = 1
                 if count_e is not None:
@@ -419,9 +440,6 @@ class Checker:
                     if v is None:
                         return None
                 values.extend(T.copy_value(v) for _ in range(n))
-            if len(values) > base.size:
-                self.error(init, f"{len(values)} initial values for an array of {base.size} elements")
-                return None
             values.extend(T.default_value(base.elem) for _ in range(base.size - len(values)))
             return values
         if isinstance(init, A.StructInit):
@@ -658,6 +676,15 @@ class Checker:
             return a.dims == b.dims and Checker._decl_types_match(a.elem, b.elem)
         return False
 
+    def _scope_for(self, pou: A.PouDecl) -> dict[str, A.VarDecl]:
+        """The global scope whose names cover the POU's VAR_EXTERNALs (the first one if none
+        does: the missing names are then reported)."""
+        if len(self.global_scopes) == 1:
+            return self.global_scopes[0]
+        wanted = {d.key for d in pou.decls if d.section == "VAR_EXTERNAL"}
+        best = max(self.global_scopes, key=lambda g: len(wanted & g.keys()))
+        return best
+
     def _check_pou_decls(self, pou: A.PouDecl) -> None:
         names: dict[str, Any] = {}
         if pou.kind == "FUNCTION":
@@ -708,7 +735,14 @@ class Checker:
         scope = _Scope(pou, pou.symbols or {})
         if not pou.body:
             self.error(pou, f"{pou.kind} '{pou.name}' has no statements: OpenPLC's compiler needs at least one")
-        self.stmts(pou.body, scope)
+        for s in pou.body:
+            try:
+                self.stmt(s, scope)
+            except RecursionError:
+                scope.for_vars.clear()
+                scope.loop_depth = 0
+                self.error(s, "this statement nests IF/CASE/loops or operators too deeply (a few hundred "
+                              "levels); split it into smaller statements or functions")
 
     def body(self, body: list[A.Stmt], scope: _Scope, where: Any, what: str) -> None:
         """A statement list that OpenPLC's compiler requires to be non-empty."""

@@ -26,21 +26,35 @@ def _digits(text: str) -> str:
     return text.replace("_", "")
 
 
+ULINT_MAX = 2**64 - 1
+
+
+def _checked_int(digits: str, base: int, text: str) -> int:
+    # the length test first: int() refuses very long digit strings with an unrelated message
+    if len(digits.lstrip("0")) > 64 or int(digits, base) > ULINT_MAX:
+        shown = text if len(text) <= 30 else text[:27] + "..."
+        raise LiteralError(f"integer literal {shown} is too large (the largest is {ULINT_MAX}, ULINT)")
+    return int(digits, base)
+
+
 def parse_int(text: str) -> int:
-    return int(_digits(text))
+    return _checked_int(_digits(text), 10, text)
 
 
 def parse_based(text: str) -> int:
     base, _, digits = text.partition("#")
     if not digits or digits.startswith("_"):
         raise LiteralError(f"malformed based number '{text}'")
-    return int(_digits(digits), int(base))
+    return _checked_int(_digits(digits), int(base), text)
 
 
 def parse_real(text: str) -> float:
     mantissa, _, exp = text.lower().partition("e")
-    value = _digits(mantissa) + (("e" + _digits(exp)) if exp else "")
-    return float(value)
+    value = float(_digits(mantissa) + (("e" + _digits(exp)) if exp else ""))
+    if value == float("inf"):
+        shown = text if len(text) <= 30 else text[:27] + "..."
+        raise LiteralError(f"real literal {shown} is too large even for LREAL")
+    return value
 
 
 def parse_time(text: str) -> int:

@@ -6,12 +6,13 @@ kept), which is what keeps a 5,000-line program well under the benchmark's 0.5 s
 from __future__ import annotations
 
 import re
+import threading
 from functools import lru_cache
 from importlib import resources
 from typing import Any, Iterable
 
-from lark import Lark, Token, Transformer, v_args
-from lark.exceptions import LarkError, UnexpectedCharacters, UnexpectedEOF, UnexpectedInput, UnexpectedToken, VisitError
+from lark import Lark, Token, Transformer
+from lark.exceptions import LarkError, UnexpectedCharacters, UnexpectedEOF, UnexpectedToken
 
 from plclab.errors import Diagnostic
 from plclab.frontend import ast as A
@@ -35,12 +36,17 @@ class _Positioned(Exception):
         self.line, self.col, self.message = line, col, message
 
 
-def _pos(meta_or_tok: Any) -> tuple[int, int]:
-    if isinstance(meta_or_tok, Token):
-        return meta_or_tok.line or 1, meta_or_tok.column or 1
-    if getattr(meta_or_tok, "empty", True):
-        return 1, 1
-    return meta_or_tok.line, meta_or_tok.column
+def _first_pos(c: Any) -> tuple[int, int] | None:
+    if isinstance(c, Token):
+        return c.line or 1, c.column or 1
+    if isinstance(c, A.Node):
+        return c.line, c.col
+    if isinstance(c, (list, tuple)):
+        for x in c:
+            pos = _first_pos(x)
+            if pos:
+                return pos
+    return None
 
 
 def _words(children: Iterable[Any]) -> list[Any]:
@@ -56,7 +62,6 @@ _VALUE_TOKENS = {"IDENT", "ELEMENTARY", "INTEGER", "BASED_INTEGER", "REAL_NUMBER
                  "WSTRING_KW", "AT", "SINGLE", "INTERVAL", "ELSE", "BY", "WITH"}
 
 
-@v_args(meta=True)
 class _Builder(Transformer):
     """Builds AST nodes bottom-up while the LALR parser reduces."""
 
@@ -65,8 +70,9 @@ class _Builder(Transformer):
         self.file = file
 
     # -- helpers ------------------------------------------------------------------------
-    def _at(self, meta: Any) -> dict:
-        line, col = _pos(meta)
+    def _at(self, children: Any) -> dict:
+        """Position of a node: that of its first child that has one (a token or a node)."""
+        line, col = _first_pos(children) or (1, 1)
         return {"line": line, "col": col, "file": self.file}
 
     def _tok(self, tok: Token) -> dict:
@@ -78,11 +84,12 @@ class _Builder(Transformer):
         except L.LiteralError as e:
             raise _Positioned(tok.line, tok.column, str(e)) from None
         except (ValueError, OverflowError):
-            raise _Positioned(tok.line, tok.column, f"malformed literal '{tok}'") from None
+            shown = tok if len(tok) <= 30 else tok[:27] + "..."
+            raise _Positioned(tok.line, tok.column, f"malformed literal '{shown}'") from None
         return A.Literal(**self._tok(tok), kind=kind, value=value, type_name=type_name, text=str(tok))
 
     # -- top level ------------------------------------------------------------------------
-    def start(self, meta, children):
+    def start(self, children):
         unit = A.Unit(line=1, col=1, file=self.file)
         for c in children:
             if isinstance(c, A.TypeBlock):
@@ -95,81 +102,81 @@ class _Builder(Transformer):
                 unit.gvls.append(c.block)
         return unit
 
-    def gvl(self, meta, children):
+    def gvl(self, children):
         (block,) = children
-        return A.GlobalBlock(**self._at(meta), block=block)
+        return A.GlobalBlock(**self._at(children), block=block)
 
     # -- types ----------------------------------------------------------------------------
-    def type_block(self, meta, children):
-        return A.TypeBlock(**self._at(meta), decls=[c for c in children if isinstance(c, A.TypeDecl)])
+    def type_block(self, children):
+        return A.TypeBlock(**self._at(children), decls=[c for c in children if isinstance(c, A.TypeDecl)])
 
-    def type_decl(self, meta, children):
+    def type_decl(self, children):
         name, (type_ref, init) = children
         return A.TypeDecl(**self._tok(name), name=str(name), type_ref=type_ref, init=init)
 
-    def type_def(self, meta, children):
+    def type_def(self, children):
         return (children[0], children[1] if len(children) > 1 else None)
 
-    def type_def_struct(self, meta, children):
+    def type_def_struct(self, children):
         return (children[0], None)
 
-    def struct_spec(self, meta, children):
-        return A.StructTypeRef(**self._at(meta), fields=[c for c in children if isinstance(c, A.VarDecl)])
+    def struct_spec(self, children):
+        return A.StructTypeRef(**self._at(children), fields=[c for c in children if isinstance(c, A.VarDecl)])
 
-    def struct_field(self, meta, children):
+    def struct_field(self, children):
         name, type_ref, init = children
         return A.VarDecl(**self._tok(name), name=str(name), type_ref=type_ref, init=init, section="STRUCT")
 
-    def named_type(self, meta, children):
+    def named_type(self, children):
         (tok,) = children
         return A.NamedType(**self._tok(tok), name=str(tok))
 
-    def subrange_type(self, meta, children):
+    def subrange_type(self, children):
         base, lo, hi = children
-        return A.SubrangeTypeRef(**self._at(meta), base=base, lo=lo, hi=hi)
+        return A.SubrangeTypeRef(**self._at(children), base=base, lo=lo, hi=hi)
 
-    def string_type(self, meta, children):
-        return A.StringTypeRef(**self._at(meta), wide=False, length=children[1])
+    def string_type(self, children):
+        return A.StringTypeRef(**self._at(children), wide=False, length=children[1])
 
-    def wstring_type(self, meta, children):
-        return A.StringTypeRef(**self._at(meta), wide=True, length=children[1])
+    def wstring_type(self, children):
+        return A.StringTypeRef(**self._at(children), wide=True, length=children[1])
 
-    def array_type(self, meta, children):
+    def array_type(self, children):
         w = _words(children)
         ranges = [c for c in w if isinstance(c, tuple)]
         elem = w[-1]
-        return A.ArrayTypeRef(**self._at(meta), ranges=ranges, elem=elem)
+        return A.ArrayTypeRef(**self._at(children), ranges=ranges, elem=elem)
 
-    def array_range(self, meta, children):
+    def array_range(self, children):
         return (children[0], children[1])
 
-    def enum_type(self, meta, children):
-        (values,) = children
-        return A.EnumTypeRef(**self._at(meta), values=values)
+    def enum_type(self, children):
+        _lpar, values = children
+        return A.EnumTypeRef(**self._at(children), values=values)
 
-    def enum_values(self, meta, children):
+    def enum_values(self, children):
         return [(str(t), t.line, t.column) for t in children]
 
     # -- initializers ---------------------------------------------------------------------
-    def array_init(self, meta, children):
-        return A.ArrayInit(**self._at(meta), items=list(children))
+    def array_init(self, children):
+        return A.ArrayInit(**self._at(children), items=list(children[1:]))
 
-    def array_item(self, meta, children):
+    def array_item(self, children):
         return (None, children[0])
 
-    def array_repeat(self, meta, children):
+    def array_repeat(self, children):
         count, value = children
         return (self._lit(L.parse_int, count, "int"), value)
 
-    def struct_init(self, meta, children):
-        return A.StructInit(**self._at(meta), fields=list(children))
+    def struct_init(self, children):
+        return A.StructInit(**self._at(children), fields=list(children[1:]))
 
-    def struct_init_item(self, meta, children):
+    def struct_init_item(self, children):
         name, value = children
         return (str(name), name.line, name.column, value)
 
     # -- POUs -------------------------------------------------------------------------------
-    def _pou(self, meta, kind, children, has_return=False):
+    def _pou(self, kind, children, has_return=False):
         w = _words(children)
         name = w[0]
         ret = w[1] if has_return else None
@@ -182,42 +189,42 @@ class _Builder(Transformer):
         pou.end_line = end.line if isinstance(end, Token) else 0
         return pou
 
-    def function(self, meta, children):
-        return self._pou(meta, "FUNCTION", children, has_return=True)
+    def function(self, children):
+        return self._pou("FUNCTION", children, has_return=True)
 
-    def function_block(self, meta, children):
-        return self._pou(meta, "FUNCTION_BLOCK", children)
+    def function_block(self, children):
+        return self._pou("FUNCTION_BLOCK", children)
 
-    def program(self, meta, children):
-        return self._pou(meta, "PROGRAM", children)
+    def program(self, children):
+        return self._pou("PROGRAM", children)
 
-    def var_kind(self, meta, children):
+    def var_kind(self, children):
         return children[0]
 
-    def var_qualifier(self, meta, children):
+    def var_qualifier(self, children):
         return children[0]
 
-    def edge(self, meta, children):
+    def edge(self, children):
         return str(children[0]).upper()
 
-    def var_block(self, meta, children):
+    def var_block(self, children):
         kind = children[0]
-        return self._block(meta, str(kind).upper(), children[1:])
+        return self._block(kind, str(kind).upper(), children[1:])
 
-    def global_var_block(self, meta, children):
-        return self._block(meta, "VAR_GLOBAL", children[1:])
+    def global_var_block(self, children):
+        return self._block(children[0], "VAR_GLOBAL", children[1:])
 
-    def _block(self, meta, section, rest):
+    def _block(self, first: Token, section, rest):
         quals = [str(c).upper() for c in rest if isinstance(c, Token) and c.type in ("CONSTANT", "RETAIN", "NON_RETAIN")]
         decls = [d for c in rest if isinstance(c, list) for d in c]
         constant, retain = "CONSTANT" in quals, "RETAIN" in quals
         for d in decls:
             d.section, d.constant, d.retain = section, constant, retain
-        block = A.VarBlock(**self._at(meta), section=section, constant=constant, retain=retain, decls=decls)
+        block = A.VarBlock(**self._tok(first), section=section, constant=constant, retain=retain, decls=decls)
         block.qualifiers = quals  # type: ignore[attr-defined]
         return block
 
-    def var_decl(self, meta, children):
+    def var_decl(self, children):
         names = []
         location = None
         type_ref = None
@@ -246,7 +253,7 @@ class _Builder(Transformer):
             d.group_size = len(names)  # type: ignore[attr-defined]
         return decls
 
-    def anon_located(self, meta, children):
+    def anon_located(self, children):
         w = [c for c in children if c is not None and not (isinstance(c, Token) and c.type == "AT")]
         loc_tok, type_ref = w[0], w[1]
         init = w[2] if len(w) > 2 else None
@@ -269,7 +276,7 @@ class _Builder(Transformer):
         return A.Location(**self._tok(tok), text=text.upper(), area=area, size=size, parts=parts)
 
     # -- configuration --------------------------------------------------------------------
-    def config_single(self, meta, children):
+    def config_single(self, children):
         w = _words(children)
         name = w[0]
         globals_ = [c for c in w if isinstance(c, A.VarBlock)]
@@ -277,25 +284,25 @@ class _Builder(Transformer):
         res = A.Resource(**self._tok(name), name="", on="", globals=[], tasks=tasks, programs=programs)
         return A.Configuration(**self._tok(name), name=str(name), globals=globals_, resources=[res])
 
-    def config(self, meta, children):
+    def config(self, children):
         w = _words(children)
         name = w[0]
         return A.Configuration(**self._tok(name), name=str(name),
                                globals=[c for c in w if isinstance(c, A.VarBlock)],
                                resources=[c for c in w if isinstance(c, A.Resource)])
 
-    def resource(self, meta, children):
+    def resource(self, children):
         w = _words(children)
         name, on = w[0], w[1]
         tasks, programs = w[-1]
         return A.Resource(**self._tok(name), name=str(name), on=str(on),
                           globals=[c for c in w if isinstance(c, A.VarBlock)], tasks=tasks, programs=programs)
 
-    def resource_body(self, meta, children):
+    def resource_body(self, children):
         return ([c for c in children if isinstance(c, A.TaskDecl)],
                 [c for c in children if isinstance(c, A.ProgramInstance)])
 
-    def task(self, meta, children):
+    def task(self, children):
         name = children[1]
         params = [c for c in children[2:] if isinstance(c, tuple)]
         found: dict[str, Any] = {}
@@ -316,10 +323,10 @@ class _Builder(Transformer):
         return A.TaskDecl(**self._tok(name), name=str(name), single=found.get("SINGLE"),
                           interval=found.get("INTERVAL"), priority=found["PRIORITY"])
 
-    def task_param(self, meta, children):
+    def task_param(self, children):
         return (children[0], children[1])
 
-    def program_config(self, meta, children):
+    def program_config(self, children):
         retain = None
         idents = []
         args = []
@@ -342,24 +349,24 @@ class _Builder(Transformer):
                                  type_name=str(type_name), args=args, retain=retain)
 
     # -- statements -------------------------------------------------------------------------
-    def stmt_list(self, meta, children):
+    def stmt_list(self, children):
         return list(children)
 
-    def assign(self, meta, children):
+    def assign(self, children):
         target, value = children
         return A.Assign(line=target.line, col=target.col, file=self.file, target=target, value=value)
 
-    def call_stmt(self, meta, children):
+    def call_stmt(self, children):
         name = children[0]
         target = A.Name(**self._tok(name), name=str(name))
         return A.CallStmt(**self._tok(name), target=target, args=[a for a in children[1:] if a is not None])
 
-    def call_stmt_path(self, meta, children):
+    def call_stmt_path(self, children):
         target = children[0]
         return A.CallStmt(line=target.line, col=target.col, file=self.file, target=target,
                           args=[a for a in children[1:] if a is not None])
 
-    def if_stmt(self, meta, children):
+    def if_stmt(self, children):
         w = _words(children)
         branches = [(w[0], w[1])]
         rest = w[2:]
@@ -369,13 +376,13 @@ class _Builder(Transformer):
                 branches.append(c)
             elif isinstance(c, list):
                 else_body = c
-        return A.If(**self._at(meta), branches=branches, else_body=else_body)
+        return A.If(**self._at(children), branches=branches, else_body=else_body)
 
-    def elsif(self, meta, children):
+    def elsif(self, children):
         w = _words(children)
         return (w[0], w[1])
 
-    def case_stmt(self, meta, children):
+    def case_stmt(self, children):
         # children: CASE selector OF head (head | stmt)* [ELSE stmt_list] END_CASE
         sel = children[1]
         branches: list[A.CaseBranch] = []
@@ -388,56 +395,56 @@ class _Builder(Transformer):
             elif isinstance(c, Token) and c.type == "ELSE":
                 else_body = children[i + 1]
                 break
-        return A.Case(**self._at(meta), selector=sel, branches=branches, else_body=else_body)
+        return A.Case(**self._at(children), selector=sel, branches=branches, else_body=else_body)
 
-    def case_head(self, meta, children):
+    def case_head(self, children):
         labels = [c for c in children if isinstance(c, A.CaseLabel)]
-        return A.CaseBranch(**self._at(meta), labels=labels, body=[])
+        return A.CaseBranch(**self._at(children), labels=labels, body=[])
 
-    def case_label(self, meta, children):
+    def case_label(self, children):
         lo, hi = children
         return A.CaseLabel(line=lo.line, col=lo.col, file=self.file, lo=lo, hi=hi)
 
-    def for_stmt(self, meta, children):
+    def for_stmt(self, children):
         # children: FOR IDENT start TO end (BY step | None None) DO body END_FOR
         var, start, end, step, body = children[1], children[2], children[4], children[6], children[8]
-        return A.For(**self._at(meta), var=A.Name(**self._tok(var), name=str(var)),
+        return A.For(**self._at(children), var=A.Name(**self._tok(var), name=str(var)),
                      start=start, end=end, step=step, body=body)
 
-    def while_stmt(self, meta, children):
+    def while_stmt(self, children):
         w = _words(children)
-        return A.While(**self._at(meta), cond=w[0], body=w[1])
+        return A.While(**self._at(children), cond=w[0], body=w[1])
 
-    def repeat_stmt(self, meta, children):
+    def repeat_stmt(self, children):
         w = _words(children)
-        return A.Repeat(**self._at(meta), body=w[0], cond=w[1])
+        return A.Repeat(**self._at(children), body=w[0], cond=w[1])
 
-    def exit_stmt(self, meta, children):
-        return A.Exit(**self._at(meta))
+    def exit_stmt(self, children):
+        return A.Exit(**self._at(children))
 
-    def continue_stmt(self, meta, children):
-        return A.Continue(**self._at(meta))
+    def continue_stmt(self, children):
+        return A.Continue(**self._at(children))
 
-    def return_stmt(self, meta, children):
-        return A.Return(**self._at(meta))
+    def return_stmt(self, children):
+        return A.Return(**self._at(children))
 
-    def empty_stmt(self, meta, children):
-        return A.Empty(**self._at(meta))
+    def empty_stmt(self, children):
+        return A.Empty(**self._at(children))
 
     # -- arguments ----------------------------------------------------------------------------
-    def arg_in(self, meta, children):
+    def arg_in(self, children):
         name, value = children
         return A.Arg(**self._tok(name), name=str(name), value=value)
 
-    def arg_out(self, meta, children):
+    def arg_out(self, children):
         name, _arrow, target = children
         return A.Arg(**self._tok(name), name=str(name), value=target, is_output=True)
 
-    def arg_out_not(self, meta, children):
+    def arg_out_not(self, children):
         _not, name, _arrow, target = children
         return A.Arg(**self._tok(name), name=str(name), value=target, is_output=True, negated=True)
 
-    def arg_pos(self, meta, children):
+    def arg_pos(self, children):
         (value,) = children
         return A.Arg(line=value.line, col=value.col, file=self.file, name=None, value=value)
 
@@ -447,28 +454,28 @@ class _Builder(Transformer):
         return A.Binary(line=left.line, col=left.col, file=self.file,
                         op=op or str(optok).upper(), left=left, right=right)
 
-    def bin_or(self, meta, c):
+    def bin_or(self, c):
         return self._bin(c, "OR")
 
-    def bin_xor(self, meta, c):
+    def bin_xor(self, c):
         return self._bin(c, "XOR")
 
-    def bin_and(self, meta, c):
+    def bin_and(self, c):
         return A.Binary(line=c[0].line, col=c[0].col, file=self.file, op="AND", left=c[0], right=c[-1])
 
-    def bin_cmp(self, meta, c):
+    def bin_cmp(self, c):
         return self._bin(c)
 
-    def bin_arith(self, meta, c):
+    def bin_arith(self, c):
         return self._bin(c)
 
-    def bin_mod(self, meta, c):
+    def bin_mod(self, c):
         return self._bin(c, "MOD")
 
-    def bin_pow(self, meta, c):
+    def bin_pow(self, c):
         return A.Binary(line=c[0].line, col=c[0].col, file=self.file, op="**", left=c[0], right=c[-1])
 
-    def neg(self, meta, children):
+    def neg(self, children):
         minus, operand = children
         if isinstance(operand, A.Literal) and operand.kind in ("int", "real", "time") and operand.type_name is None \
                 and not operand.text.startswith("("):
@@ -479,92 +486,92 @@ class _Builder(Transformer):
             return operand
         return A.Unary(**self._tok(minus), op="-", operand=operand)
 
-    def pos(self, meta, children):
+    def pos(self, children):
         plus, operand = children
         operand.line, operand.col = plus.line, plus.column
         operand.text = "+" + operand.text
         return operand
 
-    def neg_neg(self, meta, children):
+    def neg_neg(self, children):
         minus, inner_minus, operand = children
-        return A.Unary(**self._tok(minus), op="-", operand=self.neg(meta, [inner_minus, operand]))
+        return A.Unary(**self._tok(minus), op="-", operand=self.neg([inner_minus, operand]))
 
-    def neg_pos(self, meta, children):
+    def neg_pos(self, children):
         minus, plus, operand = children
-        return A.Unary(**self._tok(minus), op="-", operand=self.pos(meta, [plus, operand]))
+        return A.Unary(**self._tok(minus), op="-", operand=self.pos([plus, operand]))
 
-    def not_(self, meta, children):
+    def not_(self, children):
         tok, operand = children
         return A.Unary(**self._tok(tok), op="NOT", operand=operand)
 
-    def call(self, meta, children):
+    def call(self, children):
         name = children[0]
         return A.Call(**self._tok(name), name=str(name), args=[a for a in children[1:] if a is not None])
 
-    def call_operator_name(self, meta, children):
+    def call_operator_name(self, children):
         # `AND(a, b)`, `MOD(a, b)`: standard functions whose names are also operator keywords
         name = children[0]
         return A.Call(**self._tok(name), name=str(name).upper(), args=[a for a in children[1:] if a is not None])
 
-    def name(self, meta, children):
+    def name(self, children):
         (tok,) = children
         return A.Name(**self._tok(tok), name=str(tok))
 
-    def variable_path(self, meta, children):
+    def variable_path(self, children):
         return children[0]
 
-    def member(self, meta, children):
+    def member(self, children):
         base, name = children
         return A.Member(line=base.line, col=base.col, file=self.file, base=base, name=str(name))
 
-    def member_name(self, meta, children):
+    def member_name(self, children):
         return children[0]
 
-    def index(self, meta, children):
+    def index(self, children):
         base = children[0]
         return A.Index(line=base.line, col=base.col, file=self.file, base=base, indexes=list(children[1:]))
 
     # -- literals ---------------------------------------------------------------------------
-    def int_lit(self, meta, c):
+    def int_lit(self, c):
         return self._lit(L.parse_int, c[0], "int")
 
-    def based_lit(self, meta, c):
+    def based_lit(self, c):
         return self._lit(L.parse_based, c[0], "int")
 
-    def real_lit(self, meta, c):
+    def real_lit(self, c):
         return self._lit(L.parse_real, c[0], "real")
 
-    def true_lit(self, meta, c):
+    def true_lit(self, c):
         return A.Literal(**self._tok(c[0]), kind="bool", value=True, text=str(c[0]))
 
-    def false_lit(self, meta, c):
+    def false_lit(self, c):
         return A.Literal(**self._tok(c[0]), kind="bool", value=False, text=str(c[0]))
 
-    def time_lit(self, meta, c):
+    def time_lit(self, c):
         return self._lit(L.parse_time, c[0], "time")
 
-    def date_lit(self, meta, c):
+    def date_lit(self, c):
         return self._lit(L.parse_date, c[0], "date")
 
-    def tod_lit(self, meta, c):
+    def tod_lit(self, c):
         return self._lit(L.parse_tod, c[0], "tod")
 
-    def dt_lit(self, meta, c):
+    def dt_lit(self, c):
         return self._lit(L.parse_dt, c[0], "dt")
 
-    def string_lit(self, meta, c):
+    def string_lit(self, c):
         return self._lit(L.parse_string, c[0], "string")
 
-    def wstring_lit(self, meta, c):
+    def wstring_lit(self, c):
         return self._lit(L.parse_string, c[0], "wstring")
 
-    def neg_typed(self, meta, c):
+    def neg_typed(self, c):
         return ("-", c[1])
 
-    def pos_typed(self, meta, c):
+    def pos_typed(self, c):
         return ("+", c[1])
 
-    def typed_lit(self, meta, children):
+    def typed_lit(self, children):
         prefix, value = children
         type_name = str(prefix)[:-1].upper()
         sign = 1
@@ -591,9 +598,19 @@ def _grammar() -> str:
     return resources.files("plclab.frontend").joinpath("st.lark").read_text(encoding="utf-8")
 
 
+# One parser for the process: the LALR tables are built once, and the AST builder runs inline
+# as the parser reduces (no parse tree is kept). `_BUILDER.file` is set per parse under a lock.
+_BUILDER_LOCK = threading.Lock()
+
+
+@lru_cache(maxsize=1)
+def _builder() -> "_Builder":
+    return _Builder("")
+
+
 @lru_cache(maxsize=1)
 def _parser_for_errors() -> Lark:
-    return Lark(_grammar(), parser="lalr", lexer="contextual", propagate_positions=True,
+    return Lark(_grammar(), parser="lalr", lexer="contextual", transformer=_builder(),
                 lexer_callbacks={"IDENT": _reject_keyword})
 
 
@@ -615,12 +632,6 @@ def _reject_keyword(tok: Token) -> Token:
     if word in _keywords():
         raise _Positioned(tok.line, tok.column, f"'{tok.value}' is a reserved word; it cannot be used as a name")
     return tok
-
-
-def _make_parser(file: str) -> Lark:
-    base = _parser_for_errors()
-    # Re-using the compiled tables: only the transformer differs per file.
-    return base, _Builder(file)
 
 
 def _describe_expected(expected: Iterable[str]) -> str:
@@ -663,10 +674,10 @@ def parse_source(text: str, file: str) -> tuple[A.Unit | None, list[Diagnostic]]
     if comment:
         return None, [Diagnostic(file, *comment, "unterminated comment: '(*' without '*)'")]
     lark = _parser_for_errors()
-    builder = _Builder(file)
     try:
-        tree = lark.parse(text)
-        unit = builder.transform(tree)
+        with _BUILDER_LOCK:
+            _builder().file = file
+            unit = lark.parse(text)
         return unit, []
     except UnexpectedCharacters as e:
         return None, [_lex_error(text, file, e)]
@@ -676,13 +687,6 @@ def parse_source(text: str, file: str) -> tuple[A.Unit | None, list[Diagnostic]]
         return None, [Diagnostic(file, text.count("\n") + 1, 1, "unexpected end of file")]
     except _Positioned as e:
         return None, [Diagnostic(file, e.line, e.col, e.message)]
-    except VisitError as e:
-        orig = e.orig_exc
-        if isinstance(orig, _Positioned):
-            return None, [Diagnostic(file, orig.line, orig.col, orig.message)]
-        if isinstance(orig, RecursionError):
-            return None, [Diagnostic(file, 1, 1, "program nested too deeply")]
-        raise
     except RecursionError:
         return None, [Diagnostic(file, 1, 1, "program nested too deeply")]
 
@@ -720,7 +724,7 @@ _OPENERS = {"IF": "END_IF", "CASE": "END_CASE", "FOR": "END_FOR", "WHILE": "END_
             "CONFIGURATION": "END_CONFIGURATION", "RESOURCE": "END_RESOURCE"}
 _VAR_OPENERS = {"VAR", "VAR_INPUT", "VAR_OUTPUT", "VAR_IN_OUT", "VAR_EXTERNAL", "VAR_GLOBAL", "VAR_TEMP"}
 _CLOSERS = set(_OPENERS.values()) | {"END_VAR"}
-_SCAN = re.compile(r"'(?:[^'$\n]|\$[^\n])*'|\"(?:[^\"$\n]|\$[^\n])*\"|\(\*.*?\*\)|\(\*", re.S)
+_SCAN = re.compile(r"'[^'$\n]*(?:\$[^\n][^'$\n]*)*'|\"[^\"$\n]*(?:\$[^\n][^\"$\n]*)*\"|\(\*.*?\*\)|\(\*", re.S)
 
 
 def _unterminated_comment(text: str) -> tuple[int, int] | None:

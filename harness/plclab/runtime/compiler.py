@@ -113,7 +113,7 @@ class Compiler:
         self.consts: dict[str, Any] = {}
         self.const_ids: dict[int, str] = {}
         self.ns: dict[str, Any] = {
-            "_bound": _bound, "_cmod": _cmod,
+            "_bound": _bound, "_cmod": _cmod, "_store_into": _store_into,
             "_f32": T.to_f32, "_copy": T.copy_value, "Ref": Ref, "PlcFault": PlcFault,
             "_StructValue": T.StructValue,
             "_Locals": _Locals, "_NegRef": _NegRef,
@@ -422,18 +422,10 @@ class Compiler:
         if isinstance(b, T.StringType) and b.length < 126:
             value_code = f"({value_code})[:{b.length}]"
         if isinstance(b, (T.ArrayType, T.StructType)):
-            if value is not None and isinstance(value, A.Call):
-                pass
-            else:
-                value_code = f"_copy({value_code})"
-            # a VAR_IN_OUT array/struct is the caller's object: update it in place
-            if isinstance(target, A.Name) and isinstance(target.sym, A.VarDecl) and \
-                    target.sym.section == "VAR_IN_OUT":
-                if isinstance(b, T.ArrayType):
-                    self.out.emit(ind, f"{self.lvalue_get(target)}[:] = {value_code}", node)
-                else:
-                    self.out.emit(ind, f"{self.lvalue_get(target)}.__dict__.update({value_code}.__dict__)", node)
-                return
+            # IEC variables have fixed storage: copy the value into it (this also keeps
+            # VAR_IN_OUT references and watched elements pointing at the variable)
+            self.out.emit(ind, f"_store_into({self.lvalue_get(target)}, {value_code})", node)
+            return
         self.out.emit(ind, self.store(target, value_code), node)
 
     def store(self, target: A.Expr, value_code: str) -> str:
@@ -760,6 +752,24 @@ def _inline_conversion(name: str, arg_types: list, result: Optional[T.Type], cod
     if src.kind in ints and dst.is_real and src.bits <= (16 if dst is T.REAL else 32):
         return f"float({codes[0]})"
     return None
+
+
+def _store_into(dst: Any, src: Any) -> None:
+    """Assign an ARRAY or STRUCT value into existing storage, element by element."""
+    if isinstance(dst, list):
+        if dst and isinstance(dst[0], (list, T.StructValue)):
+            for d, v in zip(dst, src):
+                _store_into(d, v)
+        else:
+            dst[:] = src
+        return
+    fields = dst.__dict__
+    for k, v in src.__dict__.items():
+        cur = fields.get(k)
+        if isinstance(cur, (list, T.StructValue)):
+            _store_into(cur, v)
+        else:
+            fields[k] = v
 
 
 def _cmod(a: int, b: int) -> int:

@@ -10,6 +10,7 @@ This is OpenPLC's scan cycle; the clock that timers read advances by one base ti
 from __future__ import annotations
 
 import math
+import re
 import struct
 import sys
 import time
@@ -84,6 +85,9 @@ class PLC:
                  retain: Any = None, retain_period_ns: int = 1_000_000_000):
         self.compiled = compiled
         self.checked: CheckedUnit = compiled.checked
+        if self.checked.scope_count > 1:
+            raise PlcLabError("these files hold the globals of several stands (GVL files): "
+                              "give the files of one program")
         self.image = image if image is not None else ProcessImage()
         self.watchdog_s = watchdog_s
         self.retain_store = retain
@@ -342,44 +346,67 @@ class PLC:
 
     # ------------------------------------------------------------------ access by name
     def resolve(self, name: str) -> tuple[Any, Any]:
-        """(owner, attribute) of a located address, global name or `instance.var[.field]` path."""
+        """(container, key) of a located address, a global, or a path such as
+        `Main.Robot.Sequencer.Ptr` or `Positions[2]` / `Main.Cp.Frames[3].Data[1]`: the value
+        is `container[key]` for an array element, else `getattr(container, key)`."""
         up = name.strip().upper()
         if up.startswith("%"):
             for b in self.bindings:
                 if b.address == up:
                     return b.owner, b.attr
             raise PlcLabError(f"no variable is located at {name}")
-        parts = up.split(".")
-        if len(parts) == 1:
-            if hasattr(self.G, parts[0]):
-                return self.G, parts[0]
-            for inst in self.instances:
-                if hasattr(inst.obj, parts[0]) and parts[0] in getattr(type(inst.obj), "__slots__", ()):
-                    return inst.obj, parts[0]
-            raise PlcLabError(f"unknown variable '{name}'")
-        owner: Any
-        if parts[0] in self.instance_by_name:
-            owner = self.instance_by_name[parts[0]].obj
-        elif hasattr(self.G, parts[0]):
-            owner = getattr(self.G, parts[0])
-            parts = parts[1:]
-            if not parts:
-                return self.G, name.upper()
-            parts = [None] + parts  # type: ignore[list-item]
+        steps = re.findall(r"\.?\s*([A-Z_][A-Z0-9_]*)|\[([^\]]*)\]", up)
+        if not steps or not steps[0][0] or "".join(
+                (("." if i and n else "") + n) if n else f"[{ix}]" for i, (n, ix) in enumerate(steps)
+        ).replace(" ", "") != up.replace(" ", ""):
+            raise PlcLabError(f"malformed variable name '{name}'")
+        unknown = PlcLabError(f"unknown variable '{name}'")
+        first = steps[0][0]
+        if first in self.instance_by_name and len(steps) > 1:
+            inst = self.instance_by_name[first]
+            container, key, ty = inst.obj, None, T.FBType(inst.name, inst.decl.pou if inst.decl else
+                                                         self.checked.pous[type(inst.obj)._ST_NAME.upper()])
+            steps = steps[1:]
+        elif first in self.checked.globals and hasattr(self.G, first):
+            container, key, ty = self.G, first, self.checked.globals[first].ty
+            steps = steps[1:]
         else:
-            raise PlcLabError(f"unknown variable '{name}'")
-        for p in parts[1:-1]:
-            try:
-                owner = getattr(owner, p)
-            except AttributeError:
-                raise PlcLabError(f"unknown variable '{name}'") from None
-        if not hasattr(owner, parts[-1]):
-            raise PlcLabError(f"unknown variable '{name}'")
-        return owner, parts[-1]
+            for inst in self.instances:
+                if first in getattr(type(inst.obj), "__slots__", ()):
+                    pou = self.checked.pous[type(inst.obj)._ST_NAME.upper()]
+                    container, key, ty = inst.obj, first, pou.symbols[first].ty
+                    steps = steps[1:]
+                    break
+            else:
+                raise unknown
+        for field, index in steps:
+            value = container if key is None else _get(container, key)
+            if field:
+                sub = _member_type(ty, field)
+                if sub is None or not hasattr(value, field):
+                    raise unknown
+                container, key, ty = value, field, sub
+            else:
+                arr = T.base_of(ty)
+                if not isinstance(arr, T.ArrayType):
+                    raise unknown
+                try:
+                    idx = [int(x) for x in index.split(",")]
+                except ValueError:
+                    raise PlcLabError(f"'{name}': array indexes must be integers") from None
+                if len(idx) != len(arr.dims) or any(not lo <= i <= hi for i, (lo, hi) in zip(idx, arr.dims)):
+                    raise PlcLabError(f"'{name}': index outside {arr.name}")
+                flat = 0
+                for i, (lo, hi) in zip(idx, arr.dims):
+                    flat = flat * (hi - lo + 1) + (i - lo)
+                container, key, ty = value, flat, arr.elem
+        if key is None:
+            raise unknown
+        return container, key
 
     def read(self, name: str) -> Any:
-        owner, attr = self.resolve(name)
-        return getattr(owner, attr)
+        container, key = self.resolve(name)
+        return _get(container, key)
 
     def write(self, name: str, value: Any) -> None:
         """Set a variable (for inputs prefer the image: the next scan samples it)."""
@@ -393,13 +420,41 @@ class PLC:
                     return
             self.write_address(up, value)
             return
-        owner, attr = self.resolve(name)
-        setattr(owner, attr, value)
+        container, key = self.resolve(name)
+        _set(container, key, value)
 
     def write_address(self, address: str, value: Any) -> None:
         """Write a raw value into the image at an address no variable is located at."""
         area, index = parse_address(address)
         self.image.areas[area][index] = int(value) & ((1 << image_bits(area)) - 1)
+
+
+def _get(container: Any, key: Any) -> Any:
+    return container[key] if isinstance(container, list) else getattr(container, key)
+
+
+def _set(container: Any, key: Any, value: Any) -> None:
+    if isinstance(container, list):
+        container[key] = value
+    else:
+        setattr(container, key, value)
+
+
+def _member_type(ty: T.Type, name: str) -> Optional[T.Type]:
+    """The type of field / FB variable `name` of a value of type `ty`."""
+    b = T.base_of(ty)
+    if isinstance(b, T.StructType):
+        f = b.fields.get(name)
+        return f[0] if f else None
+    if isinstance(b, T.FBType):
+        pou = b.pou
+        if isinstance(pou, A.PouDecl):
+            d = (pou.symbols or {}).get(name)
+            return d.ty if d is not None else None
+        for n, tn in getattr(pou, "inputs", ()) + getattr(pou, "outputs", ()):
+            if n == name:
+                return T.ELEMENTARY[tn]
+    return None
 
 
 def image_bits(area: str) -> int:

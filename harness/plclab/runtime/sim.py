@@ -72,10 +72,11 @@ class Simulation:
             self._add_signal(norm, ty, (lambda a=arr, i=index: bool(a[i])) if area[1] == "X"
                              else (lambda a=arr, i=index: a[i]))
         for name in watch:
-            owner, attr = plc.resolve(name)
-            value = getattr(owner, attr)
-            ty = self._type_of(name, value)
-            self._add_signal(name, ty, lambda o=owner, a=attr: getattr(o, a))
+            owner, key = plc.resolve(name)
+            getter = (lambda o=owner, k=key: o[k]) if isinstance(owner, list) else \
+                (lambda o=owner, k=key: getattr(o, k))
+            ty = self._type_of(name, getter())
+            self._add_signal(name, ty, getter)
         self.recorder = Recorder(self.trace, names=self._names)
         self.fault_reported = False
 
@@ -127,9 +128,8 @@ class Simulation:
                     return
             plc.image.areas[area][index] = int(value) & ((1 << image_bits(area)) - 1)
         else:
-            owner, attr = plc.resolve(name)
-            current = getattr(owner, attr)
-            setattr(owner, attr, _coerce_like(value, current))
+            current = plc.read(name)
+            plc.write(name, _coerce_like(value, current))
 
     # ------------------------------------------------------------------ time
     @property

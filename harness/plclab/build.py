@@ -1,0 +1,100 @@
+"""`plclab build STAND VARIANT`: the OpenPLC bundle (.st) and the PLCopen TC6 XML project.
+
+Everything is made and checked in memory first; files are written only when all checks pass,
+so a failed build never leaves a half-written or unchecked program behind:
+1. the variant's plc/ sources check (diagnostics name the plc/ files a user edits);
+2. the bundle text, exactly what goes into the .st file, checks too;
+3. the XML project (if asked for) validates against the TC6 schema when the schema is on this
+   machine (see plclab.plcopen.schema), and reads back, through ST and the front end, to the
+   same program as the bundle.
+"""
+from __future__ import annotations
+
+import os
+import tempfile
+from dataclasses import dataclass
+from pathlib import Path
+from typing import Optional
+
+from plclab import plcopen
+from plclab.errors import PlcLabError
+from plclab.frontend import check_sources
+from plclab.frontend.checker import CheckedUnit
+from plclab.stands import bundle, get_stand, sources
+
+
+@dataclass(frozen=True)
+class BuildOutput:
+    """A checked build, not yet written."""
+
+    name: str                    # '<stand>_<variant>'
+    st_text: str
+    xml_bytes: Optional[bytes]
+    schema: Optional[Path]       # the XSD the XML was validated against; None: no schema here
+
+
+def build_outputs(stand: str, variant: str, xml: bool = True, xml_name: Optional[str] = None) -> BuildOutput:
+    """Make and check the bundle (and the XML project) of `variant` of `stand`."""
+    s = get_stand(stand)
+    s.variant(variant)                       # an unknown variant is one clear error
+    name = f"{stand}_{variant}"
+    check_sources(sources(s, variant))
+    text = bundle(s, variant)
+    checked = check_sources([(f"{name}.st", text)])
+    if not xml:
+        return BuildOutput(name, text, None, None)
+    data, schema = xml_project(text, name, xml_name or f"{name}.xml", checked)
+    return BuildOutput(name, text, data, schema)
+
+
+def xml_project(text: str, name: str, where: str,
+                checked: Optional[CheckedUnit] = None) -> tuple[bytes, Optional[Path]]:
+    """The PLCopen XML project of one ST text (`checked`: its front-end result, if at hand),
+    validated and proven to read back to the same program; `where` names it in errors."""
+    if checked is None:
+        checked = check_sources([(f"{name}.st", text)])
+    tree = plcopen.project_tree(checked, text, name)
+    data = plcopen.to_bytes(tree)
+    schema = plcopen.validate(tree, where)
+    st_again = plcopen.st_from_tree(plcopen.parse_xml(data, where))
+    try:
+        again = check_sources([(f"{where} (as ST)", st_again)])
+    except PlcLabError as e:
+        raise PlcLabError(f"{where}: the XML does not read back as valid ST: {str(e).splitlines()[0]}") from None
+    diff = plcopen.first_difference(checked, again)
+    if diff:
+        raise PlcLabError(f"{where}: the XML does not read back to the same program: {diff}")
+    return data, schema
+
+
+def write_build(stand: str, variant: str, st_path: str | None, xml_path: str | None) -> list[Path]:
+    """Write `<stand>_<variant>.st` (or `st_path`) and, if `xml_path` is given, the PLCopen XML
+    project; returns the paths written. Raises PlcLabError / CompileError, writing nothing."""
+    out = build_outputs(stand, variant, xml=xml_path is not None, xml_name=xml_path)
+    targets = [(Path(st_path) if st_path else Path.cwd() / f"{out.name}.st", out.st_text.encode("utf-8"))]
+    if xml_path is not None:
+        targets.append((Path(xml_path), out.xml_bytes))
+    for path, _data in targets:
+        if path.is_dir():
+            raise PlcLabError(f"{path}: is a directory")
+        if not path.parent.is_dir():
+            raise PlcLabError(f"{path}: cannot write: no such directory '{path.parent}'")
+    for path, data in targets:
+        _write_atomic(path, data)
+    return [path for path, _data in targets]
+
+
+def _write_atomic(path: Path, data: bytes) -> None:
+    """Write through a temporary file in the same directory and rename it into place: a
+    reader (OpenPLC's upload, an editor) never sees a half-written file."""
+    try:
+        fd, tmp = tempfile.mkstemp(prefix=f".{path.name}.", dir=path.parent)
+        try:
+            with os.fdopen(fd, "wb") as f:
+                f.write(data)
+            os.replace(tmp, path)
+        except BaseException:
+            Path(tmp).unlink(missing_ok=True)
+            raise
+    except OSError as e:
+        raise PlcLabError(f"{path}: cannot write: {e.strerror}") from None

@@ -1,0 +1,111 @@
+"""`grade STAND TASK FILE.st...`: run a task's requirement checks against a student's program.
+
+The student's files are one compilation unit forming a complete OpenPLC program (normally
+the bundle they were handed, modified). It is judged by its I/O behaviour alone: each
+scenario of the task's requirement set runs it on a fresh stand in virtual time, through the
+located I/O (the console and wiring labels); the student's internal names are never read.
+"""
+from __future__ import annotations
+
+import tempfile
+from pathlib import Path
+from typing import Iterable, Optional, Sequence
+
+from plclab.errors import CompileError, Diagnostic, PlcLabError
+from plclab.frontend import check_sources, read_source
+from plclab.scenario import ScenarioFailure, Session
+from plclab.trace import write_csv, write_vcd
+
+from .registry import EVERY, Checks, RequirementSet, requirement_set
+from .report import GradeReport, Row
+
+
+def grade(stand: str, task: str, files: Sequence[str], out_dir: Optional[str] = None) -> GradeReport:
+    """Grade the ST `files` (one program) on `task` of `stand`; trace files go to `out_dir`.
+
+    Raises PlcLabError only for a stand or task the grader does not know; a program that does
+    not compile or does not run is a report that fails.
+    """
+    requirement_set(stand, task)                     # unknown stand / task: one-line error
+    sources: list[tuple[str, str]] = []
+    diags: list[Diagnostic] = []
+    for f in files:
+        text, errs = read_source(f)
+        diags.extend(errs)
+        if not errs:
+            sources.append((str(f), text))
+    if diags:
+        req = requirement_set(stand, task)
+        return GradeReport(stand, task, req.title, [str(f) for f in files],
+                           errors=[str(d) for d in sorted(set(diags))])
+    return grade_sources(stand, task, sources, out_dir)
+
+
+def grade_sources(stand: str, task: str, sources: Sequence[tuple[str, str]],
+                  out_dir: Optional[str] = None) -> GradeReport:
+    """Like `grade`, with the program given as (file name, text) pairs."""
+    req = requirement_set(stand, task)
+    sources = list(sources)
+    report = GradeReport(stand, task, req.title, [name for name, _ in sources])
+    if not sources:
+        report.errors = ["grade: no ST file given"]
+        return report
+    try:
+        check_sources(sources)
+    except CompileError as e:
+        report.errors = [str(d) for d in e.diagnostics]
+        return report
+    checks = Checks(req.requirements)
+    with tempfile.TemporaryDirectory(prefix="plclab-grade-") as tmp:
+        for scenario in req.scenarios:
+            checks.scenario = scenario.name
+            retain = Path(tmp) / f"{scenario.name}.retain.json" if scenario.needs_retain else None
+            try:
+                s = req.make_session(sources, retain)
+            except PlcLabError as e:                 # compiles, but cannot be loaded as a program
+                report.errors = [f"{sources[0][0]}:1:1: error: the program cannot run: {e}"]
+                return report
+            try:
+                scenario.run(s, checks)
+            except ScenarioFailure as e:
+                checks.stop(str(e), s.now)
+            for hook in req.every:
+                hook(s, checks)
+            if out_dir is not None:
+                report.traces[scenario.name] = _write_traces(s, req, scenario.name, Path(out_dir))
+    report.rows = _rows(req, checks)
+    return report
+
+
+def _write_traces(s: Session, req: RequirementSet, scenario: str, out_dir: Path) -> list[Path]:
+    out_dir.mkdir(parents=True, exist_ok=True)
+    base = out_dir / f"{req.stand}-{req.task}-{scenario}"
+    names = req.trace_names(s) if req.trace_names else None
+    files = [base.with_suffix(".csv"), base.with_suffix(".vcd")]
+    write_csv(s.trace, files[0], names=names)
+    write_vcd(s.trace, files[1], names=names)
+    return files
+
+
+def _rows(req: RequirementSet, checks: Checks) -> list[Row]:
+    rows = []
+    for r in req.requirements:
+        failure = checks.failures.get(r.id)
+        if failure is not None:
+            f, scenario = failure
+            rows.append(Row(r.id, r.text, False, f.expected, f.observed, f.time, scenario))
+        elif r.id in checks.seen:
+            rows.append(Row(r.id, r.text, True, scenario=r.scenario if r.scenario != EVERY else ""))
+        else:
+            reason, time = checks.stopped.get(r.scenario, ("the scenario ended before this check", None))
+            rows.append(Row(r.id, r.text, False, "", f"not checked: the scenario stopped first: {reason}",
+                            time, r.scenario))
+    return rows
+
+
+def requirement_table(stand: str, task: str) -> list[tuple[str, str]]:
+    """(id, text) of every requirement of a task, e.g. for documentation."""
+    return [(r.id, r.text) for r in requirement_set(stand, task).requirements]
+
+
+__all__: Iterable[str] = ("grade", "grade_sources", "requirement_table")

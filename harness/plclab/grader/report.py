@@ -1,0 +1,106 @@
+"""The grade report: one row per requirement, rendered as the table a student reads.
+
+A row says what was checked in a sentence, PASS or FAIL, and for a failure what was
+expected, what the program did instead and at which plant time, with the scenario whose
+trace shows it. A program that does not compile has no rows: the report carries the
+checker's `file:line:col: error: ...` lines instead.
+"""
+from __future__ import annotations
+
+import textwrap
+from dataclasses import dataclass, field
+from pathlib import Path
+from typing import Optional
+
+WIDTH = 100          # the table fits a terminal of this width
+ID_WIDTH = 6
+RESULT_WIDTH = 4
+
+
+@dataclass(frozen=True)
+class Row:
+    """The verdict on one requirement."""
+
+    id: str
+    text: str                        # what is checked, as the student reads it
+    passed: bool
+    expected: str = ""               # for a failure: what the requirement wants ...
+    observed: str = ""               # ... and what the program did
+    time: Optional[float] = None     # plant time of the observation (s)
+    scenario: str = ""               # which scenario (trace) shows it
+
+    @property
+    def result(self) -> str:
+        return "PASS" if self.passed else "FAIL"
+
+
+@dataclass
+class GradeReport:
+    stand: str
+    task: str
+    title: str                                       # e.g. "MP-9C pneumatic robot, Task 1: ..."
+    files: list[str]
+    rows: list[Row] = field(default_factory=list)
+    errors: list[str] = field(default_factory=list)  # compile errors: file:line:col: error: ...
+    traces: dict[str, list[Path]] = field(default_factory=dict)   # scenario -> files written
+
+    @property
+    def passed(self) -> bool:
+        """True only if the program compiled and every requirement passed."""
+        return not self.errors and bool(self.rows) and all(r.passed for r in self.rows)
+
+    @property
+    def exit_code(self) -> int:
+        return 0 if self.passed else 1
+
+    def failed(self) -> list[Row]:
+        return [r for r in self.rows if not r.passed]
+
+    def row(self, rid: str) -> Row:
+        for r in self.rows:
+            if r.id == rid:
+                return r
+        raise KeyError(f"no requirement {rid!r} in this report (one of {', '.join(r.id for r in self.rows)})")
+
+    def text(self) -> str:
+        """The report as printed by `plclab grade`."""
+        out = [self.title, "program: " + " ".join(self.files)]
+        if self.errors:
+            out.append("the program does not compile:")
+            out.extend(self.errors)
+            out.append("FAIL")
+            return "\n".join(out) + "\n"
+        text_width = WIDTH - ID_WIDTH - RESULT_WIDTH - 4
+        out.append("")
+        out.append(f"{'id':<{ID_WIDTH}}  {'requirement':<{text_width}}  result")
+        out.append(f"{'-' * ID_WIDTH}  {'-' * text_width}  {'-' * (RESULT_WIDTH + 2)}")
+        indent = " " * (ID_WIDTH + 2)
+        for r in self.rows:
+            lines = textwrap.wrap(r.text, text_width) or [""]
+            out.append(f"{r.id:<{ID_WIDTH}}  {lines[0]:<{text_width}}  {r.result}")
+            out.extend(indent + line for line in lines[1:])
+            if not r.passed:
+                detail_width = WIDTH - len(indent) - 10
+                for label, value in (("expected", r.expected), ("observed", r.observed)):
+                    if value:
+                        wrapped = textwrap.wrap(value, detail_width) or [""]
+                        out.append(f"{indent}{label}: {wrapped[0]}")
+                        out.extend(f"{indent}{' ' * (len(label) + 2)}{w}" for w in wrapped[1:])
+                where = []
+                if r.time is not None:
+                    where.append(f"at t = {r.time:.2f} s")
+                if r.scenario:
+                    files = self.traces.get(r.scenario)
+                    trace = f" ({', '.join(p.name for p in files)})" if files else ""
+                    where.append(f"scenario '{r.scenario}'{trace}")
+                if where:
+                    out.append(f"{indent}{', '.join(where)}")
+        out.append("")
+        n_pass = sum(r.passed for r in self.rows)
+        verdict = "PASS" if self.passed else "FAIL"
+        out.append(f"{n_pass} of {len(self.rows)} requirements passed: {verdict}")
+        written = [p for files in self.traces.values() for p in files]
+        if written:
+            folders = sorted({str(p.parent) for p in written})
+            out.append(f"traces (CSV + VCD per scenario) in {', '.join(folders)}")
+        return "\n".join(out) + "\n"

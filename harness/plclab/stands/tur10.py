@@ -1,0 +1,259 @@
+"""The TUR-10 positional robot stand: program variants, labels, timeline and scenarios.
+
+The regulators run as their own PROGRAM in a 10 ms TASK (the S7-200's timer interrupt); the
+main program runs in a 20 ms task. No scenario of any variant may show an overvoltage, a bus
+contention or a collision (check_never).
+"""
+from __future__ import annotations
+
+import re
+from pathlib import Path
+from typing import Callable, Optional
+
+from plclab.scenario import ScenarioFailure, Session
+from plclab.stands import PLC_DIR, Stand, Task, Variant, sources
+
+SHARED = ("FC_PackBits7", "FC_BitOf", "FC_JogReference", "FB_Sb1Button", "FB_FrameStore", "FB_PauseTimer",
+          "FB_FrameWatchdog", "FB_Blink", "FB_ResetIndicator", "FB_FrameSequencer", "FB_SensorBus",
+          "FB_Tur10Sensors", "FB_PositionRegulator", "FB_Tur10Robot", "PRG_Tur10Regulators")
+
+
+def _variant(name: str, prg: str, doc: str) -> Variant:
+    return Variant(name, SHARED + (prg,), (
+        Task("MainTask", "T#20ms", 1, (("Main", prg),)),
+        Task("RegTask", "T#10ms", 0, (("Regulators", "PRG_Tur10Regulators"),)),
+    ), doc)
+
+
+STAND = Stand(
+    name="tur10",
+    title="TUR-10 positional robot",
+    gvl=("GVL_TUR10",),
+    types=("T_ControlProgram",),
+    variants={
+        "baseline": _variant("baseline", "PRG_Tur10Baseline", "Appendix 2: drive 1 only."),
+        "task1": _variant("task1", "PRG_Tur10Task1", "Task 1: manual control of all five drives."),
+        "task2": _variant("task2", "PRG_Tur10Task2", "Task 2: I1.5 selects the recorded pause."),
+        "task3": _variant("task3", "PRG_Tur10Task3", "Task 3: I1.5 enables automatic execution."),
+        "full": _variant("full", "PRG_Tur10Full", "All five axes + Tasks 2 and 3."),
+    },
+)
+
+AXES = (1, 2, 3, 4, 5)
+DRIVES = [f"DRIVE{k}" for k in AXES]
+FRAME_PTR = "Main.Robot.Sequencer.Ptr"
+FRAME_COUNT = "Main.Cp.Count"
+IN_FRAME = "Main.Robot.Sequencer.InFrame"
+POSITIONS = [f"Positions[{k}]" for k in AXES]
+TARGETS = [f"Targets[{k}]" for k in AXES]
+NEVER = ("overvoltage", "bus_contention", "collision")
+
+
+def labels() -> dict[str, str]:
+    text = (PLC_DIR / "GVL" / "GVL_TUR10.st").read_text(encoding="utf-8")
+    return {m.group(1): m.group(2).upper() for m in re.finditer(r"(\w+)\s+AT\s+(%\w+(?:\.\d+)?)", text)}
+
+
+def session(variant: str = "full", program: Optional[list[tuple[str, str]]] = None,
+            retain_path: Optional[Path] = None, watch_internals: bool = True, **plant_params) -> Session:
+    srcs = program if program is not None else sources(STAND, variant)
+    watch = [FRAME_PTR, FRAME_COUNT, IN_FRAME] + POSITIONS + TARGETS if watch_internals else []
+    s = Session(srcs, STAND.make_plant(**plant_params), labels(), watch=watch, retain_path=retain_path,
+                name=f"tur10 {variant if program is None else 'program'}")
+    return s
+
+
+def position(s: Session, axis: int) -> float:
+    """The true position of link `axis` (plant), codes."""
+    return s.plant.snapshot()[f"pos{axis}"]
+
+
+def check_never(s: Session) -> None:
+    bad = [e for e in s.plant.events if e.kind in NEVER]
+    if bad:
+        e = bad[0]
+        raise ScenarioFailure(f"t={e.time:.2f} s: {e.kind.replace('_', ' ')}: {e.detail}")
+
+
+# --------------------------------------------------------------------------- lab steps
+
+def jog(s: Session, axis: int, direction: int, seconds: float, low: bool = False) -> None:
+    """Hold drive `axis`'s forward (+1) or backward (-1) button for `seconds`."""
+    s.console.set(SA6=int(low))
+    button = f"SA{axis}_{'FWD' if direction > 0 else 'BWD'}"
+    s.plant.set_switch(button, 1)
+    s.log(f"{button} held {seconds:g} s{' (low speed)' if low else ''}")
+    s.run(seconds)
+    s.plant.set_switch(button, 0)
+    s.run(0.4)      # the link stops (50 ms lag) and the sensors are read again
+
+
+def record(s: Session, pause_select: Optional[int] = None) -> None:
+    if pause_select is not None:
+        s.console.set(I15=pause_select)
+    before = s.plc.read(FRAME_COUNT)
+    s.console.press("SB1", hold=0.2)
+    s.run(0.1)
+    if s.plc.read(FRAME_COUNT) != before + 1:
+        raise ScenarioFailure(f"t={s.now:.2f} s: a short SB1 press did not record a frame")
+
+
+def start_automatic(s: Session, enable: int = 1) -> None:
+    s.console.set(SA7=1, I15=enable)
+    s.run(0.1)
+    s.console.press("SB1", hold=0.2)
+
+
+def frame_results(s: Session, axes: tuple[int, ...] = AXES) -> list[str]:
+    """Positioning result of each played frame, from the PLC's own sensor readings: time to
+    reach, final error per axis when the pause starts, and overshoot (how far a link went past
+    its target on the way)."""
+    tr = s.trace
+    if IN_FRAME not in tr:
+        return []
+    rows = [f"{'frame':>5} {'start s':>8} {'reached after s':>16}  final error / overshoot per axis (codes)"]
+    spans = tr.pulses(IN_FRAME)
+    regulated = axes[:max(1, min(len(axes), s.plc.read("RegAxes")))]
+    for i, (start, end) in enumerate(spans):
+        frame = tr.value_at(FRAME_PTR, start)
+        until = spans[i + 1][0] if i + 1 < len(spans) else tr.end_s     # the frame and its pause
+        parts, errors = [], []
+        for k in regulated:
+            target = _signed(tr.value_at(TARGETS[k - 1], start))
+            begin = _signed(tr.value_at(POSITIONS[k - 1], start))
+            final = _signed(tr.value_at(POSITIONS[k - 1], end if end is not None else until))
+            direction = 1 if target >= begin else -1
+            past = [(_signed(v) - target) * direction for t, v in tr.changes(POSITIONS[k - 1])
+                    if start * 1e9 <= t <= until * 1e9]
+            errors.append(abs(target - final))
+            parts.append(f"{k}:{target - final:+d}/{max([0] + past)}")
+        reached = end is not None and max(errors) < 16
+        when = f"{end - start:16.2f}" if reached else f"{'stopped':>16}"
+        rows.append(f"{frame:>5} {start:8.2f} {when}  {'  '.join(parts)}")
+    return rows
+
+
+def _signed(v: int) -> int:
+    return v - 65536 if v >= 32768 else v
+
+
+# --------------------------------------------------------------------------- scenarios
+
+def teach_four_frames(s: Session, axes: tuple[int, ...] = AXES) -> None:
+    """Manual mode: four frames, moving several links at once between them."""
+    s.console.set(SA7=0, I15=0)
+    s.run(0.2)
+    record(s)
+    for k in axes:
+        jog(s, k, +1, 0.6 if k % 2 else 0.4)
+    record(s)
+    for k in axes[::2]:
+        jog(s, k, -1, 0.9, low=True)
+    record(s)
+    for k in axes[1::2]:
+        jog(s, k, -1, 0.5)
+    record(s)
+
+
+def demo(s: Session) -> None:
+    """Jog, teach 4 frames moving several links, play them back continuously for 2 cycles,
+    stop with SB1."""
+    teach_four_frames(s)
+    start_automatic(s)
+    for _cycle in range(2):
+        s.wait_until(lambda io: s.plc.read(FRAME_PTR) == 4, 60, "frame 4")
+        s.wait_until(lambda io: s.plc.read(FRAME_PTR) == 1, 60, "back to frame 1")
+    s.console.press("SB1", hold=0.2)
+    s.run(1.0)
+    if any(s.value(d) for d in DRIVES):
+        raise ScenarioFailure(f"t={s.now:.2f} s: references not 0 after the stop")
+
+
+def jog_all(s: Session) -> None:
+    """Every drive at both speeds: forward at normal speed, backward at low speed."""
+    s.console.set(SA7=0)
+    s.run(0.1)
+    for k in AXES:
+        before = position(s, k)
+        jog(s, k, +1, 0.5)
+        if position(s, k) - before < 2500:
+            raise ScenarioFailure(f"t={s.now:.2f} s: drive {k} moved {position(s, k) - before:.0f} codes "
+                                  f"in 0.5 s at normal speed")
+        before = position(s, k)
+        jog(s, k, -1, 0.5, low=True)
+        if not -1300 < position(s, k) - before < -700:
+            raise ScenarioFailure(f"t={s.now:.2f} s: drive {k} moved {position(s, k) - before:.0f} codes "
+                                  f"in 0.5 s at low speed")
+
+
+def reset(s: Session) -> None:
+    """Two frames, then SB1 held 3 s: program empty, indicator on."""
+    s.console.set(SA7=0)
+    s.run(0.2)
+    record(s)
+    jog(s, 1, +1, 0.3)
+    record(s)
+    s.console.hold("SB1")
+    s.wait_until(lambda io: io.HL1, 4, "reset indicator after holding SB1")
+    s.console.release("SB1")
+    s.run(0.3)
+    if s.plc.read(FRAME_COUNT) != 0:
+        raise ScenarioFailure(f"t={s.now:.2f} s: program not empty after the reset")
+
+
+def retain(s: Session) -> None:
+    """Recorded frames survive a PLC restart and still play."""
+    s.console.set(SA7=0)
+    s.run(0.2)
+    record(s)
+    jog(s, 1, +1, 0.5)
+    record(s)
+    s.restart_plc()
+    s.run(0.2)
+    if s.plc.read(FRAME_COUNT) != 2:
+        raise ScenarioFailure(f"t={s.now:.2f} s: {s.plc.read(FRAME_COUNT)} frames after the restart")
+    start_automatic(s)
+    s.wait_until(lambda io: s.plc.read(FRAME_PTR) == 2, 20, "frame 2 after the restart")
+
+
+def dead_sensor(s: Session) -> None:
+    """A dead sensor (stuck 30 codes past the first frame's target): the regulator creeps at a
+    small reference, the frame is never reached, execution stops after 20 s with references 0."""
+    s.console.set(SA7=0)
+    s.run(0.2)
+    record(s)
+    target = s.plc.read("Main.Cp.Frames[1].Data[1]")
+    jog(s, 1, +1, 0.8)
+    record(s)
+    s.inject("dead_sensor", axis=1, value=target + 30)
+    start_automatic(s)
+    s.wait_until(lambda io: s.plc.read("Main.Robot.Sequencer.Fault"), 45, "the frame timeout")
+    s.run(0.5)
+    if any(s.value(d) for d in DRIVES):
+        raise ScenarioFailure(f"t={s.now:.2f} s: references not 0 after the frame timeout")
+
+
+SCENARIOS: dict[str, Callable[[Session], None]] = {
+    "demo": demo, "jog": jog_all, "reset": reset, "retain": retain, "dead_sensor": dead_sensor,
+}
+PLOT_SIGNALS = ["SB1", "SA7"] + DRIVES + POSITIONS + TARGETS + [FRAME_PTR]
+
+
+def timeline(s: Session) -> list[str]:
+    tr = s.trace
+    times = {a.time for a in s.actions}
+    if FRAME_PTR in tr:
+        times.update(t / 1e9 for t, _v in tr.changes(FRAME_PTR)[1:])
+    acts: dict[float, list[str]] = {}
+    for a in s.actions:
+        acts.setdefault(round(a.time, 6), []).append(a.text)
+    rows = [f"{'time s':>8}  {'console / event':<30} " + " ".join(f"{'drive' + str(k):>6}" for k in AXES) + "  frame"]
+    for t in sorted(times):
+        refs = " ".join(f"{tr.value_at(d, t) if tr.value_at(d, t) < 32768 else tr.value_at(d, t) - 65536:>6}"
+                        for d in DRIVES)
+        frame = tr.value_at(FRAME_PTR, t) if FRAME_PTR in tr else ""
+        rows.append(f"{t:8.2f}  {'; '.join(acts.get(round(t, 6), []))[:30]:<30} {refs}  {frame}")
+    results = frame_results(s)
+    if len(results) > 1:
+        rows += ["", "positioning result of each played frame:"] + results
+    return rows
