@@ -151,6 +151,14 @@ def _cmd_psm_script(args: argparse.Namespace) -> int:
     return 0
 
 
+def _cmd_build(args: argparse.Namespace) -> int:
+    from plclab.build import write_build
+
+    for path in write_build(args.stand, args.variant, args.output, args.xml):
+        print(f"wrote {path}")
+    return 0
+
+
 def _cmd_run(args: argparse.Namespace) -> int:
     from plclab.runner import run_scenario
 
@@ -189,6 +197,13 @@ def build_parser() -> argparse.ArgumentParser:
     c.set_defaults(func=_cmd_sim)
 
     stands = ("mp9c", "tur10", "thermo")
+
+    c = sub.add_parser("build", help="write the OpenPLC bundle (.st) and a PLCopen TC6 XML project")
+    c.add_argument("stand", choices=stands)
+    c.add_argument("variant", choices=("baseline", "task1", "task2", "task3", "full"))
+    c.add_argument("-o", "--output", metavar="FILE.st", help="default: STAND_VARIANT.st")
+    c.add_argument("--xml", metavar="FILE.xml", help="also write the PLCopen XML project")
+    c.set_defaults(func=_cmd_build)
 
     c = sub.add_parser("run", help="run a scenario of a stand in virtual time; timeline and traces")
     c.add_argument("stand", choices=stands)

@@ -33,7 +33,9 @@ def check_sources(sources: Iterable[tuple[str, str]]) -> CheckedUnit:
     """Parse and check (name, text) pairs as one compilation unit; raises CompileError."""
     merged = A.Unit(line=1, col=1, file="")
     diags: list[Diagnostic] = []
+    names: list[str] = []
     for name, text in sources:
+        names.append(name)
         unit, errs = parse_source(text, name)
         diags.extend(errs)
         if unit is not None:
@@ -46,8 +48,8 @@ def check_sources(sources: Iterable[tuple[str, str]]) -> CheckedUnit:
     try:
         checked = check_unit(merged)
     except RecursionError:   # declarations nested beyond Python's stack (bodies are guarded per statement)
-        first = merged.pous[0].file if merged.pous else ""
-        raise CompileError([Diagnostic(first, 1, 1, "declarations nested too deeply")]) from None
+        raise CompileError([Diagnostic(names[0] if names else "", 1, 1,
+                                       "declarations or initial values nested too deeply")]) from None
     if checked.diagnostics:
         raise CompileError(checked.diagnostics)
     return checked

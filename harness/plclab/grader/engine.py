@@ -51,9 +51,13 @@ def grade_sources(stand: str, task: str, sources: Sequence[tuple[str, str]],
         report.errors = ["grade: no ST file given"]
         return report
     try:
-        check_sources(sources)
+        checked = check_sources(sources)
     except CompileError as e:
         report.errors = [str(d) for d in e.diagnostics]
+        return report
+    if checked.config is None:
+        report.errors = [f"{sources[-1][0]}:1:1: error: no CONFIGURATION: hand in the complete program "
+                         "(the bundle you were given, with its CONFIGURATION Config0)"]
         return report
     checks = Checks(req.requirements)
     with tempfile.TemporaryDirectory(prefix="plclab-grade-") as tmp:
@@ -94,12 +98,17 @@ def _rows(req: RequirementSet, checks: Checks) -> list[Row]:
         if failure is not None:
             f, scenario = failure
             rows.append(Row(r.id, r.text, False, f.expected, f.observed, f.time, scenario))
-        elif r.id in checks.seen:
+        elif r.id in checks.passed:
             rows.append(Row(r.id, r.text, True, scenario=r.scenario if r.scenario != EVERY else ""))
-        else:
-            reason, time = checks.stopped.get(r.scenario, ("the scenario ended before this check", None))
+        elif r.scenario in checks.stopped:
+            reason, time = checks.stopped[r.scenario]
             rows.append(Row(r.id, r.text, False, "", f"not checked: the scenario stopped first: {reason}",
                             time, r.scenario))
+        else:
+            earlier = [rid for rid, (_f, sc) in checks.failures.items() if sc == r.scenario]
+            why = (f"the scenario could not go on after {earlier[0]} failed" if earlier
+                   else "the scenario ended before this check")
+            rows.append(Row(r.id, r.text, False, "", f"not checked: {why}", None, r.scenario))
     return rows
 
 

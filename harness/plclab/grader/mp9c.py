@@ -124,7 +124,7 @@ class Op:
 
     def _fault(self) -> None:
         if self.s.fault is not None:
-            raise ScenarioFailure(f"the PLC stopped with a runtime fault (see G1): {self.s.fault}")
+            raise ScenarioFailure("the PLC stopped with a runtime fault (see G1)")
 
     def set(self, **switches: int) -> float:
         t = self.now
@@ -286,12 +286,14 @@ def sc_basics(s: Session, c: Checks) -> None:
     t = op.press(0.03)
     op.run(0.5)
     off = s.trace.first(lambda st: not st.HL1, after=t, default=None)
-    c.check("G4", off is None, "HL1 stays 1 after a 30 ms SB1 press (nothing recorded)",
-            "HL1 went 0: the bounce recorded a frame", off)
+    if c.check("G4", off is None, "HL1 stays 1 after a 30 ms SB1 press (nothing recorded)",
+               "HL1 went 0: the bounce recorded a frame", off):
+        c.ok("G4")
     rel = teach(op, [DOWN])[0]
     op.run(0.2)
-    c.check("G3", op.values(["HL1"], at=rel + 2 * op.tol)["HL1"] == 0,
-            "HL1=0 once a frame is recorded (short SB1 press)", "HL1 still 1", rel + 2 * op.tol)
+    if c.check("G3", op.values(["HL1"], at=rel + 2 * op.tol)["HL1"] == 0,
+               "HL1=0 once a frame is recorded (short SB1 press)", "HL1 still 1", rel + 2 * op.tol):
+        c.ok("G3")
     teach(op, [UP])
     pressed = op.now
     s.console.hold("SB1")
@@ -315,8 +317,9 @@ def sc_basics(s: Session, c: Checks) -> None:
     op.set(SA1=1, I07=1)
     op.run(0.3)
     t = op.press()
-    quiet(op, "G5", t, 2.0, "after the reset an SB1 press in automatic mode starts nothing",
-          "a frame started: the program was not empty")
+    if quiet(op, "G5", t, 2.0, "after the reset an SB1 press in automatic mode starts nothing",
+             "a frame started: the program was not empty"):
+        c.ok("G5")
     op.set(SA1=0)
     op.run(0.2)
 
@@ -369,6 +372,7 @@ def sc_automatic(s: Session, c: Checks) -> None:
                        fmt(got), t):
             return
         op.run(1.0)
+    c.ok("G8")
 
 
 def sc_restart(s: Session, c: Checks) -> None:
@@ -448,10 +452,11 @@ def sc_memory(s: Session, c: Checks) -> None:
     after = s.trace.edges("HL1", "rising", after=released + 2.0, until=op.now)
     ok = len(edges) == 2 and edges[0] - released <= 2 * op.tol and not after \
         and op.values(["HL1"])["HL1"] == 0
-    c.check("G11", ok, "after the 33rd short press: HL1 flashes at 1 Hz for 2 s (2 flashes from the "
-            "release), then 0", f"{len(edges)} flash(es) in 2 s" + (f" starting {edges[0] - released:.2f} s "
-            "after the release" if edges else "") + (f", {len(after)} more after 2 s" if after else ""),
-            released)
+    if c.check("G11", ok, "after the 33rd short press: HL1 flashes at 1 Hz for 2 s (2 flashes from the "
+               "release), then 0", f"{len(edges)} flash(es) in 2 s" + (f" starting {edges[0] - released:.2f} s "
+               "after the release" if edges else "") + (f", {len(after)} more after 2 s" if after else ""),
+               released):
+        c.ok("G11")
 
 
 GENERAL = (
@@ -504,7 +509,10 @@ def sc_manual(s: Session, c: Checks) -> None:
     start_manual(op)
     op.run(0.5)
     for rid, switch, _what, on, off, travel in MECHANISMS:
-        for value, (valves, sensors) in ((1, on), (0, off)):
+        for value, (valves, sensors) in ((1, on), (0, off), (None, None)):
+            if value is None:
+                c.ok(rid)
+                break
             t = op.set(**{switch: value})
             got = op.settled(t, valves)
             if not c.check(rid, got == valves, f"after {switch} := {value}: {fmt(valves)} (within one scan)",
@@ -572,15 +580,17 @@ def sc_pauses(s: Session, c: Checks) -> None:
     if not r1 or not r2:
         return
     p1 = r2.start - r1.done
-    c.check("T2.2", abs(p1 - PAUSE_LONG) <= op.tol, "a 3.0 s pause after frame 1 (recorded with I0.7 = 1)",
-            f"{p1:.2f} s", r1.done)
+    if c.check("T2.2", abs(p1 - PAUSE_LONG) <= op.tol, "a 3.0 s pause after frame 1 (recorded with I0.7 = 1)",
+               f"{p1:.2f} s", r1.done):
+        c.ok("T2.2")
     r3 = follow(op, "T2.1", f1, "frame 1 after frame 2", r2.done, NEXT_WAIT,
                 on_start=lambda: op.set(I07=0))
     if not r3:
         return
     p2 = r3.start - r2.done
-    c.check("T2.1", abs(p2 - PAUSE_SHORT) <= op.tol, "a 0.5 s pause after frame 2 (recorded with I0.7 = 0)",
-            f"{p2:.2f} s", r2.done)
+    if c.check("T2.1", abs(p2 - PAUSE_SHORT) <= op.tol, "a 0.5 s pause after frame 2 (recorded with I0.7 = 0)",
+               f"{p2:.2f} s", r2.done):
+        c.ok("T2.1")
     r4 = follow(op, "T2.3", f2, "frame 2 (second cycle)", r3.done, NEXT_WAIT, on_start=lambda: op.set(I07=1))
     if not r4:
         return
@@ -592,8 +602,9 @@ def sc_pauses(s: Session, c: Checks) -> None:
     if not r5:
         return
     p4 = r5.start - r4.done
-    c.check("T2.3", abs(p4 - p2) <= op.tol, f"the pause after frame 2 is {p2:.2f} s as in the first cycle "
-            "although I0.7 is now 1", f"{p4:.2f} s", r4.done)
+    if c.check("T2.3", abs(p4 - p2) <= op.tol, f"the pause after frame 2 is {p2:.2f} s as in the first "
+               "cycle although I0.7 is now 1", f"{p4:.2f} s", r4.done):
+        c.ok("T2.3")
     op.press()
     op.run(1.0)
 

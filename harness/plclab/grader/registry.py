@@ -40,14 +40,15 @@ class Failure:
 class Checks:
     """Observations of one grading run, requirement by requirement.
 
-    Every observation of a requirement either passes (`ok`) or fails (`fail`); the first
-    failure is the requirement's verdict. A requirement with no observation at all was not
-    reached (its scenario stopped first), which is a failure too (`not_reached`).
+    A scenario calls `check` for each observation (a False one is a `fail`) and `ok` once a
+    requirement has been checked completely. The first failure is the requirement's verdict;
+    a requirement neither failed nor completed was not checked to the end (its scenario
+    stopped first), which is a failure too.
     """
 
     def __init__(self, requirements: Sequence[Requirement]):
         self.requirements = {r.id: r for r in requirements}
-        self.seen: set[str] = set()
+        self.passed: set[str] = set()
         self.failures: dict[str, tuple[Failure, str]] = {}
         self.scenario = ""
         self.stopped: dict[str, tuple[str, Optional[float]]] = {}   # scenario -> (reason, time)
@@ -57,21 +58,22 @@ class Checks:
             raise KeyError(f"grader: no requirement {rid!r} in this set")
 
     def ok(self, rid: str) -> None:
+        """Requirement `rid` has been checked to the end (it passes unless something failed)."""
         self._known(rid)
-        self.seen.add(rid)
+        self.passed.add(rid)
 
     def fail(self, rid: str, expected: str, observed: str, time: Optional[float]) -> None:
         self._known(rid)
-        self.seen.add(rid)
         if rid not in self.failures:
-            self.failures[rid] = (Failure(expected, observed, time), self.scenario)
+            at = None if time is None else round(time, 6)
+            self.failures[rid] = (Failure(expected, observed, at), self.scenario)
 
     def check(self, rid: str, condition: bool, expected: str, observed: str,
               time: Optional[float]) -> bool:
-        """`ok` or `fail` by `condition`; returns `condition` so a scenario can stop early."""
-        if condition:
-            self.ok(rid)
-        else:
+        """One observation: a `fail` unless `condition`; returns `condition` so a scenario can
+        stop early."""
+        self._known(rid)
+        if not condition:
             self.fail(rid, expected, observed, time)
         return bool(condition)
 
