@@ -159,6 +159,14 @@ def _cmd_build(args: argparse.Namespace) -> int:
     return 0
 
 
+def _cmd_grade(args: argparse.Namespace) -> int:
+    from plclab.grader import grade
+
+    report = grade(args.stand, args.task, args.files, out_dir=args.out)
+    print(report.text(), end="")
+    return report.exit_code
+
+
 def _cmd_run(args: argparse.Namespace) -> int:
     from plclab.runner import run_scenario
 
@@ -213,6 +221,13 @@ def build_parser() -> argparse.ArgumentParser:
     c.add_argument("--vcd", metavar="F")
     c.add_argument("--plot", metavar="F")
     c.set_defaults(func=_cmd_run)
+
+    c = sub.add_parser("grade", help="grade a program on a lab task: one row per requirement")
+    c.add_argument("stand", choices=stands)
+    c.add_argument("task", metavar="TASK", help="task1, task2 or task3")
+    c.add_argument("files", nargs="+", metavar="FILE.st")
+    c.add_argument("--out", default="out/grade", metavar="DIR", help="trace files (CSV + VCD per scenario)")
+    c.set_defaults(func=_cmd_grade)
 
     c = sub.add_parser("serve", help="real time: soft PLC + plant + Modbus face until Ctrl-C")
     c.add_argument("stand", choices=stands)

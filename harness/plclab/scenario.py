@@ -87,7 +87,7 @@ class Session:
 
     def __init__(self, sources: Sequence[tuple[str, str]], plant: Any, labels: dict[str, str],
                  watch: Iterable[str] = (), retain_path: Optional[Path] = None, tick_s: Optional[float] = None,
-                 name: str = "stand"):
+                 name: str = "stand", checked: Any = None):
         self.name = name
         self.sources = list(sources)
         self.plant = plant
@@ -95,7 +95,7 @@ class Session:
         self.watch = list(watch)
         self.retain_path = retain_path
         self.tick_ns = round(tick_s * 1e9) if tick_s else None
-        self.checked = check_sources(self.sources)
+        self.checked = checked if checked is not None else check_sources(self.sources)
         self.actions: list[Action] = []
         self.console = Console(self)
         self.io = IO(self)
@@ -108,7 +108,10 @@ class Session:
         store = RetainStore(self.retain_path) if self.retain_path else None
         self.plc = PLC(compile_unit(self.checked), tick_ns=self.tick_ns, retain=store)
         self.plc.now_ns = self.plc.ticks = 0
-        self.sim = Simulation(self.plc, plants=[self.plant], watch=self.watch)
+        # every labelled I/O point is traced, also one the program does not declare: a
+        # student may drop an unused global, the trace still shows the console
+        self.sim = Simulation(self.plc, plants=[self.plant], watch=self.watch,
+                              extra_addresses=list(self.labels.values()))
         self._merge_pending = True
 
     @property

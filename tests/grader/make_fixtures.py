@@ -61,9 +61,9 @@ FIXTURES = (
     Fixture("task1_manual_in_auto", "task1", "T1.5",
             "the switch logic is outside IF NOT SA1: the switches drive the valves in automatic mode "
             "too, so playback is overwritten.", "task1",
-            (("IF NOT SA1 THEN\n    (* manual mode: every valve follows its switch (Task 1) *)\n" + MANUAL_TASK1
-              + "END_IF;\n", "(* every valve follows its switch (Task 1) *)\n"
-              + MANUAL_TASK1.replace("    L", "L")),)),
+            (("IF NOT SA1 THEN\n    (* manual mode: every valve follows its switch (Task 1) *)\n"
+              + MANUAL_TASK1 + "END_IF;\n",
+              "(* every valve follows its switch (Task 1) *)\n" + MANUAL_TASK1.replace("    L", "L")),)),
     # ---------------------------------------------------------------- Task 2
     Fixture("task2_pauses_swapped", "task2", "T2.1",
             "pauses swapped: I0.7 = 0 gives 3 s, I0.7 = 1 gives 0.5 s.", "task2",
@@ -73,7 +73,8 @@ FIXTURES = (
             "I0.7 read in automatic mode: the pause timer takes SEL(I07, 0.5 s, 3 s) live instead of "
             "the pause recorded with the frame.", "task2",
             (("    FrameTimeout : TIME := T#10s;\nEND_VAR",
-              "    FrameTimeout : TIME := T#10s;\n    PauseTime : TIME;           (* the pause to hold *)\nEND_VAR"),
+              "    FrameTimeout : TIME := T#10s;\n"
+              "    PauseTime : TIME;           (* the pause to hold *)\nEND_VAR"),
              ("            Pause(Start := TRUE, Duration := Cp.Frames[Ptr].Pause, Cancel := FALSE);",
               "            Pause(Start := TRUE, Duration := PauseTime, Cancel := FALSE);"),
              ("            Pause(Start := FALSE, Duration := Cp.Frames[Ptr].Pause, Cancel := FALSE);",
@@ -108,7 +109,8 @@ FIXTURES = (
               "Robot(RecordPause := PAUSE,\n      RunEnable := Enable "))),
     Fixture("task3_stops_at_once", "task3", "T3.4",
             "I0.7 = 0 stops execution at once instead of after the last frame and its pause.", "task3",
-            (("ELSIF Fault THEN\n    State := STOPPED;", "ELSIF Fault OR NOT RunEnable THEN\n    State := STOPPED;"),)),
+            (("ELSIF Fault THEN\n    State := STOPPED;",
+              "ELSIF Fault OR NOT RunEnable THEN\n    State := STOPPED;"),)),
     Fixture("task3_reset_on_release", "task3", "G5",
             "the long press resets the program when SB1 is released, not at 3.0 s while it is held.",
             "task3",
@@ -122,7 +124,8 @@ FIXTURES = (
 
 def header(f: Fixture) -> str:
     return (f"(* plclab grader fixture: {f.task}, expected to FAIL {f.fails}. Mistake: {f.mistake}\n"
-            f"   Made by tests/grader/make_fixtures.py from the '{f.base}' bundle; regenerate, do not edit. *)\n")
+            f"   Made by tests/grader/make_fixtures.py from the '{f.base}' bundle; regenerate, "
+            "do not edit. *)\n")
 
 
 def text(f: Fixture) -> str:
@@ -130,14 +133,16 @@ def text(f: Fixture) -> str:
     for old, new in f.edits:
         n = body.count(old)
         if n != 1:
-            raise SystemExit(f"{f.name}: the text to replace occurs {n} times in the '{f.base}' bundle:\n{old}")
+            raise SystemExit(f"{f.name}: the text to replace occurs {n} times in the '{f.base}' "
+                             f"bundle:\n{old}")
         body = body.replace(old, new)
     return header(f) + body
 
 
 def main(argv: list[str] | None = None) -> int:
     p = argparse.ArgumentParser(description=__doc__.splitlines()[0])
-    p.add_argument("--check", action="store_true", help="only report fixtures that differ from a regeneration")
+    p.add_argument("--check", action="store_true",
+                   help="only report fixtures that differ from a regeneration")
     args = p.parse_args(argv)
     OUT.mkdir(parents=True, exist_ok=True)
     stale = []

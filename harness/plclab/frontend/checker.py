@@ -523,6 +523,8 @@ class Checker:
             self._check_location(d, pou)
         if not d.name:
             d.ty = self.resolve_type(d.type_ref)
+            if isinstance(d.ty, T.FBType):   # already reported by _check_location
+                return
             if d.ty is not None and d.init is not None:
                 d.init_value = self._init_value(d.init, d.ty)
             elif d.ty is not None:

@@ -9,7 +9,7 @@ from __future__ import annotations
 
 import tempfile
 from pathlib import Path
-from typing import Iterable, Optional, Sequence
+from typing import Optional, Sequence
 
 from plclab.errors import CompileError, Diagnostic, PlcLabError
 from plclab.frontend import check_sources, read_source
@@ -117,4 +117,4 @@ def requirement_table(stand: str, task: str) -> list[tuple[str, str]]:
     return [(r.id, r.text) for r in requirement_set(stand, task).requirements]
 
 
-__all__: Iterable[str] = ("grade", "grade_sources", "requirement_table")
+__all__ = ["grade", "grade_sources", "requirement_table"]

@@ -14,7 +14,7 @@ from typing import Optional
 
 WIDTH = 100          # the table fits a terminal of this width
 ID_WIDTH = 6
-RESULT_WIDTH = 4
+RESULT_WIDTH = 6       # "result"
 
 
 @dataclass(frozen=True)
@@ -73,7 +73,7 @@ class GradeReport:
         text_width = WIDTH - ID_WIDTH - RESULT_WIDTH - 4
         out.append("")
         out.append(f"{'id':<{ID_WIDTH}}  {'requirement':<{text_width}}  result")
-        out.append(f"{'-' * ID_WIDTH}  {'-' * text_width}  {'-' * (RESULT_WIDTH + 2)}")
+        out.append(f"{'-' * ID_WIDTH}  {'-' * text_width}  {'-' * RESULT_WIDTH}")
         indent = " " * (ID_WIDTH + 2)
         for r in self.rows:
             lines = textwrap.wrap(r.text, text_width) or [""]
