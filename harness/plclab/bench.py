@@ -10,27 +10,31 @@ import time
 from pathlib import Path
 from typing import Callable, Optional
 
+from plclab.errors import PlcLabError
+
 PROGRAMS_DIR = Path(__file__).resolve().parents[2] / "tests" / "programs"
 
 
-def bench_program(path: Path, sim_seconds: float = 20.0) -> dict:
-    """Microseconds per scan and virtual-time speed-up of one program (best of 3 runs)."""
-    from plclab.frontend import load_files
+def bench_program(path: Path, sim_seconds: float = 20.0, sources=None, plant_factory=None,
+                  name: str = "") -> dict:
+    """Microseconds per scan and virtual-time speed-up of one program (best of 3 runs), with
+    its plant model when it has one."""
+    from plclab.frontend import check_sources, load_files
     from plclab.runtime.compiler import compile_unit
     from plclab.runtime.plc import PLC
     from plclab.runtime.sim import Simulation
 
-    checked = load_files([path])
+    checked = check_sources(sources) if sources is not None else load_files([path])
     best = None
     for _ in range(3):
         plc = PLC(compile_unit(checked))
-        sim = Simulation(plc)
+        sim = Simulation(plc, plants=[plant_factory()] if plant_factory else ())
         t0 = time.perf_counter()
         sim.run(sim_seconds)
         elapsed = time.perf_counter() - t0
         best = elapsed if best is None or elapsed < best else best
     scans = round(sim_seconds * 1e9 / plc.tick_ns)
-    return {"program": path.name, "tick_ms": plc.tick_ns / 1e6, "scans": scans,
+    return {"program": name or path.name, "tick_ms": plc.tick_ns / 1e6, "scans": scans,
             "us_per_scan": best / scans * 1e6, "speedup": sim_seconds / best}
 
 
@@ -52,6 +56,17 @@ def run_bench(report: Callable[[str], None] = print, quick: bool = False,
         goal = "  (goal >= 500x)" if path.name == "bench300.st" else ""
         report(f"scan: {r['program']}: {r['us_per_scan']:.1f} us/scan at {r['tick_ms']:g} ms tick, "
                f"{r['speedup']:.0f}x real time{goal}")
+    from plclab.stands import STANDS, get_stand, sources
+    for stand_name in STANDS:
+        try:
+            stand = get_stand(stand_name)
+        except PlcLabError:
+            continue
+        r = bench_program(Path(stand_name), 5.0 if quick else 20.0, sources=sources(stand, "full"),
+                          plant_factory=stand.make_plant, name=f"{stand_name} full (with its plant)")
+        results["programs"].append(r)
+        report(f"scan: {r['program']}: {r['us_per_scan']:.1f} us/scan at {r['tick_ms']:g} ms tick, "
+               f"{r['speedup']:.0f}x real time")
     try:
         from plclab.modbus.bench import bench_modbus
         mb = bench_modbus(1.0 if quick else 3.0)

@@ -1,0 +1,475 @@
+"""The thermostabilization stand (textbook section 5.3, thermo.md): a Twido PLC keeping a
+radiator's temperature with a heater or a fan, operated from SCADA through %MW0..%MW6.
+
+One program, `full` (PRG_Thermo), in one 100 ms TASK. Scenarios are written like the lab
+work: SCADA writes the mode, the setpoint and the manual commands into the registers (through
+the Twido map, so a write the stand refuses over Modbus is refused here too), the operator
+flips the disturbance toggle switch, and the trend (temperature, setpoint, heater, fan) is
+checked against the spec's goals. No scenario may ever show a command outside its range, the
+heater on with an open sensor, or an automatic-mode report (%MW1/%MW2) that differs from
+what is output (check_never).
+"""
+from __future__ import annotations
+
+import re
+from dataclasses import dataclass
+from pathlib import Path
+from typing import Callable, Iterable, Optional
+
+from plclab.modbus.maps import TwidoMap
+from plclab.modbus.profiles import THERMO
+from plclab.modbus.protocol import ModbusException, Table
+from plclab.scenario import ScenarioFailure, Session
+from plclab.stands import PLC_DIR, Stand, Task, Variant, sources
+
+POUS = ("FC_ScaleAdc", "FB_TemperatureSensor", "FB_FrequencyMeter", "FB_PIRegulator", "PRG_Thermo")
+
+# 100 ms: a Twido periodic task (5..255 ms) that acts on a SCADA write or an open sensor
+# within 0.1 s and fits 10 scans in the fan speed meter's 1 s gate; the regulators sample
+# every 1 s inside it, against thermal time constants of 200..500 s.
+STAND = Stand(
+    name="thermo",
+    title="Thermostabilization stand (Twido + SCADA)",
+    gvl=("GVL_THERMO",),
+    variants={
+        "full": Variant("full", POUS, (Task("MainTask", "T#100ms", 1, (("Main", "PRG_Thermo"),)),),
+                        "Modes 0/1/2 on %MW0, PI regulators on the heater (automatic-1) and the fan "
+                        "(automatic-2)."),
+    },
+    register_map="twido",
+)
+
+MANUAL, AUTO1, AUTO2 = 0, 1, 2
+MODE_NAMES = {MANUAL: "manual", AUTO1: "automatic-1", AUTO2: "automatic-2"}
+FAN_MAX, HEATER_MAX = 1000, 2000
+ADC_FULL = 1000                    # counts at 100.0 C; also what an open sensor reads
+CELSIUS = "Main.Sensor.Celsius"    # the regulators' measurement, 0.1 C
+BAND = 1.0                         # C: "within +/-1 C"
+
+# The spec's goals for the default model (thermo.md, "Regulators").
+STEP_SETTLE_S = 300.0
+STEP_OVERSHOOT_C = 2.0
+DISTURBANCE_DEVIATION_C = 1.5
+AUTO2_RECOVERY_S = 300.0
+
+
+def labels() -> dict[str, str]:
+    """Wiring labels and register names -> addresses, read from the GVL (the single source)."""
+    text = (PLC_DIR / "GVL" / "GVL_THERMO.st").read_text(encoding="utf-8")
+    return {m.group(1): m.group(2).upper() for m in re.finditer(r"(\w+)\s+AT\s+(%\w+(?:\.\d+)?)", text)}
+
+
+REGISTERS = {name: int(addr[3:]) for name, addr in labels().items() if addr.startswith("%MW")}
+
+
+def session(variant: str = "full", program: Optional[list[tuple[str, str]]] = None,
+            retain_path: Optional[Path] = None, watch_internals: bool = True, **plant_params) -> Session:
+    """A fresh stand: the shipped program (or a student's `program` sources) and a plant at
+    power-up (22 C, everything off). `s.scada` is the SCADA client of the session."""
+    srcs = program if program is not None else sources(STAND, variant)
+    watch = [CELSIUS] if watch_internals and program is None else []
+    s = Session(srcs, STAND.make_plant(**plant_params), labels(), watch=watch, retain_path=retain_path,
+                name=f"thermo {variant if program is None else 'program'}")
+    s.scada = Scada(s)          # type: ignore[attr-defined]
+    return s
+
+
+# --------------------------------------------------------------------------- SCADA and console
+
+class Scada:
+    """SCADA's side of the stand: holding registers n = %MWn through the Twido map (the same
+    validation as the Modbus face: a refused write raises and changes nothing)."""
+
+    def __init__(self, s: Session):
+        self.s = s
+
+    def _map(self) -> TwidoMap:
+        return TwidoMap(self.s.plc.image, THERMO)    # the image of the PLC running now
+
+    def write(self, **registers: int) -> None:
+        """Write registers by name, one request each, in order (`MODE=0, HEATER_CTRL=2000`).
+        Each write is applied by the next scan, which runs before the next write."""
+        for name, value in registers.items():
+            try:
+                self._map().write(Table.HOLDING_REGISTERS, REGISTERS[name], (int(value) & 0xFFFF,))
+            except ModbusException as e:
+                raise ScenarioFailure(f"t={self.s.now:.2f} s: SCADA write {name} (%MW{REGISTERS[name]}) "
+                                      f"= {value} refused: {e}") from None
+            self.s.log(f"SCADA {name}={value}")
+            self.s.run(self.s.tick)
+
+    def refused(self, name: str, value: int) -> Optional[int]:
+        """Try a write that should be refused: the exception code, or None if it was accepted."""
+        try:
+            self._map().write(Table.HOLDING_REGISTERS, REGISTERS[name], (int(value) & 0xFFFF,))
+        except ModbusException as e:
+            self.s.log(f"SCADA {name}={value} refused ({int(e.code):02d})")
+            return int(e.code)
+        self.s.log(f"SCADA {name}={value}")
+        self.s.run(self.s.tick)
+        return None
+
+    def read(self, name: str) -> int:
+        """A register as SCADA reads it (signed INT)."""
+        raw = self._map().read(Table.HOLDING_REGISTERS, REGISTERS[name], 1)[0]
+        return raw - 0x10000 if raw >= 0x8000 else raw
+
+
+def disturbance(s: Session, on: bool) -> None:
+    """Flip the console's disturbance toggle switch (%IX0.0)."""
+    s.plant.set_disturbance(on)
+    s.log(f"DISTURBANCE={int(on)}")
+
+
+# --------------------------------------------------------------------------- measurements
+
+def _signed(v: int) -> int:
+    return v - 65536 if v >= 32768 else v
+
+
+def celsius(s: Session, t: Optional[float] = None) -> float:
+    """The measured temperature (ADC %IW0, 0.1 C) at time t (default: now)."""
+    if t is None:
+        return s.value("TEMP_ADC") / 10.0
+    return s.trace.value_at("TEMP_ADC", t) / 10.0
+
+
+def samples(s: Session, name: str, after: float, until: Optional[float] = None) -> list[tuple[float, int]]:
+    """(time, value) of `name` in [after, until]: the value in effect at `after`, then each change."""
+    end = s.trace.end_s if until is None else until
+    out = [(after, _signed(s.trace.value_at(name, after)))]
+    out += [(t / 1e9, _signed(v)) for t, v in s.trace.changes(name) if after * 1e9 < t <= end * 1e9]
+    return out
+
+
+@dataclass(frozen=True)
+class Response:
+    """How the measured temperature answered a setpoint step or a disturbance."""
+
+    start: float                  # s: when the step / disturbance happened
+    target: float                 # C
+    settle: Optional[float]       # s after start until it stays within +/-BAND (None: never)
+    overshoot: float              # C beyond the target, in the direction of the step (>= 0)
+    deviation: float              # C: largest |temperature - target| after start
+
+    def text(self) -> str:
+        settled = f"within +/-{BAND:g} C after {self.settle:.0f} s" if self.settle is not None \
+            else f"not within +/-{BAND:g} C"
+        return f"{settled}, overshoot {self.overshoot:.1f} C, largest deviation {self.deviation:.1f} C"
+
+
+def response(s: Session, start: float, target: float, until: Optional[float] = None,
+             direction: int = 0) -> Response:
+    """Measure the temperature (%IW0) from `start` to `until` against `target`. `direction`
+    +1 / -1 is the step's direction for the overshoot (0: the larger side)."""
+    pts = samples(s, "TEMP_ADC", start, until)
+    errors = [(t, v / 10.0 - target) for t, v in pts]
+    settle: Optional[float] = 0.0
+    for t, e in errors:
+        if abs(e) > BAND + 1e-9:
+            settle = None
+        elif settle is None:
+            settle = t - start
+    if settle is not None and abs(errors[0][1]) > BAND + 1e-9:
+        settle = None
+    # settle: the start of the last stretch within the band (None if it ends outside it)
+    settle = _last_entry(errors, start)
+    if direction > 0:
+        over = max(0.0, max(e for _t, e in errors))
+    elif direction < 0:
+        over = max(0.0, -min(e for _t, e in errors))
+    else:
+        over = max(abs(e) for _t, e in errors)
+    return Response(start, target, settle, round(over, 3), round(max(abs(e) for _t, e in errors), 3))
+
+
+def _last_entry(errors: list[tuple[float, float]], start: float) -> Optional[float]:
+    if abs(errors[-1][1]) > BAND + 1e-9:
+        return None
+    entry = start
+    for t, e in errors:
+        if abs(e) > BAND + 1e-9:
+            entry = None
+        elif entry is None:
+            entry = t
+    return None if entry is None else entry - start
+
+
+def jumps(s: Session, name: str, at: float, window: float = 2.0) -> int:
+    """The largest change of a command `name` from the scan before `at` to any time in the
+    `window` seconds after it: how much a mode change bumped it."""
+    before = _signed(s.trace.value_at(name, at - s.tick))
+    return max(abs(v - before) for _t, v in samples(s, name, at, at + window))
+
+
+# --------------------------------------------------------------------------- never
+
+def _instants(s: Session, names: Iterable[str]) -> list[int]:
+    times: set[int] = set()
+    for n in names:
+        times.update(t for t, _v in s.trace.changes(n))
+    return sorted(times)
+
+
+def check_never(s: Session) -> None:
+    """What no scenario may ever show: a command outside its range, the heater on with an open
+    sensor (ADC at full scale), a report in %MW1/%MW2 that differs from the commands output in
+    an automatic mode, %MW3 not the ADC in whole degrees, %MW5 not 0."""
+    tr = s.trace
+    names = ["FAN", "HEATER", "TEMP_ADC", "MODE", "FAN_CTRL", "HEATER_CTRL", "TEMPERATURE", "RESERVED"]
+    for t_ns in _instants(s, names):
+        v = {n: _signed(tr.value_at_ns(n, t_ns)) for n in names}
+        t = t_ns / 1e9
+        if not 0 <= v["FAN"] <= FAN_MAX:
+            raise ScenarioFailure(f"t={t:.2f} s: fan command {v['FAN']} outside 0..{FAN_MAX}")
+        if not 0 <= v["HEATER"] <= HEATER_MAX:
+            raise ScenarioFailure(f"t={t:.2f} s: heater command {v['HEATER']} outside 0..{HEATER_MAX}")
+        if v["TEMP_ADC"] >= ADC_FULL and v["HEATER"] != 0:
+            raise ScenarioFailure(f"t={t:.2f} s: heater {v['HEATER']} with the sensor open (ADC {v['TEMP_ADC']})")
+        if v["MODE"] in (AUTO1, AUTO2) and (v["FAN_CTRL"], v["HEATER_CTRL"]) != (v["FAN"], v["HEATER"]):
+            raise ScenarioFailure(f"t={t:.2f} s: {MODE_NAMES[v['MODE']]}: %MW1/%MW2 report "
+                                  f"{v['FAN_CTRL']}/{v['HEATER_CTRL']}, output {v['FAN']}/{v['HEATER']}")
+        whole = (min(max(v["TEMP_ADC"], 0), ADC_FULL) + 5) // 10
+        if v["TEMPERATURE"] != whole:
+            raise ScenarioFailure(f"t={t:.2f} s: %MW3 = {v['TEMPERATURE']}, ADC {v['TEMP_ADC']} is {whole} C")
+        if v["RESERVED"] != 0:
+            raise ScenarioFailure(f"t={t:.2f} s: %MW5 = {v['RESERVED']}, reserved must read 0")
+
+
+# --------------------------------------------------------------------------- lab steps
+
+def settle_at(s: Session, mode: int, setpoint: int, hold: float = 60.0, timeout: float = 1500.0) -> float:
+    """Select `mode` with `setpoint` and wait until the temperature has stayed within +/-0.5 C
+    of it for `hold` seconds; returns that time."""
+    s.scada.write(SETPOINT=setpoint, MODE=mode)
+    since = [None]
+
+    def steady(io) -> bool:
+        if abs(io.TEMP_ADC / 10.0 - setpoint) > 0.5:
+            since[0] = None
+            return False
+        if since[0] is None:
+            since[0] = s.now
+        return s.now - since[0] >= hold
+    return s.wait_until(steady, timeout, f"{MODE_NAMES[mode]} steady at {setpoint} C")
+
+
+def expect(s: Session, ok: bool, what: str) -> None:
+    if not ok:
+        raise ScenarioFailure(f"t={s.now:.2f} s: {what}")
+
+
+def fan_speed_ok(s: Session, fan: int) -> None:
+    """%MW4, pulses per second, for a fan command: 3000 rpm x 2 pulses / 60 s at 1000."""
+    expected = round(fan * 100 / FAN_MAX)
+    speed = s.scada.read("FAN_SPEED")
+    expect(s, abs(speed - expected) <= 1, f"fan {fan}: %MW4 = {speed} pulses/s, expected {expected}")
+
+
+# --------------------------------------------------------------------------- scenarios
+
+def manual(s: Session) -> None:
+    """Manual mode: heater step to full power, fan steps to half and full speed, heater off.
+    %MW3 follows the radiator, %MW4 the fan (also across the 16-bit counter's wrap, after
+    65536 pulses = 655 s at full speed); the outputs are what SCADA wrote."""
+    s.scada.write(MODE=MANUAL, HEATER_CTRL=HEATER_MAX)
+    expect(s, s.value("HEATER") == HEATER_MAX, f"heater output {s.value('HEATER')} after %MW2 = {HEATER_MAX}")
+    start = celsius(s)
+    s.run(300.0)
+    expect(s, celsius(s) - start > 20.0, f"heater full for 300 s: {start:.1f} -> {celsius(s):.1f} C")
+    s.scada.write(FAN_CTRL=500)
+    s.run(5.0)
+    fan_speed_ok(s, 500)
+    s.scada.write(FAN_CTRL=FAN_MAX)
+    s.run(5.0)
+    fan_speed_ok(s, FAN_MAX)
+    hot = celsius(s)
+    s.run(300.0)
+    expect(s, celsius(s) < hot - 3.0, f"fan full for 300 s: {hot:.1f} -> {celsius(s):.1f} C")
+    s.scada.write(HEATER_CTRL=0)
+    s.run(400.0)                                   # the counter wraps at about 655 s of full speed
+    expect(s, s.plant.pulse_count > 65536, f"only {s.plant.pulse_count} pulses: the counter did not wrap")
+    speeds = [v for _t, v in samples(s, "FAN_SPEED", s.now - 690.0)]
+    expect(s, min(speeds[1:]) >= 99, f"%MW4 dropped to {min(speeds[1:])} pulses/s at full fan speed")
+    expect(s, celsius(s) < 30.0, f"heater off, fan full: still {celsius(s):.1f} C")
+    s.scada.write(FAN_CTRL=0)
+    s.run(5.0)
+    fan_speed_ok(s, 0)
+
+
+def setpoint_step(s: Session, low: int = 40, high: int = 50, watch: float = 600.0) -> Response:
+    """Automatic-1 (the heater regulates, fan off), steady at `low`; the setpoint steps to
+    `high`: settling within +/-1 C under 300 s, overshoot under 2 C (thermo.md goals)."""
+    settle_at(s, AUTO1, low)
+    s.scada.write(SETPOINT=high)
+    start = s.now - s.tick
+    s.run(watch)
+    r = response(s, start, high, direction=1 if high > low else -1)
+    s.log(f"setpoint {low} -> {high} C: {r.text()}")
+    expect(s, r.settle is not None and r.settle < STEP_SETTLE_S,
+           f"setpoint step {low} -> {high} C: {r.text()}; the goal is +/-1 C in under {STEP_SETTLE_S:g} s")
+    expect(s, r.overshoot < STEP_OVERSHOOT_C,
+           f"setpoint step {low} -> {high} C: overshoot {r.overshoot:.1f} C, the goal is under {STEP_OVERSHOOT_C:g} C")
+    return r
+
+
+def auto1_step(s: Session) -> None:
+    """Automatic-1 setpoint step 40 -> 50 C and back to 40 C."""
+    setpoint_step(s, 40, 50)
+    s.scada.write(SETPOINT=40)
+    start = s.now - s.tick
+    s.run(600.0)
+    r = response(s, start, 40, direction=-1)
+    s.log(f"setpoint 50 -> 40 C: {r.text()}")
+    expect(s, r.settle is not None, f"setpoint step 50 -> 40 C: {r.text()}")
+
+
+def auto1_disturbance(s: Session) -> None:
+    """Automatic-1 steady at 40 C; the fan disturbance is switched on (fan 500): the deviation
+    stays under 1.5 C and the temperature returns within +/-1 C; switched off: the same."""
+    settle_at(s, AUTO1, 40)
+    for on in (True, False):
+        disturbance(s, on)
+        start = s.now
+        s.run(600.0)
+        r = response(s, start, 40)
+        s.log(f"fan disturbance {'on' if on else 'off'}: {r.text()}")
+        expect(s, s.value("FAN") == (500 if on else 0), f"fan {s.value('FAN')} with the switch {'on' if on else 'off'}")
+        expect(s, r.deviation < DISTURBANCE_DEVIATION_C,
+               f"fan disturbance {'on' if on else 'off'}: deviation {r.deviation:.1f} C, the goal is under "
+               f"{DISTURBANCE_DEVIATION_C:g} C")
+        expect(s, r.settle is not None, f"fan disturbance {'on' if on else 'off'}: {r.text()}")
+
+
+def auto2_disturbance(s: Session) -> None:
+    """Preheat to 45 C in automatic-1, change to automatic-2 (the fan regulates, heater 1000),
+    steady; the heater disturbance is switched on (heater 2000): back within +/-1 C in under
+    300 s; switched off: back again."""
+    settle_at(s, AUTO1, 45, hold=30.0)
+    s.scada.write(MODE=AUTO2)
+    s.wait_until(lambda io: False, 0, "") if False else None
+    settled = settle_at(s, AUTO2, 45, hold=120.0)
+    del settled
+    for on in (True, False):
+        disturbance(s, on)
+        start = s.now
+        s.run(600.0)
+        r = response(s, start, 45)
+        s.log(f"heater disturbance {'on' if on else 'off'}: {r.text()}")
+        expect(s, s.value("HEATER") == (2000 if on else 1000),
+               f"heater {s.value('HEATER')} with the switch {'on' if on else 'off'}")
+        expect(s, r.settle is not None and r.settle < AUTO2_RECOVERY_S,
+               f"heater disturbance {'on' if on else 'off'}: {r.text()}; the goal is back within +/-1 C in "
+               f"under {AUTO2_RECOVERY_S:g} s")
+
+
+def mode_changes(s: Session) -> None:
+    """Mode changes without bumps: manual -> automatic-1 -> automatic-2 -> manual ->
+    automatic-2 -> automatic-1. The regulated command starts from what the actuator had (no
+    jump at the change); the other one becomes its mode's disturbance value; manual mode
+    keeps the last automatic commands. %MW1/%MW2 cannot be written in automatic modes."""
+    s.scada.write(MODE=MANUAL, SETPOINT=45, HEATER_CTRL=1300, FAN_CTRL=300)
+    s.run(400.0)
+    steps = [(AUTO1, "HEATER"), (AUTO2, "FAN"), (MANUAL, None), (AUTO2, "FAN"), (AUTO1, "HEATER")]
+    for mode, regulated in steps:
+        before = {n: s.value(n) for n in ("FAN", "HEATER")}
+        s.scada.write(MODE=mode)
+        at = s.now - s.tick
+        s.run(300.0)
+        for name in ("FAN", "HEATER"):
+            if name == regulated or mode == MANUAL:
+                bump = jumps(s, name, at)
+                s.log(f"to {MODE_NAMES[mode]}: {name.lower()} moved {bump} in the 2 s after the change")
+                limit = HEATER_MAX if name == "HEATER" else FAN_MAX
+                expect(s, bump <= limit // 20, f"{name.lower()} jumped by {bump} when changing to {MODE_NAMES[mode]} "
+                                               f"(from {before[name]})")
+        if mode != MANUAL:
+            expect(s, s.scada.refused("HEATER_CTRL", 500) == 3, f"%MW2 written in {MODE_NAMES[mode]}")
+            expect(s, s.scada.refused("FAN_CTRL", 500) == 3, f"%MW1 written in {MODE_NAMES[mode]}")
+
+
+def sensor_open(s: Session) -> None:
+    """Automatic-1 at 40 C; the sensor opens: heater off at once, %MW3 shows 100, the mode
+    stays 1 and SCADA can still change the setpoint; the sensor is repaired: regulation
+    resumes from heater 0 without a jump and gets back to 40 C."""
+    settle_at(s, AUTO1, 40, hold=30.0)
+    s.inject("sensor_open")
+    s.run(s.tick)
+    expect(s, s.value("HEATER") == 0, f"heater {s.value('HEATER')} with the sensor open")
+    s.run(60.0)
+    expect(s, s.scada.read("TEMPERATURE") == 100, f"%MW3 = {s.scada.read('TEMPERATURE')} with the sensor open")
+    expect(s, s.scada.read("MODE") == AUTO1, f"mode {s.scada.read('MODE')} after the sensor opened")
+    expect(s, s.value("HEATER") == 0, f"heater {s.value('HEATER')} with the sensor open")
+    s.scada.write(SETPOINT=42)
+    s.run(30.0)
+    expect(s, s.value("HEATER") == 0, "heater on with the sensor open after a setpoint change")
+    s.scada.write(MODE=AUTO2)
+    s.run(30.0)
+    expect(s, s.value("HEATER") == 0 and s.value("FAN") == FAN_MAX,
+           f"automatic-2 with the sensor open: heater {s.value('HEATER')}, fan {s.value('FAN')}")
+    s.scada.write(MODE=AUTO1)
+    s.run(10.0)
+    s.clear_faults()
+    at = s.now
+    s.run(2.0)
+    expect(s, s.value("HEATER") <= HEATER_MAX // 20, f"heater jumped to {s.value('HEATER')} when the sensor came back")
+    s.wait_until(lambda io: abs(io.TEMP_ADC / 10.0 - 42) <= BAND, 900, "back within +/-1 C of 42 C")
+    del at
+
+
+def demo(s: Session) -> None:
+    """A short tour: manual heater step (full power for 150 s), then automatic-1 at 40 C and
+    a setpoint step to 45 C."""
+    s.scada.write(MODE=MANUAL, HEATER_CTRL=HEATER_MAX)
+    s.run(150.0)
+    s.scada.write(SETPOINT=40, MODE=AUTO1)
+    s.wait_until(lambda io: abs(io.TEMP_ADC / 10.0 - 40) <= 0.3, 600, "automatic-1 at 40 C")
+    s.run(60.0)
+    s.scada.write(SETPOINT=45)
+    start = s.now - s.tick
+    s.run(300.0)
+    r = response(s, start, 45, direction=1)
+    s.log(f"setpoint 40 -> 45 C: {r.text()}")
+    expect(s, r.settle is not None and r.overshoot < STEP_OVERSHOOT_C, f"setpoint 40 -> 45 C: {r.text()}")
+
+
+SCENARIOS: dict[str, Callable[[Session], None]] = {
+    "demo": demo, "manual": manual, "step": auto1_step, "disturbance": auto1_disturbance,
+    "auto2": auto2_disturbance, "modes": mode_changes, "sensor_open": sensor_open,
+}
+PLOT_SIGNALS = [CELSIUS, "TEMP_ADC", "SETPOINT", "HEATER", "FAN", "FAN_SPEED", "DISTURBANCE", "MODE"]
+
+
+# --------------------------------------------------------------------------- timeline
+
+TIMELINE_EVERY = 30.0          # s between rows when nothing happens
+
+
+def timeline(s: Session) -> list[str]:
+    """Rows: time, SCADA / console action, mode, setpoint, temperature (0.1 C from the ADC),
+    %MW3, heater, fan, fan speed, disturbance. A row for every action and every 30 s."""
+    tr = s.trace
+    acts: dict[float, list[str]] = {}
+    for a in s.actions:
+        acts.setdefault(round(a.time, 6), []).append(a.text)
+    times = set(acts)
+    t = 0.0
+    while t <= tr.end_s:
+        times.add(round(t, 6))
+        t += TIMELINE_EVERY
+    rows = [f"{'time s':>8}  {'SCADA / console':<34} {'mode':>4} {'sp C':>4} {'temp C':>6} {'%MW3':>4} "
+            f"{'heater':>6} {'fan':>5} {'pulse/s':>7} dist"]
+    for t in sorted(times):
+        v = {n: _signed(tr.value_at(n, t)) for n in
+             ("MODE", "SETPOINT", "TEMP_ADC", "TEMPERATURE", "HEATER", "FAN", "FAN_SPEED", "DISTURBANCE")}
+        text = "; ".join(acts.get(round(t, 6), []))
+        rows.append(f"{t:8.1f}  {text[:34]:<34} {v['MODE']:>4} {v['SETPOINT']:>4} {v['TEMP_ADC'] / 10:>6.1f} "
+                    f"{v['TEMPERATURE']:>4} {v['HEATER']:>6} {v['FAN']:>5} {v['FAN_SPEED']:>7} "
+                    f"{'on' if v['DISTURBANCE'] else '-':>4}")
+        for extra in acts.get(round(t, 6), [])[1:]:
+            pass
+    results = [a.text for a in s.actions if ": within" in a.text or ": not within" in a.text
+               or "moved" in a.text]
+    if results:
+        rows += ["", "measured:"] + [f"  {r}" for r in results]
+    return rows
