@@ -1,4 +1,4 @@
-"""Regenerate the grader's wrong-solution fixtures (tests/grader/fixtures/mp9c/*.st).
+"""Regenerate the grader's wrong-solution fixtures (tests/grader/fixtures/STAND/*.st).
 
 Each fixture is a complete OpenPLC program as a student would hand it in: the shipped bundle
 of a variant (plclab.stands.bundle) with one realistic mistake made by text edits, and a first
@@ -18,10 +18,10 @@ import sys
 from dataclasses import dataclass
 from pathlib import Path
 
-from plclab.stands import bundle
-from plclab.stands.mp9c import STAND
+from plclab.stands import bundle, get_stand
 
-OUT = Path(__file__).resolve().parent / "fixtures" / "mp9c"
+FIXTURES_DIR = Path(__file__).resolve().parent / "fixtures"
+OUT = FIXTURES_DIR / "mp9c"
 
 
 @dataclass(frozen=True)
@@ -32,6 +32,7 @@ class Fixture:
     mistake: str                         # what the student got wrong
     base: str                            # the variant whose bundle is edited
     edits: tuple[tuple[str, str], ...]   # (old, new): old must occur exactly once
+    stand: str = "mp9c"                  # written to fixtures/<stand>/
 
 
 MANUAL_TASK1 = """    L1 := SA2;
@@ -122,6 +123,121 @@ FIXTURES = (
 )
 
 
+# ---------------------------------------------------------------------------- TUR-10
+
+TUR10_MANUAL = """    DRIVE1 := FC_JogReference(SA1_FWD, SA1_BWD, SA6);
+    DRIVE2 := FC_JogReference(SA2_FWD, SA2_BWD, SA6);
+    DRIVE3 := FC_JogReference(SA3_FWD, SA3_BWD, SA6);
+    DRIVE4 := FC_JogReference(SA4_FWD, SA4_BWD, SA6);
+    DRIVE5 := FC_JogReference(SA5_FWD, SA5_BWD, SA6);
+"""
+TUR10_ENABLES = """RE5 := FC_BitOf(Code, 0);
+RE4 := FC_BitOf(Code, 1);
+RE3 := FC_BitOf(Code, 2);
+RE2 := FC_BitOf(Code, 3);
+RE1 := FC_BitOf(Code, 4);
+"""
+
+
+def tur10(name: str, task: str, fails: str, mistake: str, base: str, *edits: tuple[str, str]) -> Fixture:
+    return Fixture(name, task, fails, mistake, base, tuple(edits), stand="tur10")
+
+
+TUR10_FIXTURES = (
+    # ---------------------------------------------------------------- Task 1
+    tur10("task1_sa6_ignored", "task1", "T1.1",
+          "SA6 not wired: every jog is called with LowSpeed := FALSE, so +/-1500 where +/-500 is due.",
+          "task1", (TUR10_MANUAL, TUR10_MANUAL.replace(", SA6);", ", FALSE);"))),
+    tur10("task1_both_buttons_move", "task1", "T1.3",
+          "'no button' tested as NOT Forward AND NOT Backward: with both buttons held the drive runs "
+          "forward.", "task1",
+          ("IF Forward = Backward THEN", "IF NOT Forward AND NOT Backward THEN")),
+    tur10("task1_sa4_ignored", "task1", "T1.1",
+          "drive 4 is still not jogged: DRIVE4 := 0 as in the baseline.", "task1",
+          ("    DRIVE4 := FC_JogReference(SA4_FWD, SA4_BWD, SA6);\n", "    DRIVE4 := 0;\n")),
+    tur10("task1_drive2_swapped", "task1", "T1.1",
+          "drive 2's buttons swapped: SA2 forward gives -500 / -1500 and moves the link backward.", "task1",
+          ("FC_JogReference(SA2_FWD, SA2_BWD, SA6)", "FC_JogReference(SA2_BWD, SA2_FWD, SA6)")),
+    tur10("task1_drive3_copy_paste", "task1", "T1.4",
+          "copy-paste: DRIVE3 follows SA2's buttons, so jogging drive 2 moves link 3 too (and SA3 does "
+          "nothing).", "task1",
+          ("FC_JogReference(SA3_FWD, SA3_BWD, SA6)", "FC_JogReference(SA2_FWD, SA2_BWD, SA6)")),
+    tur10("task1_two_sensors_enabled", "task1", "G3",
+          "round-robin that keeps the previous sensor's enable OFF one more scan 'so that it can be "
+          "read': two read enables OFF at once (bus contention).", "task1",
+          ("    Code : INT;\n", "    Code : INT;\n    Last : INT := 31;          (* the sensor selected before *)\n"),
+          (TUR10_ENABLES, TUR10_ENABLES.replace("(Code, 0);", "(Code, 0) AND FC_BitOf(Last, 0);")
+           .replace("(Code, 1);", "(Code, 1) AND FC_BitOf(Last, 1);")
+           .replace("(Code, 2);", "(Code, 2) AND FC_BitOf(Last, 2);")
+           .replace("(Code, 3);", "(Code, 3) AND FC_BitOf(Last, 3);")
+           .replace("(Code, 4);", "(Code, 4) AND FC_BitOf(Last, 4);") + "Last := Code;\n")),
+    tur10("task1_normal_speed_3000", "task1", "G2",
+          "normal speed taken as 3000 (twice the limit): the DAC overvolts the drive.", "task1",
+          ("    NORMAL : INT := 1500;", "    NORMAL : INT := 3000;")),
+    # ---------------------------------------------------------------- Task 2
+    tur10("task2_pauses_swapped", "task2", "T2.1",
+          "pauses swapped: I1.5 = 0 gives 3 s, I1.5 = 1 gives 0.5 s.", "task2",
+          ("SEL(G := I15, IN0 := PAUSE_SHORT, IN1 := PAUSE_LONG)",
+           "SEL(G := I15, IN0 := PAUSE_LONG, IN1 := PAUSE_SHORT)")),
+    tur10("task2_i15_live", "task2", "T2.3",
+          "I1.5 read in automatic mode: the pause timer takes SEL(I15, 0.5 s, 3 s) live instead of the "
+          "pause recorded with the frame.", "task2",
+          ("    FrameTimeout : TIME := T#10s;\nEND_VAR",
+           "    FrameTimeout : TIME := T#10s;\n    PauseTime : TIME;           (* the pause to hold *)\nEND_VAR"),
+          ("            Pause(Start := TRUE, Duration := Cp.Frames[Ptr].Pause, Cancel := FALSE);",
+           "            Pause(Start := TRUE, Duration := PauseTime, Cancel := FALSE);"),
+          ("            Pause(Start := FALSE, Duration := Cp.Frames[Ptr].Pause, Cancel := FALSE);",
+           "            Pause(Start := FALSE, Duration := PauseTime, Cancel := FALSE);"),
+          ("Sequencer(Active := SA7, StepMode := FALSE,",
+           "Sequencer(Active := SA7, StepMode := FALSE, PauseTime := RecordPause,")),
+    tur10("task2_pause_ignored", "task2", "T2.2",
+          "the selected pause is computed but never used: every frame still gets the baseline 1 s.",
+          "task2",
+          ("    Robot : FB_Tur10Robot;\nEND_VAR",
+           "    Robot : FB_Tur10Robot;\n    Pause : TIME;                   (* chosen by I1.5 *)\nEND_VAR"),
+          ("Robot(RecordPause := SEL(G := I15, IN0 := PAUSE_SHORT, IN1 := PAUSE_LONG),",
+           "Pause := SEL(G := I15, IN0 := PAUSE_SHORT, IN1 := PAUSE_LONG);\nRobot(RecordPause := T#1s,")),
+    tur10("task2_short_pause_1s", "task2", "T2.1",
+          "the short pause kept the baseline value: I1.5 = 0 gives 1 s instead of 0.5 s.", "task2",
+          ("PAUSE_SHORT : TIME := T#500ms;", "PAUSE_SHORT : TIME := T#1s;")),
+    tur10("task2_program_not_retained", "task2", "G10",
+          "the control program declared VAR instead of VAR RETAIN: a PLC restart empties it.", "task2",
+          ("VAR RETAIN\n    Cp : ST_ControlProgram;", "VAR\n    Cp : ST_ControlProgram;")),
+    # ---------------------------------------------------------------- Task 3
+    tur10("task3_start_with_i15_0", "task3", "T3.1",
+          "start not gated: an SB1 press starts the program whatever I1.5 is.", "task3",
+          ("        IF Press AND Cp.Count > 0 AND RunEnable THEN", "        IF Press AND Cp.Count > 0 THEN")),
+    tur10("task3_wrap_not_suppressed", "task3", "T3.5",
+          "I1.5 is taken once, at the SB1 press: dropping it later does not stop the wrap to frame 1.",
+          "task3",
+          ("    SA7 : BOOL;\n    I15 : BOOL;\n", "    SA7 : BOOL;\n    I15 : BOOL;\n    SB1 : BOOL;\n"),
+          ("    Robot : FB_Tur10Robot;\nEND_VAR",
+           "    Robot : FB_Tur10Robot;\n    Enable : BOOL;                  (* I1.5 at the start press *)\n"
+           "    Sb1Before : BOOL;\nEND_VAR"),
+          ("Robot(RecordPause := PAUSE,\n      RunEnable := I15,",
+           "IF SB1 AND NOT Sb1Before THEN\n    Enable := I15;\nEND_IF;\nSb1Before := SB1;\n"
+           "Robot(RecordPause := PAUSE,\n      RunEnable := Enable,")),
+    tur10("task3_stops_at_once", "task3", "T3.4",
+          "I1.5 = 0 stops execution at once instead of after the last frame and its pause.", "task3",
+          ("ELSIF Fault THEN\n    State := STOPPED;", "ELSIF Fault OR NOT RunEnable THEN\n    State := STOPPED;")),
+    tur10("task3_stops_after_current_frame", "task3", "T3.4",
+          "I1.5 = 0 stops after the current frame and its pause instead of after the last frame.", "task3",
+          ("                IF Ptr >= Cp.Count AND NOT RunEnable THEN", "                IF NOT RunEnable THEN")),
+    tur10("task3_reset_on_release", "task3", "G7",
+          "the long press resets the program when SB1 is released, not at 3.0 s while it is held.",
+          "task3",
+          ("Long := LongTimer.Q AND NOT LongGiven;\nShort := WasHeld AND NOT Held AND NOT LongGiven;\n"
+           "IF Long THEN\n    LongGiven := TRUE;\nEND_IF;\n",
+           "IF LongTimer.Q THEN\n    LongGiven := TRUE;             (* held 3 s *)\nEND_IF;\n"
+           "Long := WasHeld AND NOT Held AND LongGiven;\n"
+           "Short := WasHeld AND NOT Held AND NOT LongGiven;\n")),
+    tur10("task3_timeout_10s", "task3", "G11",
+          "frame timeout copied from the MP-9C lab: 10 s instead of 20 s.", "task3",
+          ("    FRAME_TIMEOUT : TIME := T#20s;", "    FRAME_TIMEOUT : TIME := T#10s;")),
+)
+ALL_FIXTURES = FIXTURES + TUR10_FIXTURES
+
+
 def header(f: Fixture) -> str:
     return (f"(* plclab grader fixture: {f.task}, expected to FAIL {f.fails}. Mistake: {f.mistake}\n"
             f"   Made by tests/grader/make_fixtures.py from the '{f.base}' bundle; regenerate, "
@@ -129,7 +245,7 @@ def header(f: Fixture) -> str:
 
 
 def text(f: Fixture) -> str:
-    body = bundle(STAND, f.base)
+    body = bundle(get_stand(f.stand), f.base)
     for old, new in f.edits:
         n = body.count(old)
         if n != 1:
@@ -144,15 +260,15 @@ def main(argv: list[str] | None = None) -> int:
     p.add_argument("--check", action="store_true",
                    help="only report fixtures that differ from a regeneration")
     args = p.parse_args(argv)
-    OUT.mkdir(parents=True, exist_ok=True)
     stale = []
-    for f in FIXTURES:
-        path = OUT / f"{f.name}.st"
+    for f in ALL_FIXTURES:
+        path = FIXTURES_DIR / f.stand / f"{f.name}.st"
         new = text(f)
         if args.check:
             if not path.exists() or path.read_text(encoding="utf-8") != new:
                 stale.append(path)
             continue
+        path.parent.mkdir(parents=True, exist_ok=True)
         path.write_text(new, encoding="utf-8")
         print(f"wrote {path}")
     for path in stale:

@@ -296,6 +296,11 @@ class Location(Node):
     size: str
     parts: list[int]
 
+    @property
+    def key(self) -> str:
+        """The canonical spelling: `%ix0.1` and `%I0.1` are both `%IX0.1`."""
+        return f"%{self.area}{self.size}{'.'.join(map(str, self.parts))}"
+
 
 @dataclass(eq=False)
 class VarDecl(Node):

@@ -14,7 +14,7 @@ from typing import Any, Iterable, Optional
 
 from plclab.errors import Diagnostic
 from plclab.frontend import ast as A
-from plclab.frontend.stdsigs import FUNCTION_BLOCKS, FUNCTIONS, RESERVED_NAMES, FBSig, FuncSig
+from plclab.frontend.stdsigs import FUNCTION_BLOCKS, FUNCTIONS, NO_BOOL_OVERLOAD, RESERVED_NAMES, FBSig, FuncSig
 from plclab.iec import types as T
 
 # Pseudo-types of untyped literals: they become a concrete type where they are used.
@@ -521,6 +521,9 @@ class Checker:
     def _declare_var(self, d: A.VarDecl, names: dict[str, Any], pou: Optional[A.PouDecl]) -> None:
         if d.location is not None:
             self._check_location(d, pou)
+            if pou is not None:
+                # as in matiec, the body may then use the address itself (`%QX0.0 := TRUE;`)
+                names.setdefault(d.location.key, d)
         if not d.name:
             d.ty = self.resolve_type(d.type_ref)
             if isinstance(d.ty, T.FBType):   # already reported by _check_location
@@ -575,8 +578,8 @@ class Checker:
                 and isinstance(T.base_of(ty), (T.ArrayType, T.StructType))):
             self.error(d, "an ARRAY or STRUCT passed by value to a FUNCTION does not compile in OpenPLC "
                           "(its C code is rejected); use a FUNCTION_BLOCK with VAR_IN_OUT")
-        if d.section == "VAR_IN_OUT" and d.init is not None:
-            self.error(d.init, "a VAR_IN_OUT cannot have an initial value")
+        if d.section in ("VAR_IN_OUT", "VAR_TEMP") and d.init is not None:
+            self.error(d.init, f"a {d.section} cannot have an initial value in OpenPLC's compiler")
         if d.init is not None:
             d.init_value = self._init_value(d.init, ty, _Scope(pou, names))
             if d.init_value is None:
@@ -922,18 +925,8 @@ class Checker:
             formal = positional
         seen = set()
         for a in formal:
-            if a.key == "EN" and not a.is_output:      # matiec gives every FB an EN input...
-                t = self.expr(a.value, scope, T.BOOL)
-                if t is not None:
-                    self.assignable(T.BOOL, a.value, t, what="EN")
-                continue
-            if a.key == "ENO" and a.is_output:         # ...and an ENO output
-                t = self.lvalue(a.value, scope)
-                if t is not None and T.base_of(t) is not T.BOOL:
-                    self.error(a.value, "ENO is BOOL")
-                continue
-            if a.key in ("EN", "ENO"):
-                self.error(a, f"{a.name} is {'an input: use :=' if a.key == 'EN' else 'an output: use =>'}")
+            if a.key in ("EN", "ENO"):      # matiec gives every FB an EN input and an ENO output
+                self._en_eno_arg(a, scope)
                 continue
             if a.key in seen:
                 self.error(a, f"parameter '{a.name}' given twice")
@@ -999,37 +992,31 @@ class Checker:
         c.pou = pou
         if scope.pou is pou:
             self.error(c, f"recursive call of '{pou.name}' (IEC 61131-3 forbids recursion)")
-        inputs = [d for d in pou.decls if d.section in ("VAR_INPUT", "VAR_IN_OUT")]
-        params = {d.key: d for d in pou.decls if d.section in ("VAR_INPUT", "VAR_OUTPUT", "VAR_IN_OUT")}
+        params = [d for d in pou.decls if d.section in ("VAR_INPUT", "VAR_OUTPUT", "VAR_IN_OUT")]
+        by_key = {d.key: d for d in params}
         formal = [a for a in c.args if a.name is not None]
         positional = [a for a in c.args if a.name is None]
         if formal and positional:
-            first_formal = formal[0]
-            if any((p.line, p.col) > (first_formal.line, first_formal.col) for p in positional):
-                self.error(positional[-1], "positional arguments cannot follow formal ones")
-                return pou.ret_ty
-        if positional and len(positional) > len(inputs):
-            self.error(c, f"'{pou.name}' takes {len(inputs)} input(s), {len(positional)} given")
+            self.error(positional[0], "mixing formal (name := value) and positional arguments in one call")
+            return pou.ret_ty
+        if len(positional) > len(params):
+            self.error(c, f"'{pou.name}' has {len(params)} parameter(s), {len(positional)} given")
             return pou.ret_ty
         seen = set()
-        for a, d in zip(positional, inputs):
+        # positional arguments go to the parameters in declaration order, outputs included (matiec)
+        for a, d in zip(positional, params):
             a.param = d
             seen.add(d.key)
-            self._bind_input(a, d, scope, pou.name)
+            if d.section == "VAR_OUTPUT":
+                a.is_output = True
+                self._bind_output(a, d, scope)
+            else:
+                self._bind_input(a, d, scope, pou.name)
         for a in formal:
             if a.key in ("EN", "ENO"):
-                if a.key == "EN" and not a.is_output:
-                    t = self.expr(a.value, scope, T.BOOL)
-                    if t is not None:
-                        self.assignable(T.BOOL, a.value, t, what="EN")
-                elif a.key == "ENO" and a.is_output:
-                    t = self.lvalue(a.value, scope)
-                    if t is not None and T.base_of(t) is not T.BOOL:
-                        self.error(a.value, "ENO is BOOL")
-                else:
-                    self.error(a, f"{a.name} is {'an input' if a.key == 'EN' else 'an output'}")
+                self._en_eno_arg(a, scope)
                 continue
-            d = params.get(a.key)
+            d = by_key.get(a.key)
             if d is None:
                 self.error(a, f"function '{pou.name}' has no parameter '{a.name}'")
                 continue
@@ -1042,18 +1029,38 @@ class Checker:
                 if d.section != "VAR_OUTPUT":
                     self.error(a, f"'{a.name}' is an input: use ':='")
                     continue
-                tt = self.lvalue(a.value, scope)
-                if tt is not None and d.ty is not None and not self._decl_types_match(T.base_of(tt), T.base_of(d.ty)):
-                    self.error(a.value, f"output '{a.name}' is {d.ty.name}; it cannot be stored in {self._tname(tt)}")
+                self._bind_output(a, d, scope)
             else:
                 if d.section == "VAR_OUTPUT":
                     self.error(a, f"'{a.name}' is an output: use '=>'")
                     continue
                 self._bind_input(a, d, scope, pou.name)
-        for d in inputs:
+        for d in params:
             if d.section == "VAR_IN_OUT" and d.key not in seen:
                 self.error(c, f"VAR_IN_OUT parameter '{d.name}' of '{pou.name}' must be given")
         return pou.ret_ty
+
+    def _bind_output(self, a: A.Arg, d: A.VarDecl, scope: _Scope) -> None:
+        if not self._is_variable(a.value, d.name, "VAR_OUTPUT"):
+            return
+        tt = self.lvalue(a.value, scope)
+        if a.negated and d.ty is not None and T.base_of(d.ty) is not T.BOOL:
+            self.error(a, "NOT on an output needs a BOOL output")
+        elif tt is not None and d.ty is not None and not self._decl_types_match(T.base_of(tt), T.base_of(d.ty)):
+            self.error(a.value, f"output '{d.name}' is {d.ty.name}; it cannot be stored in {self._tname(tt)}")
+
+    def _en_eno_arg(self, a: A.Arg, scope: _Scope) -> None:
+        """`EN := cond` and `ENO => flag`, which matiec gives every function and FB call."""
+        if a.key == "EN" and not a.is_output:
+            t = self.expr(a.value, scope, T.BOOL)
+            if t is not None:
+                self.assignable(T.BOOL, a.value, t, what="EN")
+        elif a.key == "ENO" and a.is_output:
+            t = self.lvalue(a.value, scope)
+            if t is not None and T.base_of(t) is not T.BOOL:
+                self.error(a.value, f"ENO is BOOL; it cannot be stored in {self._tname(t)}")
+        else:
+            self.error(a, f"{a.name} is {'an input: use :=' if a.key == 'EN' else 'an output: use =>'}")
 
     def _bind_input(self, a: A.Arg, d: A.VarDecl, scope: _Scope, fname: str) -> None:
         if d.ty is None:
@@ -1153,6 +1160,9 @@ class Checker:
             else:
                 kinds = {t.kind for _a, t, _g in raw}
                 gen_t = DEFAULT_REAL if "real" in kinds else DEFAULT_INT
+        if sig.name in NO_BOOL_OVERLOAD and gen_t is not None and T.base_of(gen_t) is T.BOOL:
+            self.error(c, f"OpenPLC's library has no {sig.name} for BOOL (its C code would not compile)")
+            return None
         for a, t, g in raw:
             if not T.in_generic(gen_t, g) and not (g in T.ELEMENTARY and T.same_type(gen_t, T.ELEMENTARY[g])):
                 self.error(a.value, f"{sig.name} does not accept {self._tname(gen_t)} (needs {g})")
@@ -1184,12 +1194,12 @@ class Checker:
         return T.ELEMENTARY[sig.result]
 
     # ------------------------------------------------------------------ lvalues
-    def _is_variable(self, e: A.Expr, param: str) -> bool:
-        """A VAR_IN_OUT is passed by reference: its argument must be a variable."""
+    def _is_variable(self, e: A.Expr, param: str, section: str = "VAR_IN_OUT") -> bool:
+        """A VAR_IN_OUT is passed by reference, an output is stored: the argument must be a variable."""
         if isinstance(e, (A.Name, A.Member, A.Index)):
             return True
-        self.error(e, f"VAR_IN_OUT '{param}' is passed by reference: give it a variable, not an expression "
-                      f"or a literal")
+        why = "is passed by reference" if section == "VAR_IN_OUT" else "is stored into its argument"
+        self.error(e, f"{section} '{param}' {why}: give it a variable, not an expression or a literal")
         return False
 
     def lvalue(self, e: A.Expr, scope: _Scope) -> Optional[T.Type]:
@@ -1324,6 +1334,10 @@ class Checker:
                 if t is None:
                     return None
                 if isinstance(t, _LitType):
+                    # `w AND NOT 16#0F`: the literal takes the bit-string type the context needs
+                    if expected is not None and not isinstance(expected, _LitType) and \
+                            T.in_generic(expected, "ANY_BIT"):
+                        return expected if self.assignable(expected, e.operand, t, what="operand of NOT") else None
                     self.error(e, "NOT needs a BOOL or bit-string operand, not an untyped number")
                     return None
                 if not T.in_generic(t, "ANY_BIT"):
@@ -1336,8 +1350,12 @@ class Checker:
             if isinstance(t, _LitType):
                 return t
             b = T.base_of(t)
-            if not (isinstance(b, T.ElementaryType) and (b.kind in ("sint", "real", "time"))):
-                self.error(e, f"unary '-' needs a signed number or TIME, not {self._tname(t)}")
+            if b is T.TIME:
+                self.error(e, "unary '-' on a TIME does not compile in OpenPLC (its C code is rejected): "
+                              "write T#0s - ...")
+                return None
+            if not (isinstance(b, T.ElementaryType) and (b.kind in ("sint", "real"))):
+                self.error(e, f"unary '-' needs a signed integer or a REAL, not {self._tname(t)}")
                 return None
             return t
         if isinstance(e, A.Binary):
@@ -1435,6 +1453,10 @@ class Checker:
                 return values[0].ty
             self.error(e, f"'{e.name}' is a value of several enumerated types; qualify it (e.g. "
                           f"{values[0].ty.name}#{e.name})")
+            return None
+        if e.key.startswith("%"):
+            self.error(e, f"{e.name} is not declared in this POU: OpenPLC's compiler needs a located "
+                          f"declaration first (e.g. VAR AT {e.name} : BOOL; END_VAR)")
             return None
         if e.key == "EN":
             self.error(e, "EN cannot be read inside a function or function block (OpenPLC's compiler has no "
@@ -1599,7 +1621,8 @@ class Checker:
                     return True
                 if tb.is_real and t.kind == "real":
                     if tb is T.REAL and v is not None and abs(v) > 3.4028234663852886e38:
-                        self.error(e, f"{v} does not fit in REAL (use LREAL)")
+                        shown = e.text if isinstance(e, A.Literal) and e.text else v
+                        self.error(e, f"{shown} does not fit in REAL (use LREAL)")
                         return False
                     self._set_lit_type(e, target)
                     return True

@@ -272,8 +272,13 @@ class _Builder(Transformer):
             rest = rest[1:]
         elif "." not in rest:
             size = "X"  # `%I0` is a bit address in short form (IEC); matiec accepts it as BOOL
-        parts = [int(p) for p in rest.split(".")]
+        parts = [int(p) if len(p) <= 18 else 10**18 for p in rest.split(".")]
         return A.Location(**self._tok(tok), text=text.upper(), area=area, size=size, parts=parts)
+
+    def direct_name(self, children):
+        # `%QX0.0` used in a body: it names the POU's variable located there (see the checker)
+        (tok,) = children
+        return A.Name(**self._tok(tok), name=self._location(tok).key)
 
     # -- configuration --------------------------------------------------------------------
     def config_single(self, children):
@@ -624,13 +629,11 @@ def _keywords() -> frozenset[str]:
 
 def _reject_keyword(tok: Token) -> Token:
     # The contextual lexer lets `IF` through as an identifier where no keyword fits (e.g. a
-    # variable name); matiec's lexer never does, so neither do we.
+    # variable name); matiec's lexer never does, so neither do we: the token goes to the parser
+    # as the keyword it is, and the syntax error then says what is wrong there.
     word = tok.value.upper()
-    if word == "STRUCT":
-        raise _Positioned(tok.line, tok.column, "a STRUCT must be declared in TYPE ... END_TYPE; a variable "
-                                                "then uses the type's name")
     if word in _keywords():
-        raise _Positioned(tok.line, tok.column, f"'{tok.value}' is a reserved word; it cannot be used as a name")
+        tok.type = word
     return tok
 
 
@@ -737,7 +740,8 @@ def _unterminated_comment(text: str) -> tuple[int, int] | None:
 
 
 def _unclosed_block(text: str, err: Token) -> tuple[str, Token] | None:
-    """The innermost block still open where `err` (an END_x or the end of file) stands."""
+    """The innermost block still open where `err` (an END_x or the end of file) stands; None
+    also when `err` is an END_x that closes none of the open blocks (then it is misplaced)."""
     stack: list[Token] = []
     try:
         for tok in _parser_for_errors().lex(text):
@@ -757,6 +761,8 @@ def _unclosed_block(text: str, err: Token) -> tuple[str, Token] | None:
     except (LarkError, _Positioned):
         return None
     if not stack:
+        return None
+    if err.type in _CLOSERS and all(_OPENERS.get(t.type, "END_VAR") != err.type for t in stack):
         return None
     top = stack[-1]
     return _OPENERS.get(top.type, "END_VAR"), top
@@ -811,6 +817,15 @@ def _nested_comment(text: str, err: Token) -> tuple[str, int, int] | None:
     return None
 
 
+_EMPTY_BLOCK = {
+    "END_RESOURCE": "a RESOURCE needs at least one program instance (PROGRAM name WITH task : type;)",
+    "END_CONFIGURATION": "a CONFIGURATION needs at least one program instance (PROGRAM name WITH task : type;)",
+    "END_TYPE": "TYPE ... END_TYPE needs at least one type declaration",
+    "END_STRUCT": "a STRUCT needs at least one field",
+    "END_CASE": "a CASE needs at least one branch (label: statements)",
+}
+_EXPECTS_OPERAND = {":=", "(", ",", "+", "-", "*", "/", "**", "=", "<>", "<", ">", "<=", ">=", "&", "[",
+                    "AND", "OR", "XOR", "MOD", "NOT", "IF", "ELSIF", "WHILE", "UNTIL", "CASE", "TO", "BY"}
 _STATEMENT_START = {"IDENT", "IF", "CASE", "FOR", "WHILE", "REPEAT", "RETURN", "EXIT", "CONTINUE"} | _CLOSERS
 _NOT_SUPPORTED_WORDS = {"VAR_ACCESS", "VAR_CONFIG", "ACTION", "TRANSITION", "STEP", "INITIAL_STEP", "REF", "DREF",
                         "REF_TO", "NULL"}
@@ -830,9 +845,13 @@ def _syntax_error(file: str, e: UnexpectedToken, text: str) -> Diagnostic:
     nested = _nested_comment(text, tok)
     if nested:
         return Diagnostic(file, nested[1], nested[2], nested[0])
+    if tok.type in _EMPTY_BLOCK:
+        unclosed = _unclosed_block(text, tok)
+        if unclosed and unclosed[0] == tok.type:   # the block is closed right here, but empty
+            return Diagnostic(file, line, col, _EMPTY_BLOCK[tok.type])
     if tok.type == "$END" or tok.type in _CLOSERS:
         unclosed = _unclosed_block(text, tok)
-        if unclosed:
+        if unclosed and unclosed[0] != tok.type:
             closer, opener = unclosed
             where = "end of file" if tok.type == "$END" else f"'{tok}'"
             if "SEMICOLON" in expected and tok.type != "$END":
@@ -859,6 +878,8 @@ def _syntax_hint(text: str, tok: Token, expected: set[str]) -> tuple[str, int, i
     if last is not None and last.type == "IDENT" and str(last).upper() in _NOT_SUPPORTED_WORDS:
         return (f"'{last}' is a reserved word of OpenPLC's compiler (and this construct is not supported)",
                 last.line, last.column)
+    if tok.type == "STRUCT":
+        return ("a STRUCT must be declared in TYPE ... END_TYPE; a variable then uses the type's name", line, col)
     if str(tok) == "=" and text[tok.start_pos - 1:tok.start_pos] == ":" and len(prev) == 2:
         unclosed = _unclosed_block(text, tok)
         if unclosed and unclosed[0] == "END_VAR":
@@ -873,6 +894,9 @@ def _syntax_hint(text: str, tok: Token, expected: set[str]) -> tuple[str, int, i
         return ("a real literal needs a digit before the '.': write e.g. 0.5", line, col)
     if str(tok) == ":=" and expected and expected <= {"RPAR", "COMMA"}:
         return ("enumerated values cannot be given numbers in OpenPLC's compiler: write (A, B, C)", line, col)
+    if last is not None and (str(last) in _EXPECTS_OPERAND or last.type in _EXPECTS_OPERAND) \
+            and tok.type not in ("IDENT", "LOCATION", "LPAR", "MINUS", "PLUS", "NOT") and "IDENT" in expected:
+        return (f"missing expression after {_token_text(last)} (before {_token_text(tok)})", line, col)
     if str(tok) == ";" and last is not None and last.type == "SEMICOLON":
         return ("a second ';': remove it (OpenPLC's compiler rejects empty declarations and statements)", line, col)
     opener = _open_header(text, tok)

@@ -54,15 +54,9 @@ def _build() -> dict[str, FuncSig]:
             if src == "DT" and dst == "TIME":
                 continue
             add(_f(f"{src}_TO_{dst}", [("IN", src)], dst))
-    for long_name, short in (("TIME_OF_DAY", "TOD"), ("DATE_AND_TIME", "DT")):
-        for name in list(sigs):
-            parts = name.split("_TO_")
-            if short in parts:
-                alias = "_TO_".join(long_name if p == short else p for p in parts)
-                add(FuncSig(alias, sigs[name].params, sigs[name].result))
-    for t in ["SINT", "INT", "DINT", "LINT", "USINT", "UINT", "UDINT", "ULINT"]:
-        add(_f(f"REAL_TRUNC_{t}", [("IN", "REAL")], t))
-        add(_f(f"LREAL_TRUNC_{t}", [("IN", "LREAL")], t))
+    # The long type names appear in two conversions only (matiec's standard_function_names.c)
+    add(_f("DATE_AND_TIME_TO_TIME_OF_DAY", [("IN", "DT")], "TOD"))
+    add(_f("DATE_AND_TIME_TO_DATE", [("IN", "DT")], "DATE"))
     for b in ["BYTE", "WORD", "DWORD", "LWORD"]:
         for t in ["USINT", "UINT", "UDINT", "ULINT"]:
             add(_f(f"{b}_BCD_TO_{t}", [("IN", b)], t))
@@ -102,7 +96,7 @@ def _build() -> dict[str, FuncSig]:
         add(_f(n, [("IN1", "ANY_ELEMENTARY"), ("IN2", "ANY_ELEMENTARY")], "BOOL", ("IN1", "IN2"), extensible=True))
     add(_f("NE", [("IN1", "ANY_ELEMENTARY"), ("IN2", "ANY_ELEMENTARY")], "BOOL", ("IN1", "IN2")))
     # Strings, Table 29
-    add(_f("LEN", [("IN", "STRING")], "INT"))
+    add(_f("LEN", [("IN", "STRING")], "ANY_INT"))      # LEN__<ANY_INT>__STRING: typed by the context
     add(_f("LEFT", [("IN", "STRING"), ("L", "ANY_INT")], "STRING"))
     add(_f("RIGHT", [("IN", "STRING"), ("L", "ANY_INT")], "STRING"))
     add(_f("MID", [("IN", "STRING"), ("L", "ANY_INT"), ("P", "ANY_INT")], "STRING"))
@@ -110,12 +104,12 @@ def _build() -> dict[str, FuncSig]:
     add(_f("INSERT", [("IN1", "STRING"), ("IN2", "STRING"), ("P", "ANY_INT")], "STRING"))
     add(_f("DELETE", [("IN", "STRING"), ("L", "ANY_INT"), ("P", "ANY_INT")], "STRING"))
     add(_f("REPLACE", [("IN1", "STRING"), ("IN2", "STRING"), ("L", "ANY_INT"), ("P", "ANY_INT")], "STRING"))
-    add(_f("FIND", [("IN1", "STRING"), ("IN2", "STRING")], "INT"))
+    add(_f("FIND", [("IN1", "STRING"), ("IN2", "STRING")], "ANY_INT"))
     # Time, Table 30
     add(_f("ADD_TIME", [("IN1", "TIME"), ("IN2", "TIME")], "TIME"))
     add(_f("SUB_TIME", [("IN1", "TIME"), ("IN2", "TIME")], "TIME"))
-    add(_f("MUL_TIME", [("IN1", "TIME"), ("IN2", "ANY_NUM")], "TIME"))
-    add(_f("DIV_TIME", [("IN1", "TIME"), ("IN2", "ANY_NUM")], "TIME"))
+    add(_f("MULTIME", [("IN1", "TIME"), ("IN2", "ANY_NUM")], "TIME"))   # not MUL_TIME / DIV_TIME
+    add(_f("DIVTIME", [("IN1", "TIME"), ("IN2", "ANY_NUM")], "TIME"))
     add(_f("ADD_TOD_TIME", [("IN1", "TOD"), ("IN2", "TIME")], "TOD"))
     add(_f("ADD_DT_TIME", [("IN1", "DT"), ("IN2", "TIME")], "DT"))
     add(_f("SUB_DATE_DATE", [("IN1", "DATE"), ("IN2", "DATE")], "TIME"))
@@ -128,6 +122,10 @@ def _build() -> dict[str, FuncSig]:
 
 
 FUNCTIONS: dict[str, FuncSig] = _build()
+
+# Overloads the C library lacks although the generic signature allows them: there is no GT, EQ,
+# MIN, LIMIT... for BOOL (only MAX_BOOL), so such a call passes matiec and fails in C.
+NO_BOOL_OVERLOAD = frozenset({"GT", "GE", "EQ", "LE", "LT", "NE", "MIN", "LIMIT"})
 
 
 @dataclass(frozen=True)
@@ -167,7 +165,9 @@ OPENPLC_EXTRA_FBS = frozenset("""DERIVATIVE HYSTERESIS INTEGRAL PID RAMP RTC SEM
 TCP_RECEIVE TCP_CLOSE""".split())
 
 # Names that matiec's library makes unavailable as identifiers.
-RESERVED_NAMES: frozenset[str] = frozenset(FUNCTIONS) | frozenset(FUNCTION_BLOCKS) | OPENPLC_EXTRA_FBS
+# CONCAT_DAT_TOD: so spelled in matiec's list of standard function names (not callable here).
+RESERVED_NAMES: frozenset[str] = frozenset(FUNCTIONS) | frozenset(FUNCTION_BLOCKS) | OPENPLC_EXTRA_FBS | \
+    frozenset({"CONCAT_DAT_TOD"})
 
 
 def type_by_name(name: str) -> T.Type:

@@ -111,6 +111,12 @@ class ThermoPlant(PlantModel):
         """
         self.disturbance = bool(on)
 
+    def set_switch(self, name: str, value: Any) -> None:
+        """The console API every plant has: the only switch here is DISTURBANCE (%IX0.0)."""
+        if name.strip().lstrip("%").upper() not in ("DISTURBANCE", "IX0.0"):
+            raise PlantError(f"unknown console switch {name!r} (the thermo stand has DISTURBANCE)")
+        self.set_disturbance(bool(int(value)))
+
     # --- derived quantities --------------------------------------------------------------
 
     @property

@@ -52,7 +52,16 @@ class ProcessImage:
     def snapshot(self, area: str, start: int, count: int) -> list[int]:
         """A consistent copy of `count` elements of `area` from `start` (taken under the lock)."""
         with self._lock:
-            return self.areas[area][start:start + count]
+            values = self.areas[area][start:start + count]
+            # writes queued for the next scan are already what a client sees (a Twido or
+            # OpenPLC applies a write at once; here the scan takes it at its next tick)
+            for p_area, p_start, p_values in self._pending:
+                if p_area != area:
+                    continue
+                lo, hi = max(start, p_start), min(start + count, p_start + len(p_values))
+                for i in range(lo, hi):
+                    values[i - start] = p_values[i - p_start]
+            return values
 
     def queue_write(self, area: str, start: int, values: list[int]) -> None:
         """Queue a write; the scan thread applies it whole at the start of its next tick."""

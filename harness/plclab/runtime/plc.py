@@ -111,6 +111,7 @@ class PLC:
         self._outputs = [b for b in self.bindings if not b.is_input]
         if self.retain_store is not None:
             self.restore_retain()
+        self.write_outputs()      # located outputs / memory hold their initial values from the start
         self.state = RUN
 
     # ------------------------------------------------------------------ construction
@@ -288,6 +289,7 @@ class PLC:
         self._outputs = [b for b in self.bindings if not b.is_input]
         if self.retain_store is not None:
             self.restore_retain()
+        self.write_outputs()
         self.fault = None
         self.state = RUN
         del ns

@@ -1,0 +1,844 @@
+"""TUR-10 requirement sets: Tasks 1-3 of the positional robot lab (tur10.md), judged by I/O alone.
+
+Every scenario runs the student's program on a fresh robot and console, in virtual time, and
+looks only at the located I/O by their console and wiring labels (SA1_FWD..SA5_BWD, SA6, SB1,
+SA7, I15, BUS1..BUS15, RE1..RE5, HL1, DRIVE1..DRIVE5). Where the links are, the grader knows
+from its own plant: the true link positions are recorded into the trace as `plant.pos1` ..
+`plant.pos5` (sensor codes), so the trace files show them next to the references. A frame is
+what the grader taught: the link positions at the moment it pressed SB1. In automatic mode a
+frame starts with the first nonzero speed reference and is reached when every reference is
+back to 0 with every link within the admissible error (16 codes) of its recorded position;
+the pause after it lasts until the next nonzero reference. Times are compared with a
+tolerance of one scan of the student's slowest task (plus the 50 ms debounce where an SB1
+press is involved).
+
+Requirements T1.x, T2.x, T3.x are the task's own; G1..G11 are the baseline behaviour every
+solution must keep (Appendix 2), checked with drive 1 (the shoulder) alone so that they hold
+for every task: Tasks 1-3 regulate drive 1 only in automatic mode.
+"""
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass
+from pathlib import Path
+from typing import Any, Callable, Optional
+
+from plclab.frontend import check_sources
+from plclab.plants.base import signed16
+from plclab.plants.tur10 import Tur10
+from plclab.scenario import ScenarioFailure, Session
+from plclab.stands.tur10 import STAND, labels
+from plclab.trace import Trace
+
+from .registry import EVERY, Checks, Requirement, RequirementSet, Scenario, register
+
+AXES = (1, 2, 3, 4, 5)
+DRIVES = tuple(f"DRIVE{k}" for k in AXES)
+ENABLES = tuple(f"RE{k}" for k in AXES)          # read enable of sensor k, active low
+POS = tuple(f"plant.pos{k}" for k in AXES)        # true link positions (grader's plant), codes
+
+LOW = 500                # manual reference at low speed (SA6 = 1)
+NORMAL = 1500            # manual reference at normal speed (SA6 = 0)
+REF_LIMIT = 1500         # beyond this the DAC overvolts the drive
+ADMISSIBLE = 16          # codes: a frame is reached when every link is this close
+DEBOUNCE = 0.05          # SB1 closures shorter than this are contact bounce
+LONG_PRESS = 3.0         # SB1 held this long resets the program
+PAUSE_SHORT = 0.5        # Task 2: frame recorded with I1.5 = 0
+PAUSE_LONG = 3.0         # Task 2: frame recorded with I1.5 = 1
+FRAME_TIMEOUT = 20.0     # a frame not reached in this time stops execution
+TIMEOUT_TOL = 0.1        # s: on 20 s, more than one scan (the watchdog may start a scan late)
+HOLD = 0.4               # s a jog button is held in the Task 1 checks
+SETTLE = 0.3             # s for a link to stop after its reference went to 0 (lag 50 ms)
+TRAVEL = 0.3             # +/- share of the expected jog distance a link may miss
+STILL = 2                # codes a link not driven may drift
+READ_WINDOW = 1.0        # s in which every sensor must be selected alone (Task 1)
+DONE_WAIT = 5.0          # a frame is reached within this after it started (longest ~1.7 s)
+NEXT_WAIT = PAUSE_LONG + 1.0   # the next frame starts within this after one is reached
+QUIET = 2.0              # "nothing happens": every reference 0 for this long
+STEP = 0.1               # s the grader runs on between looks at the trace while it waits
+EPS = 1e-6
+
+
+# --------------------------------------------------------------------------- the stand
+
+class TracedTur10(Tur10):
+    """The TUR-10 plant recording each link's true position (code) into a trace.
+
+    The grader owns the plant, so where the links really are is part of what it observes;
+    the student's program only sees the sensor bus."""
+
+    def __init__(self, **params: Any) -> None:
+        super().__init__(**params)
+        self.trace: Optional[Trace] = None
+        self.clock: Callable[[], float] = lambda: self.time
+
+    def attach(self, trace: Trace, clock: Callable[[], float]) -> None:
+        """Record into `trace`, stamped with `clock()` (the time of the scan the step precedes)."""
+        self.trace, self.clock = trace, clock
+        for k, name in zip(AXES, POS):
+            trace.declare(name, "int", self.true_code(k), 0, width=16)
+
+    def true_code(self, k: int) -> int:
+        return min(max(math.floor(self.drives[k].position), 0), 0x7FFF)
+
+    def step(self, outputs: dict[str, int], dt: float) -> dict[str, int]:
+        inputs = super().step(outputs, dt)
+        if self.trace is not None and outputs:      # no outputs: the PLC is off (a restart)
+            t_ns = round(self.clock() * 1e6) * 1000
+            for k, name in zip(AXES, POS):
+                self.trace.change(t_ns, name, self.true_code(k))
+        return inputs
+
+
+_CHECKED: dict[tuple[tuple[str, str], ...], Any] = {}
+
+
+def _checked(sources: list[tuple[str, str]]) -> Any:
+    """The checked program, kept for the next scenario of the same grading (one entry)."""
+    key = tuple(sources)
+    if key not in _CHECKED:
+        _CHECKED.clear()
+        _CHECKED[key] = check_sources(list(sources))
+    return _CHECKED[key]
+
+
+def make_session(sources: list[tuple[str, str]], retain_path: Optional[Path]) -> Session:
+    plant = TracedTur10()
+    s = Session(sources, plant, labels(), watch=(), retain_path=retain_path, name="tur10 program",
+                checked=_checked(sources))
+    plant.attach(s.trace, lambda: s.now)
+    return s
+
+
+# --------------------------------------------------------------------------- reading the I/O
+
+def ref(st: Any, k: int) -> int:
+    """DRIVEk as the signed reference the PLC wrote (from a trace state or live)."""
+    return signed16(int(st[DRIVES[k - 1]]))
+
+
+def moving(st: Any) -> bool:
+    return any(ref(st, k) != 0 for k in AXES)
+
+
+def still(st: Any) -> bool:
+    return not moving(st)
+
+
+def fmt_ref(v: int) -> str:
+    return f"{v:+d}" if v else "0"
+
+
+def fmt_refs(refs: dict[int, int]) -> str:
+    return " ".join(f"DRIVE{k}={fmt_ref(v)}" for k, v in refs.items())
+
+
+@dataclass(frozen=True)
+class Frame:
+    """A frame as the grader records it: the five link positions when SB1 was pressed, and
+    I1.5 at that moment."""
+
+    codes: tuple[int, ...]
+    i15: int = 0
+
+    def reached(self, st: Any) -> bool:
+        return still(st) and all(abs(st[POS[k - 1]] - self.codes[k - 1]) <= ADMISSIBLE for k in AXES)
+
+    def where(self, axes: tuple[int, ...] = (1,)) -> str:
+        return ", ".join(f"link {k} at {self.codes[k - 1]}" for k in axes)
+
+
+@dataclass(frozen=True)
+class FrameRun:
+    start: float      # the first nonzero reference of the frame
+    done: float       # references back to 0, every link within 16 codes
+
+
+# --------------------------------------------------------------------------- the operator
+
+@dataclass
+class Op:
+    """The lab operator and observer on one session: console actions, waits, trace reads.
+    A PLC fault stops the scenario (G1 reports it)."""
+
+    s: Session
+    c: Checks
+
+    @property
+    def now(self) -> float:
+        return self.s.now
+
+    @property
+    def scan(self) -> float:
+        """The student's slowest task interval (one scan of it is the timing tolerance)."""
+        intervals = [i.interval_ns for i in self.s.plc.instances if i.interval_ns]
+        return (max(intervals) if intervals else self.s.plc.tick_ns) / 1e9
+
+    @property
+    def tol(self) -> float:
+        return self.scan + EPS
+
+    @property
+    def plant(self) -> TracedTur10:
+        return self.s.plant
+
+    def _fault(self) -> None:
+        if self.s.fault is not None:
+            raise ScenarioFailure("the PLC stopped with a runtime fault (see G1)")
+
+    def set(self, **switches: int) -> float:
+        t = self.now
+        self.s.console.set(**switches)
+        return t
+
+    def run(self, seconds: float) -> None:
+        if seconds > 0:
+            self.s.run(seconds)
+        self._fault()
+
+    def run_until(self, t: float) -> None:
+        self.run(t - self.now + EPS)
+
+    def press(self, hold: float = 0.2) -> float:
+        """A press of SB1 held `hold` s; returns the time it was pressed."""
+        t = self.now
+        self.s.console.press("SB1", hold=hold)
+        self._fault()
+        return t
+
+    def refs(self, at: Optional[float] = None) -> dict[int, int]:
+        st = self.s.io if at is None else self.s.trace.state_at(at)
+        return {k: ref(st, k) for k in AXES}
+
+    def ref(self, k: int, at: float) -> int:
+        return signed16(int(self.s.trace.value_at(DRIVES[k - 1], at)))
+
+    def positions(self) -> dict[int, int]:
+        return {k: self.plant.true_code(k) for k in AXES}
+
+    def hl1(self, at: Optional[float] = None) -> int:
+        v = self.s.io.HL1 if at is None else self.s.trace.value_at("HL1", at)
+        return int(bool(v))
+
+    def when(self, cond: Callable[[Any], Any], after: float, timeout: float) -> Optional[float]:
+        """The first time at or after `after` when `cond` (over a trace state) holds, from the
+        trace and then running on in steps of STEP s (the session may end up to one step past
+        the time returned); None if not by `after + timeout`."""
+        end = after + timeout
+        looked = after
+        tr = self.s.trace
+        while True:
+            t = tr.first(cond, after=looked, until=end, default=None)
+            if t is not None:
+                return t
+            if tr.end_s >= end - EPS:
+                return None
+            looked = max(looked, tr.end_s)
+            self.run(min(STEP, end - tr.end_s))
+
+    def motion(self, after: float, until: float) -> Optional[float]:
+        """The first nonzero reference in [after, until] (from the trace)."""
+        return self.s.trace.first(moving, after=after, until=until, default=None)
+
+    def record(self, i15: Optional[int] = None) -> Frame:
+        """Record a frame with a short SB1 press (I1.5 set first if given)."""
+        if i15 is not None:
+            self.set(I15=i15)
+        frame = Frame(tuple(self.positions().values()), int(self.s.plant.console["I15"]))
+        self.press(0.2)
+        self.run(0.2)
+        return frame
+
+    def jog_to(self, axis: int, code: int, timeout: float = 3.0) -> None:
+        """Hold drive `axis`'s forward or backward button (SA6 = 0) until the link passes `code`,
+        then let it stop: the frames taught do not depend on the jog speed."""
+        direction = 1 if code > self.plant.true_code(axis) else -1
+        button = f"SA{axis}_{'FWD' if direction > 0 else 'BWD'}"
+        start = self.set(SA6=0, **{button: 1})
+        while (self.plant.true_code(axis) - code) * direction < 0 and self.now < start + timeout:
+            self.run(self.s.tick)
+        self.set(**{button: 0})
+        self.run(0.4)
+        if (self.plant.true_code(axis) - code) * direction < 0:
+            raise ScenarioFailure(f"t={start:.2f} s: {button} held {timeout:g} s did not bring link {axis} "
+                                  f"to {code} (it is at {self.plant.true_code(axis)}): the frames cannot "
+                                  "be taught")
+
+
+def start_manual(op: Op) -> None:
+    op.set(SA7=0, SA6=0, I15=0)
+    op.run(0.2)
+
+
+def teach_three(op: Op) -> list[Frame]:
+    """Three frames of drive 1: where it is (16000), 3000 codes forward, 1000 back."""
+    f1 = op.record()
+    op.jog_to(1, f1.codes[0] + 3000)
+    f2 = op.record()
+    op.jog_to(1, f2.codes[0] - 1000)
+    f3 = op.record()
+    return [f1, f2, f3]
+
+
+def start_auto(op: Op, i15: int = 1) -> float:
+    """Automatic mode with I1.5 as given; returns the time SA7 went to 1."""
+    t = op.set(SA7=1, I15=i15)
+    op.run(0.3)
+    return t
+
+
+def explain_miss(op: Op, frame: Frame, start: float, frames: list[Frame]) -> str:
+    """Why `frame` was not reached: where the links are and what the references did."""
+    tr = op.s.trace
+    pos = op.positions()
+    off = [k for k in AXES if abs(pos[k] - frame.codes[k - 1]) > ADMISSIBLE]
+    where = ", ".join(f"link {k} at {pos[k]} ({pos[k] - frame.codes[k - 1]:+d} from the target)"
+                      for k in off) or "every link within 16 codes"
+    for j, other in enumerate(frames, 1):
+        if other is not frame and off and all(abs(pos[k] - other.codes[k - 1]) <= ADMISSIBLE for k in AXES):
+            where += f" = the position of frame {j}"
+            break
+    refs = op.refs()
+    if any(refs.values()):
+        return f"after {op.now - start:.2f} s: {where}; {fmt_refs(refs)}"
+    zero = tr.first(still, after=start, default=None)
+    since = start
+    while zero is not None:          # the start of the last stretch of zero references
+        nxt = tr.first(moving, after=zero, default=None)
+        if nxt is None:
+            since = zero
+            break
+        zero = tr.first(still, after=nxt, default=None)
+    return f"every reference 0 from t = {since:.2f} s with {where}"
+
+
+def follow(op: Op, rid: str, frame: Frame, label: str, since: float, timeout: float,
+           frames: list[Frame], on_start: Optional[Callable[[], None]] = None) -> Optional[FrameRun]:
+    """Expect the next nonzero reference at or after `since` (within `timeout`) to start
+    `frame`, then the links to reach it. A failure is charged to requirement `rid`."""
+    start = op.when(moving, after=since, timeout=timeout)
+    if start is None:
+        pos = op.positions()
+        op.c.fail(rid, f"{label} starts within {timeout:g} s of t = {since:.2f} s (a nonzero reference "
+                  f"towards {frame.where()})",
+                  f"every reference stayed 0 (link 1 at {pos[1]})", since)
+        return None
+    if on_start is not None:
+        on_start()
+    done = op.when(frame.reached, after=start, timeout=DONE_WAIT)
+    if done is None:
+        op.c.fail(rid, f"{label} reached within {DONE_WAIT:g} s: {frame.where()} (+/- 16 codes), every "
+                  "reference back to 0", explain_miss(op, frame, start, frames), start)
+        return None
+    return FrameRun(start, done)
+
+
+def press_starts(op: Op, rid: str, frame: Frame, label: str, pressed: float,
+                 frames: list[Frame]) -> Optional[FrameRun]:
+    """The SB1 press at `pressed` must start `frame` on the debounced press (50 ms + one scan)."""
+    run = follow(op, rid, frame, label, pressed, DEBOUNCE + 1.0, frames)
+    if run is None:
+        return None
+    late = run.start - pressed
+    if not op.c.check(rid, -EPS <= late <= DEBOUNCE + op.tol,
+                      f"{label} starts on the press (50 ms debounce + one scan)",
+                      f"its first nonzero reference came {late:.2f} s after the press", run.start):
+        return None
+    return run
+
+
+def quiet(op: Op, rid: str, after: float, seconds: float, expected: str, what: str) -> bool:
+    """Every reference 0 in [after, after + seconds]; else a failure of `rid`."""
+    op.run_until(after + seconds)
+    t = op.motion(after, after + seconds)
+    if t is None:
+        return True
+    op.c.fail(rid, expected, f"{what}: {fmt_refs(op.refs(at=t))} {t - after:.2f} s after t = {after:.2f} s", t)
+    return False
+
+
+# --------------------------------------------------------------------------- every scenario
+
+def no_fault(s: Session, c: Checks) -> None:
+    f = s.fault
+    if f is None:
+        c.ok("G1")
+        return
+    offset = s.now - s.plc.now_ns / 1e9
+    c.fail("G1", "no runtime fault", str(f), offset + f.time_ns / 1e9)
+
+
+def no_overvoltage(s: Session, c: Checks) -> None:
+    t = s.trace.first(lambda st: any(abs(ref(st, k)) > REF_LIMIT for k in AXES), default=None)
+    if t is None:
+        c.ok("G2")
+        return
+    st = s.trace.state_at(t)
+    bad = {k: ref(st, k) for k in AXES if abs(ref(st, k)) > REF_LIMIT}
+    c.fail("G2", f"|DRIVE1..DRIVE5| <= {REF_LIMIT} always", f"{fmt_refs(bad)}: overvoltage, the drive trips", t)
+
+
+def no_contention(s: Session, c: Checks) -> None:
+    t = s.trace.first(lambda st: sum(not st[e] for e in ENABLES) >= 2, default=None)
+    if t is None:
+        c.ok("G3")
+        return
+    off = [e for e in ENABLES if not s.trace.value_at(e, t)]
+    c.fail("G3", "at most one read enable OFF at a time (one sensor on the bus)",
+           f"{' and '.join(off)} OFF together: sensors {', '.join(e[2:] for e in off)} drive the bus at once", t)
+
+
+def no_collision(s: Session, c: Checks) -> None:
+    hits = [e for e in s.plant.events if e.kind == "collision"]
+    if not hits:
+        c.ok("G4")
+        return
+    c.fail("G4", "no link driven into a mechanical stop", hits[0].detail, hits[0].time)
+
+
+# --------------------------------------------------------------------------- general (G5..G11)
+
+def sc_basics(s: Session, c: Checks) -> None:
+    """Empty-program lamp, bounce, long-press reset (manual mode, drive 1 only)."""
+    op = Op(s, c)
+    start_manual(op)
+    c.check("G5", op.hl1() == 1, "HL1=1 at power-up (no frame recorded)", "HL1=0", op.now)
+    t = op.press(0.03)
+    op.run(0.5)
+    off = s.trace.first(lambda st: not st.HL1, after=t, default=None)
+    if c.check("G6", off is None, "HL1 stays 1 after a 30 ms SB1 press (nothing recorded)",
+               "HL1 went 0: the bounce recorded a frame", off):
+        c.ok("G6")
+    op.record()
+    released = op.now - 0.2
+    if c.check("G5", op.hl1(at=released + 2 * op.tol) == 0,
+               "HL1=0 once a frame is recorded (short SB1 press)", "HL1 still 1", released + 2 * op.tol):
+        c.ok("G5")
+    op.jog_to(1, op.plant.true_code(1) + 1500)
+    op.record()
+    pressed = op.now
+    s.console.hold("SB1")
+    on = op.when(lambda st: st.HL1, after=pressed, timeout=LONG_PRESS + 1.0)
+    if on is None:
+        c.fail("G7", "HL1=1 (program reset) 3.0 s after SB1 is pressed, while it is held",
+               f"HL1 still 0 after holding SB1 {LONG_PRESS + 1:g} s", pressed + LONG_PRESS)
+        op.run_until(pressed + LONG_PRESS + 1.5)
+    else:
+        held = on - pressed
+        c.check("G7", LONG_PRESS - op.tol <= held <= LONG_PRESS + DEBOUNCE + op.tol,
+                "the reset (HL1=1) 3.0 s after SB1 is pressed, while it is held",
+                f"HL1=1 {held:.2f} s after the press", on)
+        op.run_until(pressed + LONG_PRESS + 0.5)
+    released = op.now
+    s.console.release("SB1")
+    op.run(0.5)
+    off = s.trace.first(lambda st: not st.HL1, after=released, default=None)
+    c.check("G7", off is None, "HL1 stays 1 after the release (the release records nothing)",
+            "HL1 went 0: a frame was recorded (or the reset never happened)", off or released)
+    start_auto(op)
+    t = op.press()
+    if quiet(op, "G7", t, QUIET, "after the reset an SB1 press in automatic mode starts nothing",
+             "a frame started: the program was not empty"):
+        c.ok("G7")
+    op.set(SA7=0)
+    op.run(0.2)
+
+
+def sc_automatic(s: Session, c: Checks) -> None:
+    """Three frames of drive 1 played continuously, wrapped, stopped and started again."""
+    op = Op(s, c)
+    start_manual(op)
+    frames = teach_three(op)
+    f1, f2, f3 = frames
+    entered = start_auto(op)
+    op.run(0.7)
+    if not quiet(op, "G8", entered, 1.0, "every reference stays 0 on entering automatic mode (SA7 := 1), "
+                 "before any SB1 press", "in automatic mode, before any SB1 press"):
+        return
+    r1 = press_starts(op, "G8", f1, "frame 1", op.press(), frames)
+    r2 = r1 and follow(op, "G8", f2, "frame 2 after frame 1", r1.done, NEXT_WAIT, frames)
+    r3 = r2 and follow(op, "G8", f3, "frame 3 after frame 2", r2.done, NEXT_WAIT, frames)
+    r4 = r3 and follow(op, "G8", f1, "frame 1 after frame 3 (the last)", r3.done, NEXT_WAIT, frames)
+    if not r4:
+        return
+    c.ok("G8")
+
+    stop: list[float] = []
+
+    def press_during_frame() -> None:
+        op.run(0.2)
+        stop.append(op.press(0.1))
+
+    start = op.when(moving, after=r4.done, timeout=NEXT_WAIT)
+    if start is None:
+        c.fail("G9", "frame 2 (second cycle) starts", "every reference stayed 0", r4.done)
+        return
+    press_during_frame()
+    pressed = stop[0]
+    settled = pressed + DEBOUNCE + op.tol
+    op.run_until(settled + op.tol)
+    refs = op.refs(at=settled)
+    if not c.check("G9", not any(refs.values()), f"every reference 0 within 50 ms + one scan of the stop "
+                   f"press (SB1 at t = {pressed:.2f} s during frame 2)", fmt_refs(refs), settled):
+        return
+    if not quiet(op, "G9", settled, QUIET, "every reference stays 0 after the stop", "execution went on"):
+        return
+    if press_starts(op, "G9", f1, "frame 1 (SB1 pressed again after the stop)", op.press(), frames):
+        c.ok("G9")
+    op.press()
+    op.run(0.5)
+
+
+def sc_restart(s: Session, c: Checks) -> None:
+    """The recorded program survives a PLC restart."""
+    op = Op(s, c)
+    start_manual(op)
+    f1 = op.record()
+    op.jog_to(1, f1.codes[0] + 3000)
+    f2 = op.record()
+    t = op.now
+    s.restart_plc()
+    op.run(0.3)
+    if not c.check("G10", op.hl1() == 0, "HL1=0 after the restart (the program is kept)",
+                   "HL1=1: the program is empty after the restart", t):
+        return
+    start_auto(op)
+    r1 = press_starts(op, "G10", f1, "frame 1 after the restart", op.press(), [f1, f2])
+    if r1 and follow(op, "G10", f2, "frame 2 after the restart", r1.done, NEXT_WAIT, [f1, f2]):
+        c.ok("G10")
+    op.press()
+    op.run(0.5)
+
+
+def sc_timeout(s: Session, c: Checks) -> None:
+    """A dead sensor 1 (stuck 30 codes past frame 1): the frame times out after 20 s."""
+    op = Op(s, c)
+    start_manual(op)
+    f1 = op.record()
+    op.jog_to(1, f1.codes[0] + 3000)
+    op.record()
+    s.inject("dead_sensor", axis=1, value=f1.codes[0] + 30)
+    start_auto(op)
+    pressed = op.press()
+    start = op.when(moving, after=pressed, timeout=DEBOUNCE + 1.0)
+    if start is None:
+        c.fail("G11", "frame 1 starts on the SB1 press", "every reference stayed 0", pressed)
+        return
+    stop = op.when(still, after=start, timeout=FRAME_TIMEOUT + 2.0)
+    if not c.check("G11", stop is not None and abs(stop - start - FRAME_TIMEOUT) <= TIMEOUT_TOL + op.tol,
+                   "every reference 0 20 s (+/- 0.1 s) after frame 1 started (the dead sensor keeps it "
+                   "from being reached)", "references still nonzero after 22 s" if stop is None else
+                   f"every reference 0 {stop - start:.2f} s after the start", stop or start + FRAME_TIMEOUT):
+        return
+    op.run_until(stop + 2.0)
+    blinks = s.trace.edges("HL1", "any", after=stop, until=stop + 2.0)
+    if not c.check("G11", len(blinks) >= 2, "HL1 blinks after the timeout",
+                   f"HL1 changed {len(blinks)} time(s) in 2 s", stop):
+        return
+    if quiet(op, "G11", stop + op.tol, QUIET + 1.0, "execution stays stopped after the timeout "
+             "(every reference 0)", "a reference came back"):
+        c.ok("G11")
+    s.clear_faults()
+    op.set(SA7=0)
+    op.run(0.5)
+
+
+GENERAL = (
+    Requirement("G1", "The program runs without a PLC fault (division by zero, array index out of "
+                "range, scan watchdog).", EVERY),
+    Requirement("G2", "Never an overvoltage: no speed reference DRIVE1..DRIVE5 beyond +/-1500 (a larger "
+                "DAC code damages the drive).", EVERY),
+    Requirement("G3", "Never a bus contention: at most one read enable RE1..RE5 is OFF at a time (one "
+                "sensor on the bus).", EVERY),
+    Requirement("G4", "Never a collision: no link is driven into a mechanical stop.", EVERY),
+    Requirement("G5", "HL1 is ON while the program is empty (at power-up) and OFF once a frame is "
+                "recorded with a short SB1 press.", "basics"),
+    Requirement("G6", "A press of SB1 shorter than 50 ms is contact bounce: it records nothing.", "basics"),
+    Requirement("G7", "Holding SB1 resets the program at 3.0 s, while it is still held (HL1 ON); the "
+                "release records nothing and a start then finds the program empty.", "basics"),
+    Requirement("G8", "Automatic mode (SA7 = 1): entering it moves nothing; an SB1 press starts frame 1; "
+                "each frame brings the links to within 16 codes of the recorded positions with every "
+                "reference back to 0; the frames follow in order and frame 1 follows the last.",
+                "automatic"),
+    Requirement("G9", "An SB1 press during playback stops it: every reference 0 (after the 50 ms "
+                "debounce) and nothing moves; the next press starts again from frame 1.", "automatic"),
+    Requirement("G10", "The recorded program survives a PLC restart (HL1 stays OFF and the frames play "
+                "back).", "restart"),
+    Requirement("G11", "A frame not reached within 20 s (dead position sensor) stops execution: every "
+                "reference 0, HL1 blinks, nothing restarts by itself.", "timeout"),
+)
+GENERAL_SCENARIOS = (
+    Scenario("basics", sc_basics), Scenario("automatic", sc_automatic),
+    Scenario("restart", sc_restart, needs_retain=True), Scenario("timeout", sc_timeout),
+)
+
+
+# --------------------------------------------------------------------------- Task 1
+
+def selected_alone(k: int) -> Callable[[Any], bool]:
+    return lambda st: not st[ENABLES[k - 1]] and all(st[e] for e in ENABLES if e != ENABLES[k - 1])
+
+
+def sensors_read(op: Op, rid: str, after: float, until: float) -> bool:
+    """Every sensor selected alone at least once in [after, until]."""
+    tr = op.s.trace
+    for k in AXES:
+        if tr.first(selected_alone(k), after=after, until=until, default=None) is not None:
+            continue
+        enable = ENABLES[k - 1]
+        off = tr.first(lambda st, e=enable: not st[e], after=after, until=until, default=None)
+        if off is None:
+            seen = f"{enable} stayed ON: sensor {k} is never read"
+        else:
+            others = [e for e in ENABLES if e != enable and not tr.value_at(e, off)]
+            seen = f"{enable} is OFF only together with {' and '.join(others)} (t = {off:.2f} s)"
+        op.c.fail(rid, f"sensor {k} selected alone ({enable} OFF, the other enables ON) at least once "
+                  f"between t = {after:.2f} s and {until:.2f} s", seen, off if off is not None else after)
+        return False
+    return True
+
+
+def jog_check(op: Op, k: int, direction: int, low: bool) -> None:
+    """Hold one button of drive k: its reference, its motion, the other drives, the release."""
+    c = op.c
+    rid = "T1.1" if low else "T1.2"
+    want = direction * (LOW if low else NORMAL)
+    button = f"SA{k}_{'FWD' if direction > 0 else 'BWD'}"
+    what = f"{button} held with SA6 = {int(low)}"
+    before = op.positions()
+    t = op.set(**{button: 1})
+    op.run(HOLD)
+    released = op.set(**{button: 0})
+    op.run(SETTLE)
+    after = op.positions()
+    got = op.ref(k, t + op.tol)
+    if c.check(rid, got == want, f"{what}: DRIVE{k} = {fmt_ref(want)} within one scan",
+               f"DRIVE{k} = {fmt_ref(got)}" + (f" (drive {k} is not jogged)" if got == 0 else ""), t):
+        change = op.s.trace.next_change(DRIVES[k - 1], after=t + op.tol + EPS, until=released - EPS,
+                                              default=None)
+        if change is not None:
+            c.fail(rid, f"{what}: DRIVE{k} stays {fmt_ref(want)} while the button is held",
+                   f"DRIVE{k} = {fmt_ref(op.ref(k, change))}", change)
+        expected = want * op.plant.gain * HOLD
+        moved = after[k] - before[k]
+        c.check(rid, abs(moved - expected) <= TRAVEL * abs(expected),
+                f"{what}: link {k} moves about {expected:+.0f} codes in {HOLD:g} s",
+                f"link {k} moved {moved:+d} codes", t)
+    others = [j for j in AXES if j != k]
+    other_ref = op.s.trace.first(lambda st: any(ref(st, j) for j in others), after=t,
+                                 until=released + op.tol, default=None)
+    if other_ref is not None:
+        refs = op.refs(at=other_ref)
+        c.fail("T1.4", f"{what}: the other four references stay 0",
+               fmt_refs({j: refs[j] for j in others if refs[j]}), other_ref)
+    drifted = {j: after[j] - before[j] for j in others if abs(after[j] - before[j]) > STILL}
+    if drifted:
+        c.fail("T1.4", f"{what}: only link {k} moves",
+               ", ".join(f"link {j} moved {d:+d} codes" for j, d in drifted.items()), t)
+    zero = op.ref(k, released + op.tol)
+    c.check("T1.3", zero == 0, f"{button} released: DRIVE{k} = 0 within one scan",
+            f"DRIVE{k} = {fmt_ref(zero)}", released)
+
+
+def both_check(op: Op, k: int) -> None:
+    """Both buttons of drive k held: reference 0, the link stands still."""
+    fwd, bwd = f"SA{k}_FWD", f"SA{k}_BWD"
+    op.set(SA6=0)
+    before = op.positions()
+    t = op.set(**{fwd: 1, bwd: 1})
+    op.run(HOLD)
+    released = op.set(**{fwd: 0, bwd: 0})
+    op.run(SETTLE)
+    moved = op.positions()[k] - before[k]
+    nonzero = op.s.trace.first(lambda st: ref(st, k) != 0, after=t, until=released + op.tol, default=None)
+    if nonzero is not None:
+        op.c.fail("T1.3", f"{fwd} and {bwd} held together: DRIVE{k} stays 0",
+                  f"DRIVE{k} = {fmt_ref(op.ref(k, nonzero))}, link {k} moved {moved:+d} codes", nonzero)
+    elif abs(moved) > STILL:
+        op.c.fail("T1.3", f"{fwd} and {bwd} held together: link {k} stands still",
+                  f"link {k} moved {moved:+d} codes", t)
+
+
+def sc_jog(s: Session, c: Checks) -> None:
+    """Every drive jogged both ways at both speeds, then with both buttons."""
+    op = Op(s, c)
+    start_manual(op)
+    op.run(READ_WINDOW)
+    refs = op.refs()
+    c.check("T1.3", not any(refs.values()), "every reference 0 in manual mode with no button held",
+            fmt_refs(refs), op.now)
+    first_window = sensors_read(op, "T1.5", op.now - READ_WINDOW, op.now)
+    for k in AXES:
+        for low in (True, False):
+            op.set(SA6=int(low))
+            op.run(0.1)
+            jog_check(op, k, +1, low)
+            jog_check(op, k, -1, low)
+        both_check(op, k)
+    op.run(READ_WINDOW)
+    if first_window and sensors_read(op, "T1.5", op.now - READ_WINDOW, op.now):
+        c.ok("T1.5")
+    for rid in ("T1.1", "T1.2", "T1.3", "T1.4"):
+        c.ok(rid)
+
+
+TASK1 = (
+    Requirement("T1.1", "Manual mode (SA7 = 0), low speed (SA6 = 1): holding SAk forward gives drive k "
+                "the reference +500, backward -500 (within one scan), for each of the five drives, and "
+                "the link moves that way.", "jog"),
+    Requirement("T1.2", "Manual mode, normal speed (SA6 = 0): holding SAk forward gives drive k +1500, "
+                "backward -1500, for each of the five drives, and the link moves that way.", "jog"),
+    Requirement("T1.3", "With no button, or with both buttons of a drive held, its reference is 0 and "
+                "its link stands still.", "jog"),
+    Requirement("T1.4", "Only the jogged drive moves: while one drive's button is held the other four "
+                "references stay 0 and their links stand still.", "jog"),
+    Requirement("T1.5", "Manual mode reads the position sensors round-robin, one at a time: each read "
+                "enable RE1..RE5 is driven OFF alone (the others ON) at least once a second.", "jog"),
+)
+
+
+# --------------------------------------------------------------------------- Task 2
+
+def sc_pauses(s: Session, c: Checks) -> None:
+    """Frame 1 recorded with I1.5 = 1 (3 s), frame 2 with I1.5 = 0 (0.5 s); a cycle with
+    I1.5 = 1, then a cycle during which I1.5 is 0 (frame 1) and 1 again (frame 2)."""
+    op = Op(s, c)
+    start_manual(op)
+    f1 = op.record(i15=1)
+    op.jog_to(1, f1.codes[0] + 3000)
+    f2 = op.record(i15=0)
+    frames = [f1, f2]
+    start_auto(op)
+    r1 = press_starts(op, "T2.2", f1, "frame 1", op.press(), frames)
+    r2 = r1 and follow(op, "T2.2", f2, "frame 2", r1.done, NEXT_WAIT, frames)
+    if not r1 or not r2:
+        return
+    p1 = r2.start - r1.done
+    if c.check("T2.2", abs(p1 - PAUSE_LONG) <= op.tol,
+               "a 3.0 s pause after frame 1 (recorded with I1.5 = 1)", f"{p1:.2f} s", r1.done):
+        c.ok("T2.2")
+    r3 = follow(op, "T2.1", f1, "frame 1 after frame 2", r2.done, NEXT_WAIT, frames,
+                on_start=lambda: op.set(I15=0))
+    if not r3:
+        return
+    p2 = r3.start - r2.done
+    if c.check("T2.1", abs(p2 - PAUSE_SHORT) <= op.tol,
+               "a 0.5 s pause after frame 2 (recorded with I1.5 = 0)", f"{p2:.2f} s", r2.done):
+        c.ok("T2.1")
+    r4 = follow(op, "T2.3", f2, "frame 2 (second cycle)", r3.done, NEXT_WAIT, frames,
+                on_start=lambda: op.set(I15=1))
+    if not r4:
+        return
+    p3 = r4.start - r3.done
+    if not c.check("T2.3", abs(p3 - p1) <= op.tol, f"the pause after frame 1 is {p1:.2f} s as in the first "
+                   "cycle although I1.5 is now 0", f"{p3:.2f} s", r3.done):
+        return
+    r5 = follow(op, "T2.3", f1, "frame 1 (third cycle)", r4.done, NEXT_WAIT, frames)
+    if not r5:
+        return
+    p4 = r5.start - r4.done
+    if c.check("T2.3", abs(p4 - p2) <= op.tol, f"the pause after frame 2 is {p2:.2f} s as in the first "
+               "cycle although I1.5 is now 1", f"{p4:.2f} s", r4.done):
+        c.ok("T2.3")
+    op.press()
+    op.run(0.5)
+
+
+TASK2 = (
+    Requirement("T2.1", "A frame recorded with I1.5 = 0 is followed by a 0.5 s pause (from the frame being "
+                "reached, every reference back to 0 with the links within 16 codes, to the next frame's "
+                "first nonzero reference).", "pauses"),
+    Requirement("T2.2", "A frame recorded with I1.5 = 1 is followed by a 3.0 s pause.", "pauses"),
+    Requirement("T2.3", "I1.5 changes nothing in automatic mode: switched during execution, every frame "
+                "keeps the pause recorded with it.", "pauses"),
+)
+
+
+# --------------------------------------------------------------------------- Task 3
+
+def sc_enable(s: Session, c: Checks) -> None:
+    """Three frames; start refused / accepted, wrap with I1.5 = 1, I1.5 dropped in frame 2."""
+    op = Op(s, c)
+    start_manual(op)
+    frames = teach_three(op)
+    start_auto(op, i15=0)
+    pressed = op.press(0.1)
+    started = op.when(moving, after=pressed, timeout=QUIET)
+    if started is None:
+        c.ok("T3.1")
+    else:
+        c.fail("T3.1", "an SB1 press with I1.5 = 0 starts nothing",
+               f"the program started: {fmt_refs(op.refs(at=started))} {started - pressed:.2f} s after the "
+               "press", started)
+        op.run(0.1)                         # the release is seen in automatic mode (no record)
+        op.set(SA7=0)                       # manual mode stops it
+        op.run(0.5)
+        start_auto(op, i15=0)
+    op.set(I15=1)
+    op.run(0.3)
+    run = press_starts(op, "T3.2", frames[0], "frame 1 (SB1 pressed with I1.5 = 1)", op.press(), frames)
+    if run is None:
+        return
+    c.ok("T3.2")
+    for k in (1, 2):
+        run = follow(op, "T3.3", frames[k], f"frame {k + 1}", run.done, NEXT_WAIT, frames)
+        if run is None:
+            return
+    run = follow(op, "T3.3", frames[0], "frame 1 after frame 3 (I1.5 = 1)", run.done, NEXT_WAIT, frames)
+    if run is None:
+        return
+    c.ok("T3.3")
+    dropped: list[float] = []
+    run = follow(op, "T3.4", frames[1], "frame 2 (second cycle; I1.5 dropped to 0 as it starts)",
+                 run.done, NEXT_WAIT, frames, on_start=lambda: dropped.append(op.set(I15=0)))
+    if run is None:
+        return
+    run = follow(op, "T3.4", frames[2], f"frame 3 (the last; I1.5 dropped to 0 at t = {dropped[0]:.2f} s)",
+                 run.done, NEXT_WAIT, frames)
+    if run is None:
+        return
+    c.ok("T3.4")
+    if not quiet(op, "T3.5", run.done, PAUSE_LONG + QUIET, "no frame starts after frame 3 (the last) and "
+                 "its pause, I1.5 being 0", "execution went on to frame 1"):
+        c.fail("T3.6", "", "not checked: execution did not stop after the last frame (see T3.5)", None)
+        return
+    c.ok("T3.5")
+    if not quiet(op, "T3.6", op.press(), QUIET, "after the stop, an SB1 press with I1.5 = 0 starts nothing",
+                 "the program started"):
+        return
+    if not quiet(op, "T3.6", op.set(I15=1), QUIET, "after the stop, I1.5 = 1 alone (no press) starts "
+                 "nothing", "the program started"):
+        return
+    if press_starts(op, "T3.6", frames[0], "frame 1 (a new start: SB1 with I1.5 = 1)", op.press(), frames):
+        c.ok("T3.6")
+    op.set(SA7=0)
+    op.run(0.5)
+
+
+TASK3 = (
+    Requirement("T3.1", "Automatic mode: an SB1 press with I1.5 = 0 starts nothing.", "enable"),
+    Requirement("T3.2", "An SB1 press with I1.5 = 1 starts frame 1.", "enable"),
+    Requirement("T3.3", "With I1.5 = 1 the frames run in order and frame 1 follows the last frame and its "
+                "pause.", "enable"),
+    Requirement("T3.4", "I1.5 dropped to 0 during frame 2: frame 2 and the remaining frame 3 (the last) "
+                "still run to completion.", "enable"),
+    Requirement("T3.5", "Then, after the last frame and its pause, no transition to frame 1: execution "
+                "stops there (every reference 0).", "enable"),
+    Requirement("T3.6", "After that stop nothing restarts by itself, on a press with I1.5 = 0 or on I1.5 = 1 "
+                "alone; an SB1 press with I1.5 = 1 starts again from frame 1.", "enable"),
+)
+
+
+# --------------------------------------------------------------------------- registration
+
+def _set(task: str, requirements: tuple[Requirement, ...], scenarios: tuple[Scenario, ...]) -> RequirementSet:
+    return register(RequirementSet(
+        stand="tur10", task=task,
+        title=f"{STAND.title}, {STAND.variants[task].doc}",
+        requirements=requirements + GENERAL, scenarios=scenarios + GENERAL_SCENARIOS,
+        make_session=make_session, every=(no_fault, no_overvoltage, no_contention, no_collision)))
+
+
+_set("task1", TASK1, (Scenario("jog", sc_jog),))
+_set("task2", TASK2, (Scenario("pauses", sc_pauses),))
+_set("task3", TASK3, (Scenario("enable", sc_enable),))
