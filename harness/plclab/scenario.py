@@ -128,9 +128,8 @@ class Session:
     # ------------------------------------------------------------------ time
     def run(self, seconds: float) -> None:
         """Let `seconds` of plant time pass (whole scans)."""
-        before = self.plc.ticks
         self.sim.run(seconds)
-        self._copy_trace(before)
+        self._copy_trace()
 
     def wait(self, seconds: float) -> None:
         self.run(seconds)
@@ -139,15 +138,14 @@ class Session:
         """Scan until `predicate(io)` holds; returns the time. Fails with a clear message."""
         end = self.plc.now_ns + round(timeout * 1e9)
         while self.plc.now_ns <= end:
-            before = self.plc.ticks
             self.sim.step(1)
-            self._copy_trace(before)
+            self._copy_trace()
             if predicate(self.io):
                 return self.now - self.tick
         raise ScenarioFailure(f"t={self.now:.2f} s: {what or 'condition'} not reached within {timeout:g} s")
 
-    def _copy_trace(self, first_tick: int) -> None:
-        """Append what the simulation recorded since `first_tick` to the session's trace."""
+    def _copy_trace(self) -> None:
+        """Append what the simulation recorded since the last call to the session's trace."""
         src = self.sim.trace
         if self._merge_pending:
             self._merge_pending = False
@@ -159,11 +157,15 @@ class Session:
             for label, address in self.labels.items():
                 if address in self.trace and label not in self.trace:
                     self.trace.alias(label, address)
-        since = first_tick * self.plc.tick_ns
+            self._copied = {}
+        # only what was recorded since the last copy (a change at the same instant may have
+        # replaced the last entry, so that one is taken again)
+        offset, copied = self._offset_ns, self._copied
         for name in src.signals():
-            for t, v in src.changes(name):
-                if t >= since:
-                    self.trace.change(self._offset_ns + t, name, v)
+            start = max(0, copied.get(name, 0) - 1)
+            for t, v in src.changes_from(name, start):
+                self.trace.change(offset + t, name, v)
+            copied[name] = src.change_count(name)
         self.trace.advance(self._offset_ns + self.plc.now_ns - self.plc.tick_ns)
 
     # ------------------------------------------------------------------ state

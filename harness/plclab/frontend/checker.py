@@ -566,8 +566,6 @@ class Checker:
                 self.error(d, "a FUNCTION cannot hold function block instances")
             if d.section in ("VAR_TEMP",):
                 self.error(d, "function block instances cannot be VAR_TEMP")
-            if d.section == "VAR_GLOBAL" and isinstance(ty.pou, A.PouDecl) is False and False:
-                pass
             if d.init is not None:
                 self._fb_init(d, ty)
             if ty.pou is pou and pou is not None:
@@ -578,7 +576,8 @@ class Checker:
                 and isinstance(T.base_of(ty), (T.ArrayType, T.StructType))):
             self.error(d, "an ARRAY or STRUCT passed by value to a FUNCTION does not compile in OpenPLC "
                           "(its C code is rejected); use a FUNCTION_BLOCK with VAR_IN_OUT")
-        if d.section in ("VAR_IN_OUT", "VAR_TEMP") and d.init is not None:
+        if d.section in ("VAR_IN_OUT", "VAR_TEMP") and d.init is not None \
+                and not isinstance(d.type_ref, A.StringTypeRef):   # (matiec's grammar allows it for STRING)
             self.error(d.init, f"a {d.section} cannot have an initial value in OpenPLC's compiler")
         if d.init is not None:
             d.init_value = self._init_value(d.init, ty, _Scope(pou, names))
@@ -586,8 +585,6 @@ class Checker:
                 d.init_value = T.default_value(ty)
         else:
             d.init_value = T.default_value(ty)
-        if d.constant and d.init is None and d.section != "VAR_EXTERNAL":
-            pass  # a constant without initial value is its type's default (IEC allows it)
 
     def _fb_init(self, d: A.VarDecl, fb: T.FBType) -> None:
         """`t : TON := (PT := T#1s);` sets inputs of the instance before its first call."""
@@ -643,8 +640,6 @@ class Checker:
         ty = self.resolve_type(d.type_ref)
         base = T.base_of(ty) if ty is not None else None
         if base is not None and (not isinstance(base, T.ElementaryType) or base.name not in LOCATED_TYPES[loc.size]):
-            if base.name == "TIME_OF_DAY":
-                pass
             self.error(d.type_ref, f"a variable at {loc.text} must be "
                                    f"{' or '.join(sorted(LOCATED_TYPES[loc.size]))}, not {ty.name}")
 
@@ -975,8 +970,6 @@ class Checker:
         if c.key in self.pous and self.pous[c.key].kind == "FUNCTION":
             return self._user_call(c, self.pous[c.key], scope)
         if c.key in FUNCTIONS:
-            if c.key in scope.names:
-                pass
             return self._std_call(c, FUNCTIONS[c.key], scope, expected)
         if c.key in self.pous or c.key in FUNCTION_BLOCKS or c.key in self.fb_types:
             self.error(c, f"'{c.name}' is not a function; a function block is called through an instance")
@@ -1233,8 +1226,6 @@ class Checker:
             if sym.constant or (sym.global_decl is not None and sym.global_decl.constant):
                 self.error(e, f"'{root.name}' is a CONSTANT: it cannot be assigned")
                 return None
-            if sym.section == "VAR_INPUT" and scope.pou is not None and scope.pou.kind == "FUNCTION" and False:
-                pass
             if root.key in scope.for_vars and root is e:
                 self.error(e, f"'{root.name}' is the control variable of an enclosing FOR loop: "
                               f"it cannot be assigned in the loop body")
@@ -1435,12 +1426,9 @@ class Checker:
 
     def _name(self, e: A.Name, scope: _Scope, expected: Optional[T.Type]) -> Optional[T.Type]:
         sym = scope.names.get(e.key)
-        if sym is not None:
+        if isinstance(sym, A.VarDecl):
             e.sym = sym
-            if isinstance(sym, A.VarDecl):
-                if sym.section == "RETURN" and scope.pou is not None:
-                    return sym.ty
-                return sym.ty
+            return sym.ty
         values = self.enum_values.get(e.key)
         if values:
             if expected is not None and isinstance(T.base_of(expected), T.EnumType):

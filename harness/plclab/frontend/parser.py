@@ -604,7 +604,7 @@ def _grammar() -> str:
 
 
 # One parser for the process: the LALR tables are built once, and the AST builder runs inline
-# as the parser reduces (no parse tree is kept). `_BUILDER.file` is set per parse under a lock.
+# as the parser reduces (no parse tree is kept). `_builder().file` is set per parse, under a lock.
 _BUILDER_LOCK = threading.Lock()
 
 
@@ -614,9 +614,9 @@ def _builder() -> "_Builder":
 
 
 @lru_cache(maxsize=1)
-def _parser_for_errors() -> Lark:
+def _lark() -> Lark:
     return Lark(_grammar(), parser="lalr", lexer="contextual", transformer=_builder(),
-                lexer_callbacks={"IDENT": _reject_keyword})
+                lexer_callbacks={"IDENT": _keyword_token})
 
 
 @lru_cache(maxsize=1)
@@ -627,7 +627,7 @@ def _keywords() -> frozenset[str]:
     return frozenset(words)
 
 
-def _reject_keyword(tok: Token) -> Token:
+def _keyword_token(tok: Token) -> Token:
     # The contextual lexer lets `IF` through as an identifier where no keyword fits (e.g. a
     # variable name); matiec's lexer never does, so neither do we: the token goes to the parser
     # as the keyword it is, and the syntax error then says what is wrong there.
@@ -643,7 +643,7 @@ def _describe_expected(expected: Iterable[str]) -> str:
         return ""
     if len(names) > 6:
         return ""
-    return "; expected " + ", ".join(n if n.startswith(("'", "a", "end")) else n for n in names)
+    return "; expected " + ", ".join(names)
 
 
 def _token_text(tok: Token) -> str:
@@ -676,7 +676,7 @@ def parse_source(text: str, file: str) -> tuple[A.Unit | None, list[Diagnostic]]
     comment = _unterminated_comment(text)
     if comment:
         return None, [Diagnostic(file, *comment, "unterminated comment: '(*' without '*)'")]
-    lark = _parser_for_errors()
+    lark = _lark()
     try:
         with _BUILDER_LOCK:
             _builder().file = file
@@ -686,7 +686,7 @@ def parse_source(text: str, file: str) -> tuple[A.Unit | None, list[Diagnostic]]
         return None, [_lex_error(text, file, e)]
     except UnexpectedToken as e:
         return None, [_syntax_error(file, e, text)]
-    except UnexpectedEOF as e:
+    except UnexpectedEOF:
         return None, [Diagnostic(file, text.count("\n") + 1, 1, "unexpected end of file")]
     except _Positioned as e:
         return None, [Diagnostic(file, e.line, e.col, e.message)]
@@ -744,7 +744,7 @@ def _unclosed_block(text: str, err: Token) -> tuple[str, Token] | None:
     also when `err` is an END_x that closes none of the open blocks (then it is misplaced)."""
     stack: list[Token] = []
     try:
-        for tok in _parser_for_errors().lex(text):
+        for tok in _lark().lex(text):
             if err.type != "$END" and (tok.line, tok.column) >= (err.line, err.column):
                 break
             t = tok.type
@@ -772,7 +772,7 @@ def _tokens_before(text: str, err: Token, n: int = 2) -> list[Token]:
     """The last `n` tokens before `err` (error reporting only)."""
     out: list[Token] = []
     try:
-        for tok in _parser_for_errors().lex(text):
+        for tok in _lark().lex(text):
             if err.type != "$END" and (tok.line, tok.column) >= (err.line, err.column):
                 break
             out.append(tok)

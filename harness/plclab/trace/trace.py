@@ -162,6 +162,15 @@ class Trace:
     def __repr__(self) -> str:
         return f"<Trace {len(self._infos)} signals, until t={format_seconds(self._end_ns)} s>"
 
+    def change_count(self, name: str) -> int:
+        """How many entries `changes(name)` has (the initial value counts)."""
+        return len(self._times[self._resolve(name)])
+
+    def changes_from(self, name: str, start: int) -> list[tuple[int, Any]]:
+        """`changes(name)[start:]` without copying the rest (for incremental readers)."""
+        i = self._resolve(name)
+        return list(zip(self._times[i][start:], self._values[i][start:]))
+
     def changes(self, name: str) -> list[tuple[int, Any]]:
         """(time_ns, value) pairs; the first is the declared initial value."""
         i = self._resolve(name)
