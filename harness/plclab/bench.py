@@ -38,6 +38,46 @@ def bench_program(path: Path, sim_seconds: float = 20.0, sources=None, plant_fac
             "us_per_scan": best / scans * 1e6, "speedup": sim_seconds / best}
 
 
+def bench_realtime(seconds: float = 10.0, clients: int = 10) -> dict:
+    """A 10 ms task in real time for `seconds` while `clients` Modbus clients read holding
+    registers as fast as they can: scan period jitter (start lateness) and overruns."""
+    import threading
+
+    from plclab.frontend import load_files
+    from plclab.modbus.maps import OpenPlcMap
+    from plclab.modbus.rawclient import RawModbusClient
+    from plclab.modbus.server import ModbusTcpServer
+    from plclab.runtime.compiler import compile_unit
+    from plclab.runtime.plc import PLC
+    from plclab.runtime.realtime import RealTimeRunner
+
+    plc = PLC(compile_unit(load_files([PROGRAMS_DIR / "bench300.st"])))
+    server = ModbusTcpServer(OpenPlcMap(plc.image), "127.0.0.1", 0).start()
+    stop = threading.Event()
+    counts = [0] * clients
+
+    def hammer(i: int) -> None:
+        with RawModbusClient("127.0.0.1", server.port, timeout=5.0) as c:
+            while not stop.is_set():
+                c.read_holding_registers(0, 10)
+                counts[i] += 1
+    threads = [threading.Thread(target=hammer, args=(i,), daemon=True) for i in range(clients)]
+    for t in threads:
+        t.start()
+    runner = RealTimeRunner(plc)
+    try:
+        runner.run_for(seconds)
+    finally:
+        stop.set()
+        for t in threads:
+            t.join(5)
+        server.stop()
+    p50, p99 = runner.stats.jitter_s()
+    return {"seconds": seconds, "tick_ms": plc.tick_ns / 1e6, "scans": runner.stats.ticks,
+            "overruns": runner.stats.overruns, "jitter_p50_ms": p50 * 1e3, "jitter_p99_ms": p99 * 1e3,
+            "max_lateness_ms": runner.stats.max_lateness_s * 1e3, "modbus_requests": sum(counts)}
+
+
 def run_bench(report: Callable[[str], None] = print, quick: bool = False,
               programs: Optional[list[Path]] = None) -> dict:
     results: dict = {}
@@ -72,7 +112,15 @@ def run_bench(report: Callable[[str], None] = print, quick: bool = False,
         mb = bench_modbus(1.0 if quick else 3.0)
         results["modbus"] = mb
         for key, value in mb.items():
-            report(f"modbus: {key}: {value}")
+            if isinstance(value, dict):
+                report(f"modbus: {value['clients']} client(s) reading {mb.get('registers', 10)} holding registers: "
+                       f"{value['requests_per_s']:.0f} requests/s, p50 {value['p50_ms']:.2f} ms, "
+                       f"p99 {value['p99_ms']:.2f} ms, {value['errors']} errors")
     except ImportError:
         report("modbus: benchmark not available")
+    rt = bench_realtime(3.0 if quick else 10.0)
+    results["realtime"] = rt
+    report(f"real time: {rt['tick_ms']:g} ms task for {rt['seconds']:g} s under {rt['modbus_requests']} Modbus "
+           f"requests: {rt['scans']} scans, {rt['overruns']} overruns, start jitter p50 "
+           f"{rt['jitter_p50_ms']:.2f} ms, p99 {rt['jitter_p99_ms']:.2f} ms, max {rt['max_lateness_ms']:.2f} ms")
     return results
