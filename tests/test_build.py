@@ -29,7 +29,6 @@ CASES = Path(__file__).parent / "frontend" / "cases" / "valid"
 # valid ST that TC6 v2.01 has no element or attribute for: refused with one clear line
 NO_TC6_FORM = {"config_program_without_task.st": "RETAIN of program instance",
                "config_single_resource.st": "named RESOURCE",
-               "pou_fb_edge_inputs.st": "R_EDGE",
                "var_located_anonymous.st": "unnamed located variable"}
 
 

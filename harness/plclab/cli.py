@@ -6,6 +6,7 @@ no traceback escapes.
 from __future__ import annotations
 
 import argparse
+import os
 import sys
 from typing import Optional, Sequence
 
@@ -269,6 +270,12 @@ def main(argv: Optional[Sequence[str]] = None) -> int:
     except KeyboardInterrupt:
         print("plclab: interrupted", file=sys.stderr)
         return 130
+    except Exception as e:  # a bug of ours: one line for the user, the traceback on request
+        if os.environ.get("PLCLAB_DEBUG"):
+            raise
+        print(f"plclab: internal error ({type(e).__name__}: {e}); please report it with the input "
+              f"that caused it (PLCLAB_DEBUG=1 shows the traceback)", file=sys.stderr)
+        return 70
 
 
 if __name__ == "__main__":  # pragma: no cover

@@ -7,6 +7,9 @@ from pathlib import Path
 
 sys.path.insert(0, str(Path(__file__).resolve().parent))
 
+import pytest  # noqa: E402
+
+from plclab.errors import CompileError  # noqa: E402
 from plclab.iec.types import to_f32  # noqa: E402
 from st_helpers import MS, S, once, program, val  # noqa: E402
 
@@ -133,7 +136,7 @@ def test_var_temp_is_reinitialised_on_every_call():
     extra = """
 FUNCTION_BLOCK T
 VAR_OUTPUT t_out : INT; v_out : INT; END_VAR
-VAR_TEMP t : INT := 5; END_VAR
+VAR_TEMP t : INT; END_VAR
 VAR v : INT := 5; END_VAR
 t := t + 1; v := v + 1;
 t_out := t; v_out := v;
@@ -141,7 +144,7 @@ END_FUNCTION_BLOCK
 """
     sim = program("VAR f : T; END_VAR", "f(); f();", extra)
     sim.step(2)
-    assert val(sim, "f.t_out") == 6            # VAR_TEMP starts from its initial value each call
+    assert val(sim, "f.t_out") == 1            # VAR_TEMP starts from 0 on each call (matiec: no initial value)
     assert val(sim, "f.v_out") == 9            # VAR keeps its value
 
 
@@ -243,21 +246,15 @@ def test_variables_are_initialised_once_not_every_scan():
 
 # --------------------------------------------------------------------------- R_EDGE / F_EDGE
 
-def test_r_edge_input_of_function_block():
+def test_edge_inputs_are_refused_because_openplc_ignores_them():
+    """matiec declares an R_EDGE / F_EDGE input as a plain BOOL (generate_c_vardecl.cc): the
+    front end refuses it rather than run edges here and levels on OpenPLC."""
     extra = """
 FUNCTION_BLOCK Edge
-VAR_INPUT clk : BOOL R_EDGE; fall : BOOL F_EDGE; END_VAR
-VAR_OUTPUT ups : INT; downs : INT; END_VAR
+VAR_INPUT clk : BOOL R_EDGE; END_VAR
+VAR_OUTPUT ups : INT; END_VAR
 IF clk THEN ups := ups + 1; END_IF;
-IF fall THEN downs := downs + 1; END_IF;
 END_FUNCTION_BLOCK
 """
-    sim = program("VAR e : Edge; x : BOOL; END_VAR", "e(clk := x, fall := x);", extra)
-    sim.step(2)
-    for _ in range(3):
-        sim.set("main.x", True); sim.step(3)
-        sim.set("main.x", False); sim.step(3)
-    assert val(sim, "e.ups") == 3              # level held 3 scans counts once
-    # no fall at start-up although x is FALSE: like OpenPLC's F_TRIG (edge_detection.txt,
-    # M starts FALSE), which an F_EDGE input stands for
-    assert val(sim, "e.downs") == 3
+    with pytest.raises(CompileError, match="R_EDGE compiles in OpenPLC but has no effect there"):
+        program("VAR e : Edge; x : BOOL; END_VAR", "e(clk := x);", extra)

@@ -561,6 +561,11 @@ class Checker:
         if d.edge is not None and (d.section != "VAR_INPUT" or T.base_of(ty) is not T.BOOL
                                    or pou is None or pou.kind != "FUNCTION_BLOCK"):
             self.error(d, f"{d.edge} is only allowed on a BOOL VAR_INPUT of a function block")
+        elif d.edge is not None:
+            # matiec accepts the qualifier but its C generator declares a plain BOOL: on
+            # OpenPLC the input would see levels, not edges. Stricter than matiec on purpose.
+            self.error(d, f"{d.edge} compiles in OpenPLC but has no effect there (the input behaves as "
+                          f"a plain BOOL); use an {'R_TRIG' if d.edge == 'R_EDGE' else 'F_TRIG'} instance")
         if isinstance(ty, T.FBType):
             if pou is not None and pou.kind == "FUNCTION":
                 self.error(d, "a FUNCTION cannot hold function block instances")

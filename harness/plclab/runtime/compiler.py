@@ -215,8 +215,7 @@ class Compiler:
                 result.retained_globals.append(key)
         for key, d in self.cu.globals.items():
             if key.startswith("%") and d.ty is not None:
-                attr = f"_AT_{d.location.area}{d.location.size}{'_'.join(map(str, d.location.parts))}"
-                out.emit(1, f"G.{attr} = {self.var_init(d)}", d)
+                out.emit(1, f"G.{located_attr(d)} = {self.var_init(d)}", d)
                 any_ = True
         if not any_:
             out.emit(1, "pass")
@@ -246,9 +245,7 @@ class Compiler:
         name = _pyname("FB" if pou.kind == "FUNCTION_BLOCK" else "PRG", pou.name)
         decls = [d for d in pou.decls if d.name]
         located = [d for d in pou.decls if d.location is not None]
-        attrs = [d.key for d in decls] + [f"_AT_{id(d)}" for d in located if not d.name]
-        edges = [d for d in decls if d.edge]
-        attrs += [f"_EDGE_{d.key}" for d in edges]
+        attrs = [d.key for d in decls] + [located_attr(d) for d in located if not d.name]
         out.emit(0, f"class {name}:")
         out.emit(1, f"__slots__ = {tuple(attrs)!r}")
         out.emit(1, f"_ST_NAME = {pou.name!r}")
@@ -260,23 +257,11 @@ class Compiler:
                 out.emit(2, f"self.{d.key} = None", d)
                 continue
             out.emit(2, f"self.{d.key} = {self.var_init(d)}", d)
-        for d in edges:
-            # the previous input value, FALSE at start-up for both edges: as OpenPLC's
-            # R_TRIG / F_TRIG (edge_detection.txt, M starts FALSE), so an F_EDGE input that
-            # is FALSE on the first call is not a falling edge
-            out.emit(2, f"self._EDGE_{d.key} = False", d)
         for d in located:
             if not d.name:
-                out.emit(2, f"self._AT_{id(d)} = {self.var_init(d)}", d)
+                out.emit(2, f"self.{located_attr(d)} = {self.var_init(d)}", d)
         out.emit(2, "pass")
         out.emit(1, "def __call__(self):", pou)
-        for d in edges:
-            if d.edge == "R_EDGE":
-                out.emit(2, f"_raw = self.{d.key}; self.{d.key} = _raw and not self._EDGE_{d.key}; "
-                            f"self._EDGE_{d.key} = _raw", d)
-            else:
-                out.emit(2, f"_raw = self.{d.key}; self.{d.key} = (not _raw) and self._EDGE_{d.key}; "
-                            f"self._EDGE_{d.key} = _raw", d)
         temps = [d for d in decls if d.section == "VAR_TEMP"]
         for d in temps:
             out.emit(2, f"self.{d.key} = {self.var_init(d)}", d)
@@ -444,6 +429,8 @@ class Compiler:
         """The storage of a name (without the .get() of scalar VAR_IN_OUT refs)."""
         sym = e.sym
         if isinstance(sym, A.VarDecl):
+            if not sym.name:                       # `%QW1` of an anonymous AT declaration
+                return f"G.{located_attr(sym)}" if sym.section == "VAR_GLOBAL" else f"self.{located_attr(sym)}"
             if sym.section == "VAR_EXTERNAL":
                 return f"G.{sym.key}"
             if sym.section == "VAR_GLOBAL":
@@ -752,6 +739,12 @@ def _inline_conversion(name: str, arg_types: list, result: Optional[T.Type], cod
     if src.kind in ints and dst.is_real and src.bits <= (16 if dst is T.REAL else 32):
         return f"float({codes[0]})"
     return None
+
+
+def located_attr(d: A.VarDecl) -> str:
+    """The attribute holding an anonymous located variable (`AT %QW1 : WORD;`)."""
+    loc = d.location
+    return f"_AT_{loc.area}{loc.size}{'_'.join(map(str, loc.parts))}"
 
 
 def _store_into(dst: Any, src: Any) -> None:

@@ -22,7 +22,7 @@ from plclab.frontend import ast as A
 from plclab.frontend.checker import CheckedUnit
 from plclab.iec import types as T
 from plclab.runtime import stdlib
-from plclab.runtime.compiler import CompiledProgram, compile_unit
+from plclab.runtime.compiler import CompiledProgram, compile_unit, located_attr
 from plclab.runtime.faults import FaultRecord, PlcFault
 from plclab.runtime.image import ProcessImage
 
@@ -156,14 +156,13 @@ class PLC:
         out = []
         for key, d in self.checked.globals.items():
             if d.location is not None and d.ty is not None:
-                attr = key if not key.startswith("%") else \
-                    f"_AT_{d.location.area}{d.location.size}{'_'.join(map(str, d.location.parts))}"
+                attr = key if not key.startswith("%") else located_attr(d)
                 out.append(self._binding(d, self.G, attr, d.name))
         for inst in self.instances:
             pou = self.compiled.checked.pous.get(type(inst.obj)._ST_NAME.upper())
             for d in pou.decls if pou else []:
                 if d.location is not None and d.ty is not None:
-                    attr = d.key if d.name else f"_AT_{id(d)}"
+                    attr = d.key if d.name else located_attr(d)
                     out.append(self._binding(d, inst.obj, attr, f"{inst.name}.{d.name}" if d.name else ""))
         return out
 
