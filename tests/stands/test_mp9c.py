@@ -7,16 +7,14 @@ and review the diff of tests/stands/golden/ before committing it.
 """
 from __future__ import annotations
 
-import os
 from pathlib import Path
 
 import pytest
 
-from plclab.stands import mp9c
-from plclab.trace import diff, read_csv, write_csv
+from golden import check_golden
 
-GOLDEN = Path(__file__).parent / "golden"
-UPDATE = os.environ.get("PLCLAB_UPDATE_GOLDEN") == "1"
+from plclab.stands import mp9c
+
 LIFT_ONLY = ("baseline", "task2", "task3")          # variants where only SA5 moves anything
 ALL_VARIANTS = ("baseline", "task1", "task2", "task3", "full")
 
@@ -42,16 +40,6 @@ def test_lift_scenarios_pass_on_every_variant(variant, scenario, tmp_path):
 def test_demo_needs_task1_so_the_baseline_cannot_teach_it(tmp_path):
     with pytest.raises(mp9c.ScenarioFailure, match="gripper clamped"):
         run("baseline", "demo", tmp_path)
-
-
-def check_golden(trace, name: str, tick: float) -> None:
-    path = GOLDEN / f"{name}.csv"
-    if UPDATE or not path.exists():
-        assert UPDATE, f"missing golden trace {path}: run with PLCLAB_UPDATE_GOLDEN=1 and review it"
-        write_csv(trace, path)
-        return
-    difference = diff(read_csv(path), trace, tolerance_ns=round(tick * 1e9))
-    assert difference is None, f"{name}: {difference}"
 
 
 def test_demo_matches_its_golden_trace(tmp_path):

@@ -9,17 +9,15 @@ and review the diff of tests/stands/golden/ before committing it.
 """
 from __future__ import annotations
 
-import os
 from pathlib import Path
 
 import pytest
 
+from golden import check_golden
+
 from plclab.frontend import check_sources
 from plclab.stands import bundle, sources, thermo
-from plclab.trace import diff, read_csv, write_csv
 
-GOLDEN = Path(__file__).parent / "golden"
-UPDATE = os.environ.get("PLCLAB_UPDATE_GOLDEN") == "1"
 
 
 def run(scenario: str, tmp_path: Path, program=None):
@@ -211,16 +209,6 @@ def test_scenario_writes_go_through_the_twido_map(tmp_path):
 
 
 # --------------------------------------------------------------------------- golden trace
-
-def check_golden(trace, name: str, tick: float) -> None:
-    path = GOLDEN / f"{name}.csv"
-    if UPDATE or not path.exists():
-        assert UPDATE, f"missing golden trace {path}: run with PLCLAB_UPDATE_GOLDEN=1 and review it"
-        write_csv(trace, path)
-        return
-    difference = diff(read_csv(path), trace, tolerance_ns=round(tick * 1e9))
-    assert difference is None, f"{name}: {difference}"
-
 
 def test_demo_matches_its_golden_trace(traces):
     s = traces["demo"]

@@ -5,16 +5,14 @@ Regenerate golden traces after an intended change: PLCLAB_UPDATE_GOLDEN=1 (see t
 """
 from __future__ import annotations
 
-import os
 from pathlib import Path
 
 import pytest
 
-from plclab.stands import tur10
-from plclab.trace import diff, read_csv, write_csv
+from golden import check_golden
 
-GOLDEN = Path(__file__).parent / "golden"
-UPDATE = os.environ.get("PLCLAB_UPDATE_GOLDEN") == "1"
+from plclab.stands import tur10
+
 ALL_VARIANTS = ("baseline", "task1", "task2", "task3", "full")
 
 
@@ -62,16 +60,6 @@ def test_regulator_references_never_exceed_1500_and_pause_holds_zero(tmp_path):
     for (_s0, end), (nxt, _e) in zip(spans, spans[1:]):
         mid = (end + nxt) / 2
         assert all(s.trace.value_at(d, mid) == 0 for d in tur10.DRIVES)
-
-
-def check_golden(trace, name: str, tick: float) -> None:
-    path = GOLDEN / f"{name}.csv"
-    if UPDATE or not path.exists():
-        assert UPDATE, f"missing golden trace {path}: run with PLCLAB_UPDATE_GOLDEN=1 and review it"
-        write_csv(trace, path)
-        return
-    difference = diff(read_csv(path), trace, tolerance_ns=round(tick * 1e9))
-    assert difference is None, f"{name}: {difference}"
 
 
 @pytest.mark.parametrize("variant", ALL_VARIANTS)

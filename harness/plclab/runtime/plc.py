@@ -103,8 +103,13 @@ class PLC:
         ns = compiled.namespace
         ns["_rt"] = self
         self.G = ns["G"]
+        self._tick_override = tick_ns
+        self._cold_start()
+
+    def _cold_start(self) -> None:
+        """Variables to their initial values, retained ones restored, outputs published."""
         self._setup_instances()
-        self.tick_ns = tick_ns or self._base_tick()
+        self.tick_ns = self._tick_override or self._base_tick()
         self._schedule = self._make_schedule()
         self.bindings = self._bind_located()
         self._inputs = [b for b in self.bindings if b.is_input]
@@ -112,6 +117,7 @@ class PLC:
         if self.retain_store is not None:
             self.restore_retain()
         self.write_outputs()      # located outputs / memory hold their initial values from the start
+        self.fault = None
         self.state = RUN
 
     # ------------------------------------------------------------------ construction
@@ -280,18 +286,7 @@ class PLC:
 
     def restart(self) -> None:
         """Cold restart after a fault or stop: variables re-initialised, retain restored."""
-        ns = self.compiled.namespace
-        self._setup_instances()
-        self._schedule = self._make_schedule()
-        self.bindings = self._bind_located()
-        self._inputs = [b for b in self.bindings if b.is_input]
-        self._outputs = [b for b in self.bindings if not b.is_input]
-        if self.retain_store is not None:
-            self.restore_retain()
-        self.write_outputs()
-        self.fault = None
-        self.state = RUN
-        del ns
+        self._cold_start()
 
     def stop(self) -> None:
         if self.retain_store is not None and self.state == RUN:
