@@ -1,0 +1,87 @@
+"""The plant as an OpenPLC PSM I/O server, from the command line, driven by our own PSM client
+(what `plclab serve` does with io = psm) and stopped the way OpenPLC stops it (127 in
+holding register 50); and the PSM script OpenPLC runs."""
+from __future__ import annotations
+
+import re
+import socket
+import subprocess
+import sys
+import time
+from pathlib import Path
+
+from plclab.modbus.psm import PsmClient
+from plclab.modbus.rawclient import RawModbusClient
+from plclab.runtime.image import ProcessImage
+
+PLCLAB = [sys.executable, "-m", "plclab.cli"]
+
+
+def free_port() -> int:
+    with socket.socket() as s:
+        s.bind(("127.0.0.1", 0))
+        return s.getsockname()[1]
+
+
+def start_plant(stand: str) -> tuple[subprocess.Popen, int]:
+    port = free_port()
+    proc = subprocess.Popen(PLCLAB + ["plant", stand, "--psm", f"127.0.0.1:{port}"], stdout=subprocess.PIPE,
+                            stderr=subprocess.PIPE, text=True)
+    line = proc.stdout.readline()
+    assert re.search(rf"PSM I/O on 127\.0\.0\.1:{port}", line), (line, proc.stderr.read() if proc.poll() else "")
+    return proc, port
+
+
+def test_mp9c_plant_answers_a_psm_client_like_openplc_and_stops_on_127():
+    proc, port = start_plant("mp9c")
+    try:
+        image = ProcessImage()
+        client = PsmClient("127.0.0.1", port).connect()
+        client.read_inputs(image)
+        # power-up: arm up, gripper released, rotated left, backward (SQ1, SQ3, SQ4, SQ7)
+        assert [image.areas["IX"][i] for i in range(7)] == [1, 0, 1, 1, 0, 0, 1]
+        image.areas["QX"][2] = 1                          # L3: arm down
+        client.write_outputs(image)
+        deadline = time.monotonic() + 5
+        while time.monotonic() < deadline:
+            client.read_inputs(image)
+            if image.areas["IX"][1]:                      # SQ2: arm down reached
+                break
+            time.sleep(0.05)
+        assert image.areas["IX"][1] == 1 and image.areas["IX"][0] == 0
+        client.request_stop()
+        client.close()
+        assert proc.wait(timeout=10) == 0
+        assert "plant stopped" in proc.stdout.read()
+    finally:
+        if proc.poll() is None:
+            proc.kill()
+
+
+def test_serve_as_psm_client_runs_the_program_against_a_plant_in_another_process(tmp_path):
+    proc, port = start_plant("mp9c")
+    conf = tmp_path / "openplc.conf"
+    conf.write_text(f"[mp9c]\nio = psm\npsm = 127.0.0.1:{port}\nretain_file = {tmp_path / 'r.json'}\n"
+                    "[modbus]\nenabled = false\n")
+    try:
+        serve = subprocess.run(PLCLAB + ["serve", "mp9c", "--variant", "baseline", "--config", str(conf),
+                                         "--duration", "1.5"], capture_output=True, text=True, timeout=60)
+        assert serve.returncode == 0, serve.stderr
+        # what the PLC wrote to the plant over PSM: the baseline in manual mode drives L2 (arm
+        # up, SA5 = 0) and lights HL1 (empty program), which it knows from the plant's inputs
+        with RawModbusClient("127.0.0.1", port, unit=0) as client:
+            coils = client.read_coils(0, 9)
+        assert coils[1] == 1 and coils[2] == 0            # L2 on, L3 off
+        assert coils[8] == 1                              # HL1 (%QX1.0)
+    finally:
+        proc.kill()
+        proc.wait(timeout=10)
+
+
+def test_psm_script_is_python_that_starts_the_stand_plant():
+    out = subprocess.run(PLCLAB + ["psm-script", "tur10"], capture_output=True, text=True, timeout=30)
+    assert out.returncode == 0
+    code = compile(out.stdout, "main.py", "exec")           # valid Python as OpenPLC will run it
+    assert "psm.start()" in out.stdout and "tur10" in out.stdout
+    assert str(Path(__file__).resolve().parents[1] / "harness") in out.stdout
+    assert code.co_filename == "main.py"
