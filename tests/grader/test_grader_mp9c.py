@@ -8,19 +8,22 @@ a runtime fault is a failing row.
 from __future__ import annotations
 
 import re
+import sys
 from pathlib import Path
 
 import pytest
 
-from plclab.errors import PlcLabError
-from plclab.grader import GradeReport, Row, grade, grade_sources, requirement_table, tasks
-from plclab.stands import bundle, sources
-from plclab.stands.mp9c import STAND
+sys.path.insert(0, str(Path(__file__).resolve().parent))
 
-FIXTURES = Path(__file__).resolve().parent / "fixtures" / "mp9c"
-HEADER = re.compile(r"plclab grader fixture: (task\d), expected to FAIL (\S+)\. Mistake: (.*)")
+from plclab.errors import PlcLabError  # noqa: E402
+from plclab.grader import GradeReport, Row, grade, grade_sources, requirement_table, tasks  # noqa: E402
+from plclab.stands import bundle, sources  # noqa: E402
+from plclab.stands.mp9c import STAND  # noqa: E402
+from grader_helpers import (FIXTURES_DIR, TASKS, assert_fails_exactly, assert_fails_with,  # noqa: E402
+                            fixtures, fixtures_per_task, trace_csvs)
+
+FIXTURES = FIXTURES_DIR / "mp9c"
 DIAGNOSTIC = re.compile(r"^.+:\d+:\d+: error: .+$")
-TASKS = ("task1", "task2", "task3")
 SCENARIOS = {"task1": ("manual", "playback"), "task2": ("pauses",), "task3": ("enable",)}
 GENERAL_SCENARIOS = ("basics", "automatic", "restart", "timeout", "memory")
 
@@ -34,19 +37,6 @@ def write_bundle(tmp_path: Path, variant: str, edit=None) -> str:
     return str(path)
 
 
-def failed_ids(report: GradeReport) -> list[str]:
-    return [r.id for r in report.failed()]
-
-
-def fixtures() -> list[tuple[str, str, str]]:
-    out = []
-    for path in sorted(FIXTURES.glob("*.st")):
-        m = HEADER.search(path.read_text(encoding="utf-8").splitlines()[0])
-        assert m, f"{path.name}: first line must say which task and requirement"
-        out.append((path.name, m.group(1), m.group(2)))
-    return out
-
-
 # --------------------------------------------------------------------------- references
 
 @pytest.mark.parametrize("task", TASKS)
@@ -57,12 +47,7 @@ def test_reference_solution_passes_its_task(task, tmp_path):
     assert report.exit_code == 0
     assert all(r.passed for r in report.rows)
     assert [r.id for r in report.rows][0] == f"T{task[-1]}.1"
-    for scenario in SCENARIOS[task] + GENERAL_SCENARIOS:
-        csv = out / f"mp9c-{task}-{scenario}.csv"
-        vcd = out / f"mp9c-{task}-{scenario}.vcd"
-        assert csv.read_text(encoding="utf-8").startswith("time_s,name,value\n")
-        assert vcd.read_text(encoding="utf-8").startswith("$")
-        assert report.traces[scenario] == [csv, vcd]
+    trace_csvs(report, out, SCENARIOS[task] + GENERAL_SCENARIOS)
 
 
 @pytest.mark.parametrize("task", TASKS)
@@ -88,12 +73,7 @@ BASELINE_FAILS = {
 @pytest.mark.parametrize("task", TASKS)
 def test_baseline_fails_each_task_by_its_own_rows(task, tmp_path):
     report = grade("mp9c", task, [write_bundle(tmp_path, "baseline")])
-    assert not report.passed
-    assert report.exit_code == 1
-    assert failed_ids(report) == BASELINE_FAILS[task], report.text()
-    for row in report.failed():
-        assert row.observed
-    assert "FAIL" in report.text()
+    assert_fails_exactly(report, BASELINE_FAILS[task])
 
 
 def test_baseline_rows_say_why(tmp_path):
@@ -106,19 +86,13 @@ def test_baseline_rows_say_why(tmp_path):
 # --------------------------------------------------------------------------- wrong solutions
 
 def test_at_least_three_wrong_solutions_per_task():
-    per_task = {task: [name for name, t, _ in fixtures() if t == task] for task in TASKS}
+    per_task = fixtures_per_task("mp9c")
     assert all(len(names) >= 3 for names in per_task.values()), per_task
 
 
-@pytest.mark.parametrize("name,task,rid", fixtures())
+@pytest.mark.parametrize("name,task,rid", fixtures("mp9c"))
 def test_wrong_solution_fails_with_the_row_that_says_why(name, task, rid):
-    report = grade("mp9c", task, [str(FIXTURES / name)])
-    assert not report.passed and report.exit_code == 1
-    assert not report.errors, report.errors
-    assert rid in failed_ids(report), report.text()
-    row = report.row(rid)
-    assert row.expected and row.observed and row.time is not None, row
-    assert not row.observed.startswith("not checked")
+    assert_fails_with(grade("mp9c", task, [str(FIXTURES / name)]), rid)
 
 
 # --------------------------------------------------------------------------- errors and faults

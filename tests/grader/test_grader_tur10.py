@@ -9,19 +9,21 @@ of wall time for some 100 s of plant time).
 from __future__ import annotations
 
 import functools
-import re
+import sys
 from pathlib import Path
 
 import pytest
 
-from plclab.grader import GradeReport, grade, grade_sources, requirement_table, tasks
-from plclab.grader.tur10 import POS, make_session
-from plclab.stands import bundle, sources
-from plclab.stands.tur10 import STAND
+sys.path.insert(0, str(Path(__file__).resolve().parent))
 
-FIXTURES = Path(__file__).resolve().parent / "fixtures" / "tur10"
-HEADER = re.compile(r"plclab grader fixture: (task\d), expected to FAIL (\S+)\. Mistake: (.*)")
-TASKS = ("task1", "task2", "task3")
+from plclab.grader import GradeReport, grade, grade_sources, requirement_table, tasks  # noqa: E402
+from plclab.grader.tur10 import POS, make_session  # noqa: E402
+from plclab.stands import bundle, sources  # noqa: E402
+from plclab.stands.tur10 import STAND  # noqa: E402
+from grader_helpers import (FIXTURES_DIR, TASKS, assert_fails_exactly, assert_fails_with,  # noqa: E402
+                            fixtures, fixtures_per_task, trace_csvs)
+
+FIXTURES = FIXTURES_DIR / "tur10"
 SCENARIOS = {"task1": ("jog",), "task2": ("pauses",), "task3": ("enable",)}
 GENERAL_SCENARIOS = ("basics", "automatic", "restart", "timeout")
 GENERAL_IDS = [f"G{i}" for i in range(1, 12)]
@@ -31,19 +33,6 @@ GENERAL_IDS = [f"G{i}" for i in range(1, 12)]
 def graded(task: str, variant: str) -> GradeReport:
     """The report of a shipped variant's bundle on `task` (graded once per test session)."""
     return grade_sources("tur10", task, [(f"{variant}.st", bundle(STAND, variant))])
-
-
-def failed_ids(report: GradeReport) -> list[str]:
-    return [r.id for r in report.failed()]
-
-
-def fixtures() -> list[tuple[str, str, str]]:
-    out = []
-    for path in sorted(FIXTURES.glob("*.st")):
-        m = HEADER.search(path.read_text(encoding="utf-8").splitlines()[0])
-        assert m, f"{path.name}: first line must say which task and requirement"
-        out.append((path.name, m.group(1), m.group(2)))
-    return out
 
 
 # --------------------------------------------------------------------------- references
@@ -58,14 +47,8 @@ def test_reference_solution_passes_its_task(task, tmp_path):
     assert report.exit_code == 0
     ids = [r.id for r in report.rows]
     assert ids[0] == f"T{task[-1]}.1" and ids[-len(GENERAL_IDS):] == GENERAL_IDS
-    for scenario in SCENARIOS[task] + GENERAL_SCENARIOS:
-        csv = out / f"tur10-{task}-{scenario}.csv"
-        vcd = out / f"tur10-{task}-{scenario}.vcd"
-        text = csv.read_text(encoding="utf-8")
-        assert text.startswith("time_s,name,value\n")
+    for text in trace_csvs(report, out, SCENARIOS[task] + GENERAL_SCENARIOS).values():
         assert "\n0,plant.pos1,16000\n" in text and ",%QW0," in text      # links next to references
-        assert vcd.read_text(encoding="utf-8").startswith("$")
-        assert report.traces[scenario] == [csv, vcd]
 
 
 @pytest.mark.parametrize("task", TASKS)
@@ -98,12 +81,7 @@ BASELINE_FAILS = {
 
 @pytest.mark.parametrize("task", TASKS)
 def test_baseline_fails_each_task_by_its_own_rows(task):
-    report = graded(task, "baseline")
-    assert not report.passed and report.exit_code == 1
-    assert failed_ids(report) == BASELINE_FAILS[task], report.text()
-    for row in report.failed():
-        assert row.observed
-    assert "FAIL" in report.text()
+    assert_fails_exactly(graded(task, "baseline"), BASELINE_FAILS[task])
 
 
 def test_baseline_rows_say_why():
@@ -120,19 +98,13 @@ def test_baseline_rows_say_why():
 # --------------------------------------------------------------------------- wrong solutions
 
 def test_at_least_three_wrong_solutions_per_task():
-    per_task = {task: [name for name, t, _ in fixtures() if t == task] for task in TASKS}
+    per_task = fixtures_per_task("tur10")
     assert all(len(names) >= 3 for names in per_task.values()), per_task
 
 
-@pytest.mark.parametrize("name,task,rid", fixtures())
+@pytest.mark.parametrize("name,task,rid", fixtures("tur10"))
 def test_wrong_solution_fails_with_the_row_that_says_why(name, task, rid):
-    report = grade("tur10", task, [str(FIXTURES / name)])
-    assert not report.passed and report.exit_code == 1
-    assert not report.errors, report.errors
-    assert rid in failed_ids(report), report.text()
-    row = report.row(rid)
-    assert row.expected and row.observed and row.time is not None, row
-    assert not row.observed.startswith("not checked")
+    assert_fails_with(grade("tur10", task, [str(FIXTURES / name)]), rid)
 
 
 # --------------------------------------------------------------------------- faults, tables

@@ -19,22 +19,19 @@ from typing import Any, Callable, Optional
 from plclab.scenario import ScenarioFailure, Session
 from plclab.stands.mp9c import STAND, labels
 
-from .registry import EVERY, Checks, Requirement, RequirementSet, Scenario, register
+from .common import (DEBOUNCE, NEXT_WAIT, NO_FAULT, REFUSED, FrameRun, Op, basics_flow, enable_flow,
+                     lamp_requirements, no_fault, pauses_flow, register_tasks, restart_flow,
+                     task2_requirements, task3_requirements)
+from .registry import EVERY, Checks, Requirement, Scenario
 
 VALVES = tuple(f"L{i}" for i in range(1, 8))
 CONFLICTS = (("L2", "L3", "lift"), ("L4", "L5", "rotation"), ("L6", "L7", "extension"))
 
-DEBOUNCE = 0.05          # SB1 closures shorter than this are contact bounce
-LONG_PRESS = 3.0         # SB1 held this long resets the program
-PAUSE_SHORT = 0.5        # Task 2: frame recorded with I0.7 = 0
-PAUSE_LONG = 3.0         # Task 2: frame recorded with I0.7 = 1
 FRAME_TIMEOUT = 10.0     # a frame not done in this time is a fault
 CAPACITY = 32            # frames
 MARGIN = 0.5             # s of slack on plant travel times
 DONE_WAIT = 3.0          # a frame's links all arrive within this (longest travel 1.2 s)
-NEXT_WAIT = PAUSE_LONG + 1.0   # the next frame starts within this after one is done
 QUIET = 3.0              # "nothing happens": no valve change for this long
-EPS = 1e-6
 
 
 # --------------------------------------------------------------------------- the stand
@@ -79,54 +76,22 @@ def matches(io: Any, want: dict[str, int]) -> bool:
     return all(int(bool(io[k])) == v for k, v in want.items())
 
 
-@dataclass(frozen=True)
-class FrameRun:
-    start: float      # the valves changed to the frame's
-    done: float       # the sensors showed the frame reached
-
-
 # --------------------------------------------------------------------------- the operator
 
-@dataclass
-class Op:
-    """The lab operator and observer on one session: console actions, waits, trace reads.
-    A PLC fault stops the scenario (G1 reports it)."""
+class Mp9cOp(Op[Frame]):
+    """The operator of the pneumatic robot: a frame starts with a valve change and is done
+    when the limit switches show the robot there."""
 
-    s: Session
-    c: Checks
+    auto = "SA1"
+    enable = "I07"
+    enable_label = "I0.7"
+    wind_down = 1.0
+    press_window = "50 ms debounce, +/- one scan"
+    started = "it started"
 
-    @property
-    def now(self) -> float:
-        return self.s.now
-
-    @property
-    def tol(self) -> float:
-        """One scan of the student's program."""
-        return self.s.tick + EPS
-
-    def _fault(self) -> None:
-        if self.s.fault is not None:
-            raise ScenarioFailure("the PLC stopped with a runtime fault (see G1)")
-
-    def set(self, **switches: int) -> float:
-        t = self.now
-        self.s.console.set(**switches)
-        return t
-
-    def run(self, seconds: float) -> None:
-        if seconds > 0:
-            self.s.run(seconds)
-        self._fault()
-
-    def run_until(self, t: float) -> None:
-        self.run(t - self.now + EPS)
-
-    def press(self, hold: float = 0.2) -> float:
-        """A press of SB1 held `hold` s; returns the time it was pressed."""
-        t = self.now
-        self.s.console.press("SB1", hold=hold)
-        self._fault()
-        return t
+    def start_manual(self) -> None:
+        self.set(SA1=0, SA2=0, SA3=0, SA4=0, SA5=0, SA6=0, I07=0)
+        self.run(0.1)
 
     def values(self, names: Any, at: Optional[float] = None) -> dict[str, int]:
         if at is None:
@@ -152,48 +117,51 @@ class Op:
             return None
         return self.wait(cond, after + timeout - self.now)
 
-    def valve_change(self, after: float, until: Optional[float] = None) -> Optional[float]:
+    def motion(self, after: float, until: Optional[float] = None) -> Optional[float]:
         """The first change of any valve at or after `after` (up to `until`, default: now)."""
         return self.s.trace.next_change(list(VALVES), after=after, until=until, default=None)
+
+    def what_moved(self, t: float) -> str:
+        """The valves one scan after they changed at `t`."""
+        return f"the valves changed to {fmt(self.values(VALVES, at=t + self.tol))},"
 
     def settled(self, t: float, names: Any) -> dict[str, int]:
         """The values one scan after `t` (the tolerance on when outputs follow)."""
         self.run_until(t + self.tol + self.s.tick)
         return self.values(names, at=t + self.tol)
 
-
-def follow(op: Op, rid: str, frame: Frame, label: str, since: float, timeout: float,
-           on_start: Optional[Callable[[], None]] = None) -> Optional[FrameRun]:
-    """Expect the next valve change at or after `since` (within `timeout`) to start `frame`,
-    then the sensors to show it done. A failure is charged to requirement `rid`."""
-    start = op.valve_change(since, until=since + timeout)
-    if start is None and op.now < since + timeout:
-        before = op.values(VALVES)
-        start = op.wait(lambda io: _changed(io, before), since + timeout - op.now)
-    if start is None:
-        op.c.fail(rid, f"{label} starts within {timeout:g} s of t = {since:.2f} s: "
-                  f"valves {fmt(frame.valves)}",
-                  f"no valve changed: the valves stayed {fmt(op.values(frame.valves))}", since)
-        return None
-    got = op.settled(start, frame.valves)
-    if got != frame.valves:
-        op.c.fail(rid, f"{label}: valves {fmt(frame.valves)}", f"valves {fmt(got)}", start)
-        return None
-    if on_start is not None:
-        on_start()
-    done = op.when(lambda io: matches(io, frame.sensors), after=start, timeout=DONE_WAIT)
-    if done is None:
-        op.c.fail(rid, f"{label} done: sensors {fmt(frame.sensors)} within {DONE_WAIT:g} s",
-                  f"sensors {fmt(op.values(frame.sensors))}", start)
-        return None
-    return FrameRun(start, done)
+    def follow(self, rid: str, frame: Frame, label: str, since: float, timeout: float,
+               on_start: Optional[Callable[[], object]] = None) -> Optional[FrameRun]:
+        """The next valve change (within `timeout` of `since`) starts `frame` if the valves are
+        the frame's one scan later; the frame is done when the sensors show it."""
+        start = self.motion(since, until=since + timeout)
+        if start is None and self.now < since + timeout:
+            before = self.values(VALVES)
+            start = self.wait(lambda io: _changed(io, before), since + timeout - self.now)
+        if start is None:
+            self.c.fail(rid, f"{label} starts within {timeout:g} s of t = {since:.2f} s: "
+                        f"valves {fmt(frame.valves)}",
+                        f"no valve changed: the valves stayed {fmt(self.values(frame.valves))}", since)
+            return None
+        got = self.settled(start, frame.valves)
+        if got != frame.valves:
+            self.c.fail(rid, f"{label}: valves {fmt(frame.valves)}", f"valves {fmt(got)}", start)
+            return None
+        if on_start is not None:
+            on_start()
+        done = self.when(lambda io: matches(io, frame.sensors), after=start, timeout=DONE_WAIT)
+        if done is None:
+            self.c.fail(rid, f"{label} done: sensors {fmt(frame.sensors)} within {DONE_WAIT:g} s",
+                        f"sensors {fmt(self.values(frame.sensors))}", start)
+            return None
+        return FrameRun(start, done)
 
 
 def _changed(io: Any, before: dict[str, int]) -> bool:
     return any(int(bool(io[k])) != v for k, v in before.items())
 
 
-def teach(op: Op, frames: list[Frame]) -> list[float]:
+def teach(op: Mp9cOp, frames: list[Frame]) -> list[float]:
     """Manual mode: set each frame's switches, wait for the robot to get there, record it with
     a short SB1 press (I0.7 as the frame says). Returns the release times."""
     releases = []
@@ -206,41 +174,7 @@ def teach(op: Op, frames: list[Frame]) -> list[float]:
     return releases
 
 
-def quiet(op: Op, rid: str, after: float, seconds: float, expected: str, what: str) -> bool:
-    """No valve change in [after, after + seconds]; else a failure of `rid`."""
-    op.run_until(after + seconds)
-    t = op.valve_change(after, until=after + seconds)
-    if t is None:
-        return True
-    got = op.values(VALVES, at=t + op.tol)
-    op.c.fail(rid, expected, f"{what}: the valves changed to {fmt(got)}, {t - after:.2f} s after "
-              f"t = {after:.2f} s", t)
-    return False
-
-
-def press_starts(op: Op, rid: str, frame: Frame, label: str, pressed: float) -> Optional[FrameRun]:
-    """The SB1 press at `pressed` must start `frame` on the debounced press (50 ms + one scan)."""
-    run = follow(op, rid, frame, label, pressed, DEBOUNCE + 1.0)
-    if run is None:
-        return None
-    late = run.start - pressed
-    if not op.c.check(rid, -EPS <= late <= DEBOUNCE + op.tol,
-                      f"{label} starts on the press (50 ms debounce, +/- one scan)",
-                      f"it started {late:.2f} s after the press", run.start):
-        return None
-    return run
-
-
 # --------------------------------------------------------------------------- every scenario
-
-def no_fault(s: Session, c: Checks) -> None:
-    f = s.fault
-    if f is None:
-        c.ok("G1")
-        return
-    offset = s.now - s.plc.now_ns / 1e9
-    c.fail("G1", "no runtime fault", str(f), offset + f.time_ns / 1e9)
-
 
 def no_conflict(s: Session, c: Checks) -> None:
     t = s.trace.first(lambda st: any(st[a] and st[b] for a, b, _ in CONFLICTS), default=None)
@@ -256,82 +190,44 @@ def no_conflict(s: Session, c: Checks) -> None:
 DOWN, UP = lift(True), lift(False)
 
 
-def start_manual(op: Op) -> None:
-    op.set(SA1=0, SA2=0, SA3=0, SA4=0, SA5=0, SA6=0, I07=0)
-    op.run(0.1)
+def teach_one(op: Mp9cOp, frame: Frame) -> float:
+    """Teach `frame` alone and run on 0.2 s; returns the SB1 release."""
+    released = teach(op, [frame])[0]
+    op.run(0.2)
+    return released
 
 
 def sc_basics(s: Session, c: Checks) -> None:
     """Empty-program lamp, bounce, long-press reset (manual mode, lift only)."""
-    op = Op(s, c)
-    start_manual(op)
-    c.check("G3", op.values(["HL1"])["HL1"] == 1, "HL1=1 at power-up (no frame recorded)", "HL1=0", op.now)
-    t = op.press(0.03)
-    op.run(0.5)
-    off = s.trace.first(lambda st: not st.HL1, after=t, default=None)
-    if c.check("G4", off is None, "HL1 stays 1 after a 30 ms SB1 press (nothing recorded)",
-               "HL1 went 0: the bounce recorded a frame", off):
-        c.ok("G4")
-    rel = teach(op, [DOWN])[0]
-    op.run(0.2)
-    if c.check("G3", op.values(["HL1"], at=rel + 2 * op.tol)["HL1"] == 0,
-               "HL1=0 once a frame is recorded (short SB1 press)", "HL1 still 1", rel + 2 * op.tol):
-        c.ok("G3")
-    teach(op, [UP])
-    pressed = op.now
-    s.console.hold("SB1")
-    on = op.wait(lambda io: io.HL1, LONG_PRESS + 1.0)
-    if on is None:
-        c.fail("G5", "HL1=1 (program reset) 3.0 s after SB1 is pressed, while it is held",
-               f"HL1 still 0 after holding SB1 {LONG_PRESS + 1:g} s", pressed + LONG_PRESS)
-        op.run_until(pressed + LONG_PRESS + 1.5)
-    else:
-        held = on - pressed
-        c.check("G5", LONG_PRESS - op.tol <= held <= LONG_PRESS + DEBOUNCE + op.tol,
-                "the reset (HL1=1) 3.0 s after SB1 is pressed, while it is held",
-                f"HL1=1 {held:.2f} s after the press", on)
-        op.run_until(pressed + LONG_PRESS + 0.5)
-    released = op.now
-    s.console.release("SB1")
-    op.run(0.5)
-    off = s.trace.first(lambda st: not st.HL1, after=released, default=None)
-    c.check("G5", off is None, "HL1 stays 1 after the release (the release records nothing)",
-            "HL1 went 0: a frame was recorded (or the reset never happened)", off or released)
-    op.set(SA1=1, I07=1)
-    op.run(0.3)
-    t = op.press()
-    if quiet(op, "G5", t, 2.0, "after the reset an SB1 press in automatic mode starts nothing",
-             "a frame started: the program was not empty"):
-        c.ok("G5")
-    op.set(SA1=0)
-    op.run(0.2)
+    op = Mp9cOp.begin(s, c)
+    basics_flow(op, ("G3", "G4", "G5"), record=lambda: teach_one(op, DOWN),
+                record_another=lambda: teach(op, [UP]))
 
 
 def sc_automatic(s: Session, c: Checks) -> None:
     """Continuous start/stop, step mode, back to manual (lift only, two frames)."""
-    op = Op(s, c)
-    start_manual(op)
+    op = Mp9cOp.begin(s, c)
     teach(op, [DOWN, UP])
     entered = op.set(SA1=1, I07=1)
     op.run(0.5)
     op.set(SA5=1)
     op.run(0.5)
-    if not quiet(op, "G6", entered, 1.0, "no valve change on entering automatic mode (SA1 := 1) and "
-                 "moving SA5 there, before any SB1 press", "in automatic mode, before any SB1 press"):
+    if not op.quiet("G6", entered, 1.0, "no valve change on entering automatic mode (SA1 := 1) and "
+                    "moving SA5 there, before any SB1 press", "in automatic mode, before any SB1 press"):
         op.set(SA5=0)
         op.run(2.0)                        # let a switch-following arm come back up
     op.set(SA5=0)
     op.run(0.3)
-    r1 = press_starts(op, "G6", DOWN, "frame 1", op.press())
-    r2 = r1 and follow(op, "G6", UP, "frame 2 after frame 1", r1.done, NEXT_WAIT)
-    r3 = r2 and follow(op, "G6", DOWN, "frame 1 after the last frame", r2.done, NEXT_WAIT)
+    r1 = op.press_starts("G6", DOWN, "frame 1", op.press())
+    r2 = r1 and op.follow("G6", UP, "frame 2 after frame 1", r1.done, NEXT_WAIT)
+    r3 = r2 and op.follow("G6", DOWN, "frame 1 after the last frame", r2.done, NEXT_WAIT)
     stop: list[float] = []
-    r4 = r3 and follow(op, "G6", UP, "frame 2 (second cycle)", r3.done, NEXT_WAIT,
-                       on_start=lambda: stop.append(op.press(0.1)))
+    r4 = r3 and op.follow("G6", UP, "frame 2 (second cycle)", r3.done, NEXT_WAIT,
+                          on_start=lambda: stop.append(op.press(0.1)))
     if not r4:
         return
-    if not quiet(op, "G6", stop[0], QUIET, "no frame starts after the stop press (SB1 at t = "
-                 f"{stop[0]:.2f} s during frame 2)", "execution went on"):
+    if not op.quiet("G6", stop[0], QUIET, "no frame starts after the stop press (SB1 at t = "
+                    f"{stop[0]:.2f} s during frame 2)", "execution went on"):
         return
     c.ok("G6")
 
@@ -340,10 +236,10 @@ def sc_automatic(s: Session, c: Checks) -> None:
     sequence = ((DOWN, "frame 1 (first step press)"), (UP, "frame 2 (second step press)"),
                 (DOWN, "frame 1 (third step press, after the last frame)"))
     for frame, label in sequence:
-        run = press_starts(op, "G7", frame, label, op.press())
-        if run is None or not quiet(op, "G7", run.done + op.tol, QUIET,
-                                    f"after {label} and its pause, no frame starts without a press",
-                                    "a frame started without a press"):
+        run = op.press_starts("G7", frame, label, op.press())
+        if run is None or not op.quiet("G7", run.done + op.tol, QUIET,
+                                       f"after {label} and its pause, no frame starts without a press",
+                                       "a frame started without a press"):
             return
     c.ok("G7")
 
@@ -360,32 +256,19 @@ def sc_automatic(s: Session, c: Checks) -> None:
 
 def sc_restart(s: Session, c: Checks) -> None:
     """The recorded program survives a PLC restart."""
-    op = Op(s, c)
-    start_manual(op)
+    op = Mp9cOp.begin(s, c)
     teach(op, [DOWN, UP])
-    t = op.now
-    s.restart_plc(off_time=1.0)
-    op.run(0.3)
-    if not c.check("G9", op.values(["HL1"])["HL1"] == 0, "HL1=0 after the restart (the program is kept)",
-                   "HL1=1: the program is empty after the restart", t):
-        return
-    op.set(SA1=1, I07=1)
-    op.run(0.3)
-    r1 = press_starts(op, "G9", DOWN, "frame 1 after the restart", op.press())
-    if r1 and follow(op, "G9", UP, "frame 2 after the restart", r1.done, NEXT_WAIT):
-        c.ok("G9")
+    restart_flow(op, "G9", DOWN, UP, off_time=1.0)
 
 
 def sc_timeout(s: Session, c: Checks) -> None:
     """A jammed lift: the frame times out after 10 s, HL1 blinks 2 Hz until manual mode."""
-    op = Op(s, c)
-    start_manual(op)
+    op = Mp9cOp.begin(s, c)
     teach(op, [DOWN, UP])
     s.inject("jammed", mechanism="lift")
-    op.set(SA1=1, I07=1)
-    op.run(0.3)
+    op.start_auto()
     pressed = op.press()
-    start = op.valve_change(pressed)
+    start = op.motion(pressed)
     if start is None:
         start = op.wait(lambda io: io.L3, 1.0)
     if start is None or op.values(DOWN.valves, at=start + op.tol) != DOWN.valves:
@@ -404,22 +287,20 @@ def sc_timeout(s: Session, c: Checks) -> None:
         return
     cleared = op.now
     s.clear_faults()
-    if not quiet(op, "G10", cleared, QUIET, "execution stays stopped after the timeout (no frame 2 "
-                 "even once the lift gets free and reaches SQ2)", "a frame started"):
+    if not op.quiet("G10", cleared, QUIET, "execution stays stopped after the timeout (no frame 2 "
+                    "even once the lift gets free and reaches SQ2)", "a frame started"):
         return
     manual = op.set(SA1=0)
     op.run(1.5)
     late = s.trace.edges("HL1", "rising", after=manual + 2 * op.tol)
-    hl1 = op.values(["HL1"])["HL1"]
-    if c.check("G10", not late and hl1 == 0, "HL1 stops blinking (0) once SA1 = 0 (manual mode)",
+    if c.check("G10", not late and op.hl1() == 0, "HL1 stops blinking (0) once SA1 = 0 (manual mode)",
                f"HL1 {'still blinking' if late else '=1'} in manual mode", manual):
         c.ok("G10")
 
 
 def sc_memory(s: Session, c: Checks) -> None:
     """32 frames fit; the 33rd blinks HL1 at 1 Hz for 2 s."""
-    op = Op(s, c)
-    start_manual(op)
+    op = Mp9cOp.begin(s, c)
     first = op.press(0.1)
     for _ in range(CAPACITY - 1):
         op.run(0.1)
@@ -433,8 +314,7 @@ def sc_memory(s: Session, c: Checks) -> None:
     op.run(3.0)
     edges = s.trace.edges("HL1", "rising", after=released - op.tol, until=released + 2.0 - op.tol)
     after = s.trace.edges("HL1", "rising", after=released + 2.0, until=op.now)
-    ok = len(edges) == 2 and edges[0] - released <= 2 * op.tol and not after \
-        and op.values(["HL1"])["HL1"] == 0
+    ok = len(edges) == 2 and edges[0] - released <= 2 * op.tol and not after and op.hl1() == 0
     seen = f"{len(edges)} flash(es) in 2 s"
     if edges:
         seen += f" starting {edges[0] - released:.2f} s after the release"
@@ -446,15 +326,10 @@ def sc_memory(s: Session, c: Checks) -> None:
 
 
 GENERAL = (
-    Requirement("G1", "The program runs without a PLC fault (division by zero, array index out of "
-                "range, scan watchdog).", EVERY),
+    NO_FAULT,
     Requirement("G2", "Never a valve conflict: the two coils of one valve (L2/L3, L4/L5, L6/L7) are "
                 "never ON together.", EVERY),
-    Requirement("G3", "HL1 is ON while the program is empty (at power-up) and OFF once a frame is "
-                "recorded with a short SB1 press.", "basics"),
-    Requirement("G4", "A press of SB1 shorter than 50 ms is contact bounce: it records nothing.", "basics"),
-    Requirement("G5", "Holding SB1 resets the program at 3.0 s, while it is still held (HL1 ON); the "
-                "release records nothing and a start then finds the program empty.", "basics"),
+    *lamp_requirements("G3", "G4", "G5"),
     Requirement("G6", "Continuous mode: entering automatic mode (or moving a switch there) changes no "
                 "valve; an SB1 press starts frame 1, the frames follow one another, frame 1 follows "
                 "the last one; another press stops execution.", "automatic"),
@@ -491,8 +366,7 @@ MECHANISMS = (
 
 def sc_manual(s: Session, c: Checks) -> None:
     """Each switch moves its mechanism both ways in manual mode."""
-    op = Op(s, c)
-    start_manual(op)
+    op = Mp9cOp.begin(s, c)
     op.run(0.5)
     for rid, switch, _what, on, off, travel in MECHANISMS:
         for value, (valves, sensors) in ((1, on), (0, off)):
@@ -517,21 +391,19 @@ PICK_AND_PLACE = (arm(0, 0, 0, 1), arm(1, 0, 0, 0), arm(1, 1, 1, 1), arm(0, 0, 0
 
 def sc_playback(s: Session, c: Checks) -> None:
     """A pick-and-place taught with all four switches plays back."""
-    op = Op(s, c)
-    start_manual(op)
+    op = Mp9cOp.begin(s, c)
     teach(op, list(PICK_AND_PLACE))
-    op.set(SA1=1, I07=1)
-    op.run(0.3)
+    op.start_auto()
     since = op.press()
     for k, frame in enumerate(PICK_AND_PLACE + PICK_AND_PLACE[:1]):
         label = f"frame {k % 4 + 1}" + (" after frame 4" if k == 4 else "")
-        run = follow(op, "T1.5", frame, label, since, DEBOUNCE + 1.0 if k == 0 else NEXT_WAIT)
+        run = op.follow("T1.5", frame, label, since, DEBOUNCE + 1.0 if k == 0 else NEXT_WAIT)
         if run is None:
             return
         since = run.done
     c.ok("T1.5")
     op.press()
-    op.run(1.0)
+    op.run(op.wind_down)
 
 
 TASK1 = (
@@ -554,139 +426,53 @@ TASK1 = (
 def sc_pauses(s: Session, c: Checks) -> None:
     """Frame 1 recorded with I0.7 = 1 (3 s), frame 2 with I0.7 = 0 (0.5 s); a cycle with I0.7 = 1,
     then a cycle during which I0.7 is 0 (frame 1) and 1 again (frame 2)."""
-    op = Op(s, c)
-    start_manual(op)
+    op = Mp9cOp.begin(s, c)
     f1, f2 = lift(True, i07=1), lift(False, i07=0)
     teach(op, [f1, f2])
-    op.set(SA1=1, I07=1)
-    op.run(0.3)
-    r1 = follow(op, "T2.2", f1, "frame 1", op.press(), DEBOUNCE + 1.0)
-    r2 = r1 and follow(op, "T2.2", f2, "frame 2", r1.done, NEXT_WAIT)
-    if not r1 or not r2:
-        return
-    p1 = r2.start - r1.done
-    if c.check("T2.2", abs(p1 - PAUSE_LONG) <= op.tol,
-               "a 3.0 s pause after frame 1 (recorded with I0.7 = 1)", f"{p1:.2f} s", r1.done):
-        c.ok("T2.2")
-    r3 = follow(op, "T2.1", f1, "frame 1 after frame 2", r2.done, NEXT_WAIT,
-                on_start=lambda: op.set(I07=0))
-    if not r3:
-        return
-    p2 = r3.start - r2.done
-    if c.check("T2.1", abs(p2 - PAUSE_SHORT) <= op.tol,
-               "a 0.5 s pause after frame 2 (recorded with I0.7 = 0)", f"{p2:.2f} s", r2.done):
-        c.ok("T2.1")
-    r4 = follow(op, "T2.3", f2, "frame 2 (second cycle)", r3.done, NEXT_WAIT, on_start=lambda: op.set(I07=1))
-    if not r4:
-        return
-    p3 = r4.start - r3.done
-    if not c.check("T2.3", abs(p3 - p1) <= op.tol, f"the pause after frame 1 is {p1:.2f} s as in the first "
-                   "cycle although I0.7 is now 0", f"{p3:.2f} s", r3.done):
-        return
-    r5 = follow(op, "T2.3", f1, "frame 1 (third cycle)", r4.done, NEXT_WAIT)
-    if not r5:
-        return
-    p4 = r5.start - r4.done
-    if c.check("T2.3", abs(p4 - p2) <= op.tol, f"the pause after frame 2 is {p2:.2f} s as in the first "
-               "cycle although I0.7 is now 1", f"{p4:.2f} s", r4.done):
-        c.ok("T2.3")
-    op.press()
-    op.run(1.0)
+    pauses_flow(op, f1, f2, start_checked=False)
 
 
-TASK2 = (
-    Requirement("T2.1", "A frame recorded with I0.7 = 0 is followed by a 0.5 s pause (from the sensors "
-                "showing the frame done to the next valve change).", "pauses"),
-    Requirement("T2.2", "A frame recorded with I0.7 = 1 is followed by a 3.0 s pause.", "pauses"),
-    Requirement("T2.3", "I0.7 changes nothing in automatic mode: switched during execution, every frame "
-                "keeps the pause recorded with it.", "pauses"),
-)
+TASK2 = task2_requirements("I0.7", "from the sensors showing the frame done to the next valve change")
 
 
 # --------------------------------------------------------------------------- Task 3
 
+def refused_start(op: Mp9cOp) -> None:
+    """T3.1: an SB1 press with I0.7 = 0 starts nothing. A program that starts is stopped in
+    manual mode, where the arm goes back up (SA5 = 0), before the enabled start."""
+    if op.quiet("T3.1", op.press(), REFUSED, "an SB1 press with I0.7 = 0 starts nothing",
+                "the program started"):
+        op.c.ok("T3.1")
+        return
+    op.set(SA1=0)
+    op.run(2.0)
+    op.set(SA1=1)
+    op.run(0.3)
+
+
+def second_cycle(k: int, dropped: Optional[float]) -> str:
+    """Frame k's label in the cycle during which I0.7 drops (as frame 2 starts)."""
+    if dropped is None:
+        return "frame 2 (second cycle)"
+    return f"frame {k} (I0.7 dropped to 0 at t = {dropped:.2f} s)"
+
+
 def sc_enable(s: Session, c: Checks) -> None:
     """Four lift frames; start refused / accepted, wrap with I0.7 = 1, I0.7 dropped in frame 2."""
-    op = Op(s, c)
-    start_manual(op)
+    op = Mp9cOp.begin(s, c)
     frames = [DOWN, UP, DOWN, UP]
     teach(op, frames)
-    op.set(SA1=1, I07=0)
-    op.run(0.3)
-    if not quiet(op, "T3.1", op.press(), 2.0, "an SB1 press with I0.7 = 0 starts nothing",
-                 "the program started"):
-        op.set(SA1=0)                       # manual mode stops it; the arm goes back up (SA5 = 0)
-        op.run(2.0)
-        op.set(SA1=1)
-        op.run(0.3)
-    else:
-        c.ok("T3.1")
-    op.set(I07=1)
-    op.run(0.3)
-    run = press_starts(op, "T3.2", frames[0], "frame 1 (SB1 pressed with I0.7 = 1)", op.press())
-    if run is None:
-        return
-    c.ok("T3.2")
-    for k in (1, 2, 3):
-        run = follow(op, "T3.3", frames[k], f"frame {k + 1}", run.done, NEXT_WAIT)
-        if run is None:
-            return
-    run = follow(op, "T3.3", frames[0], "frame 1 after frame 4 (I0.7 = 1)", run.done, NEXT_WAIT)
-    if run is None:
-        return
-    c.ok("T3.3")
-    dropped: list[float] = []
-    run = follow(op, "T3.4", frames[1], "frame 2 (second cycle)", run.done, NEXT_WAIT,
-                 on_start=lambda: dropped.append(op.set(I07=0)))
-    for k in (2, 3):
-        if run is None:
-            return
-        run = follow(op, "T3.4", frames[k], f"frame {k + 1} (I0.7 dropped to 0 at t = {dropped[0]:.2f} s)",
-                     run.done, NEXT_WAIT)
-    if run is None:
-        return
-    c.ok("T3.4")
-    if not quiet(op, "T3.5", run.done, PAUSE_LONG + 2.0, "no frame starts after frame 4 (the last) and its "
-                 "pause, I0.7 being 0", "execution went on to frame 1"):
-        c.fail("T3.6", "", "not checked: execution did not stop after the last frame (see T3.5)", None)
-        return
-    c.ok("T3.5")
-    if not quiet(op, "T3.6", op.press(), 2.0, "after the stop, an SB1 press with I0.7 = 0 starts nothing",
-                 "the program started"):
-        return
-    if not quiet(op, "T3.6", op.set(I07=1), 2.0, "after the stop, I0.7 = 1 alone (no press) starts nothing",
-                 "the program started"):
-        return
-    if press_starts(op, "T3.6", frames[0], "frame 1 (a new start: SB1 with I0.7 = 1)", op.press()):
-        c.ok("T3.6")
-    op.set(SA1=0)
-    op.run(1.0)
+    enable_flow(op, frames, lambda: refused_start(op), second_cycle)
 
 
-TASK3 = (
-    Requirement("T3.1", "Automatic mode: an SB1 press with I0.7 = 0 starts nothing.", "enable"),
-    Requirement("T3.2", "An SB1 press with I0.7 = 1 starts frame 1.", "enable"),
-    Requirement("T3.3", "With I0.7 = 1 the frames run in order and frame 1 follows the last frame and its "
-                "pause.", "enable"),
-    Requirement("T3.4", "I0.7 dropped to 0 during frame 2: frame 2 and the remaining frames 3 and 4 still "
-                "run to completion.", "enable"),
-    Requirement("T3.5", "Then, after the last frame and its pause, no transition to frame 1: execution "
-                "stops there.", "enable"),
-    Requirement("T3.6", "After that stop nothing restarts by itself or on a press with I0.7 = 0; an SB1 "
-                "press with I0.7 = 1 starts again from frame 1.", "enable"),
-)
+TASK3 = task3_requirements("I0.7", remaining="frames 3 and 4", stops="execution stops there",
+                           restarts="by itself or on a press with I0.7 = 0")
 
 
 # --------------------------------------------------------------------------- registration
 
-def _set(task: str, requirements: tuple[Requirement, ...], scenarios: tuple[Scenario, ...]) -> RequirementSet:
-    return register(RequirementSet(
-        stand="mp9c", task=task,
-        title=f"{STAND.title}, {STAND.variants[task].doc}",
-        requirements=requirements + GENERAL, scenarios=scenarios + GENERAL_SCENARIOS,
-        make_session=make_session, every=(no_fault, no_conflict)))
-
-
-_set("task1", TASK1, (Scenario("manual", sc_manual), Scenario("playback", sc_playback)))
-_set("task2", TASK2, (Scenario("pauses", sc_pauses),))
-_set("task3", TASK3, (Scenario("enable", sc_enable),))
+register_tasks(STAND, {
+    "task1": (TASK1, (Scenario("manual", sc_manual), Scenario("playback", sc_playback))),
+    "task2": (TASK2, (Scenario("pauses", sc_pauses),)),
+    "task3": (TASK3, (Scenario("enable", sc_enable),)),
+}, GENERAL, GENERAL_SCENARIOS, make_session, every=(no_fault, no_conflict))

@@ -19,7 +19,7 @@ for every task: Tasks 1-3 regulate drive 1 only in automatic mode.
 from __future__ import annotations
 
 import math
-from dataclasses import dataclass
+from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Any, Callable, Optional
 
@@ -30,7 +30,10 @@ from plclab.scenario import ScenarioFailure, Session
 from plclab.stands.tur10 import STAND, labels
 from plclab.trace import Trace
 
-from .registry import EVERY, Checks, Requirement, RequirementSet, Scenario, register
+from .common import (DEBOUNCE, EPS, NEXT_WAIT, NO_FAULT, FrameRun, Op, basics_flow, enable_flow,
+                     lamp_requirements, no_fault, pauses_flow, register_tasks, restart_flow,
+                     task2_requirements, task3_requirements)
+from .registry import EVERY, Checks, Requirement, Scenario
 
 AXES = (1, 2, 3, 4, 5)
 DRIVES = tuple(f"DRIVE{k}" for k in AXES)
@@ -41,10 +44,6 @@ LOW = 500                # manual reference at low speed (SA6 = 1)
 NORMAL = 1500            # manual reference at normal speed (SA6 = 0)
 REF_LIMIT = 1500         # beyond this the DAC overvolts the drive
 ADMISSIBLE = 16          # codes: a frame is reached when every link is this close
-DEBOUNCE = 0.05          # SB1 closures shorter than this are contact bounce
-LONG_PRESS = 3.0         # SB1 held this long resets the program
-PAUSE_SHORT = 0.5        # Task 2: frame recorded with I1.5 = 0
-PAUSE_LONG = 3.0         # Task 2: frame recorded with I1.5 = 1
 FRAME_TIMEOUT = 20.0     # a frame not reached in this time stops execution
 TIMEOUT_TOL = 0.1        # s: on 20 s, more than one scan (the watchdog may start a scan late)
 HOLD = 0.4               # s a jog button is held in the Task 1 checks
@@ -53,10 +52,8 @@ TRAVEL = 0.3             # +/- share of the expected jog distance a link may mis
 STILL = 2                # codes a link not driven may drift
 READ_WINDOW = 1.0        # s in which every sensor must be selected alone (Task 1)
 DONE_WAIT = 5.0          # a frame is reached within this after it started (longest ~1.7 s)
-NEXT_WAIT = PAUSE_LONG + 1.0   # the next frame starts within this after one is reached
 QUIET = 2.0              # "nothing happens": every reference 0 for this long
 STEP = 0.1               # s the grader runs on between looks at the trace while it waits
-EPS = 1e-6
 
 
 # --------------------------------------------------------------------------- the stand
@@ -148,25 +145,22 @@ class Frame:
         return ", ".join(f"link {k} at {self.codes[k - 1]}" for k in axes)
 
 
-@dataclass(frozen=True)
-class FrameRun:
-    start: float      # the first nonzero reference of the frame
-    done: float       # references back to 0, every link within 16 codes
-
-
 # --------------------------------------------------------------------------- the operator
 
 @dataclass
-class Op:
-    """The lab operator and observer on one session: console actions, waits, trace reads.
-    A PLC fault stops the scenario (G1 reports it)."""
+class Tur10Op(Op[Frame]):
+    """The operator of the positional robot: a frame starts with the first nonzero speed
+    reference and is reached when every reference is back to 0 with every link within 16
+    codes of it. The timing tolerance is one scan of the student's slowest task."""
 
-    s: Session
-    c: Checks
+    taught: list[Frame] = field(default_factory=list)   # in order: a missed frame is compared with them
 
-    @property
-    def now(self) -> float:
-        return self.s.now
+    auto = "SA7"
+    enable = "I15"
+    enable_label = "I1.5"
+    wind_down = 0.5
+    press_window = "50 ms debounce + one scan"
+    started = "its first nonzero reference came"
 
     @property
     def scan(self) -> float:
@@ -175,36 +169,12 @@ class Op:
         return (max(intervals) if intervals else self.s.plc.tick_ns) / 1e9
 
     @property
-    def tol(self) -> float:
-        return self.scan + EPS
-
-    @property
     def plant(self) -> TracedTur10:
         return self.s.plant
 
-    def _fault(self) -> None:
-        if self.s.fault is not None:
-            raise ScenarioFailure("the PLC stopped with a runtime fault (see G1)")
-
-    def set(self, **switches: int) -> float:
-        t = self.now
-        self.s.console.set(**switches)
-        return t
-
-    def run(self, seconds: float) -> None:
-        if seconds > 0:
-            self.s.run(seconds)
-        self._fault()
-
-    def run_until(self, t: float) -> None:
-        self.run(t - self.now + EPS)
-
-    def press(self, hold: float = 0.2) -> float:
-        """A press of SB1 held `hold` s; returns the time it was pressed."""
-        t = self.now
-        self.s.console.press("SB1", hold=hold)
-        self._fault()
-        return t
+    def start_manual(self) -> None:
+        self.set(SA7=0, SA6=0, I15=0)
+        self.run(0.2)
 
     def refs(self, at: Optional[float] = None) -> dict[int, int]:
         st = self.s.io if at is None else self.s.trace.state_at(at)
@@ -215,10 +185,6 @@ class Op:
 
     def positions(self) -> dict[int, int]:
         return {k: self.plant.true_code(k) for k in AXES}
-
-    def hl1(self, at: Optional[float] = None) -> int:
-        v = self.s.io.HL1 if at is None else self.s.trace.value_at("HL1", at)
-        return int(bool(v))
 
     def when(self, cond: Callable[[Any], Any], after: float, timeout: float) -> Optional[float]:
         """The first time at or after `after` when `cond` (over a trace state) holds, from the
@@ -236,9 +202,17 @@ class Op:
             looked = max(looked, tr.end_s)
             self.run(min(STEP, end - tr.end_s))
 
+    def wait(self, cond: Callable[[Any], Any], timeout: float) -> Optional[float]:
+        """`when`, from now."""
+        return self.when(cond, after=self.now, timeout=timeout)
+
     def motion(self, after: float, until: float) -> Optional[float]:
         """The first nonzero reference in [after, until] (from the trace)."""
         return self.s.trace.first(moving, after=after, until=until, default=None)
+
+    def what_moved(self, t: float) -> str:
+        """The references at `t`."""
+        return fmt_refs(self.refs(at=t))
 
     def record(self, i15: Optional[int] = None) -> Frame:
         """Record a frame with a short SB1 press (I1.5 set first if given)."""
@@ -247,6 +221,7 @@ class Op:
         frame = Frame(tuple(self.positions().values()), int(self.s.plant.console["I15"]))
         self.press(0.2)
         self.run(0.2)
+        self.taught.append(frame)
         return frame
 
     def jog_to(self, axis: int, code: int, timeout: float = 3.0) -> None:
@@ -264,109 +239,68 @@ class Op:
                                   f"to {code} (it is at {self.plant.true_code(axis)}): the frames cannot "
                                   "be taught")
 
+    def follow(self, rid: str, frame: Frame, label: str, since: float, timeout: float,
+               on_start: Optional[Callable[[], object]] = None) -> Optional[FrameRun]:
+        """The next nonzero reference starts `frame`; it is reached when every reference is back
+        to 0 with the links at its positions."""
+        start = self.when(moving, after=since, timeout=timeout)
+        if start is None:
+            pos = self.positions()
+            self.c.fail(rid, f"{label} starts within {timeout:g} s of t = {since:.2f} s (a nonzero reference "
+                        f"towards {frame.where()})",
+                        f"every reference stayed 0 (link 1 at {pos[1]})", since)
+            return None
+        if on_start is not None:
+            on_start()
+        done = self.when(frame.reached, after=start, timeout=DONE_WAIT)
+        if done is None:
+            self.c.fail(rid, f"{label} reached within {DONE_WAIT:g} s: {frame.where()} (+/- 16 codes), every "
+                        "reference back to 0", self.explain_miss(frame, start), start)
+            return None
+        return FrameRun(start, done)
 
-def start_manual(op: Op) -> None:
-    op.set(SA7=0, SA6=0, I15=0)
-    op.run(0.2)
+    def explain_miss(self, frame: Frame, start: float) -> str:
+        """Why `frame` was not reached: where the links are and what the references did."""
+        tr = self.s.trace
+        pos = self.positions()
+        off = [k for k in AXES if abs(pos[k] - frame.codes[k - 1]) > ADMISSIBLE]
+        where = ", ".join(f"link {k} at {pos[k]} ({pos[k] - frame.codes[k - 1]:+d} from the target)"
+                          for k in off) or "every link within 16 codes"
+        for j, other in enumerate(self.taught, 1):
+            if other is not frame and off and all(abs(pos[k] - other.codes[k - 1]) <= ADMISSIBLE for k in AXES):
+                where += f" = the position of frame {j}"
+                break
+        refs = self.refs()
+        if any(refs.values()):
+            return f"after {self.now - start:.2f} s: {where}; {fmt_refs(refs)}"
+        zero = tr.first(still, after=start, default=None)
+        since = start
+        while zero is not None:          # the start of the last stretch of zero references
+            nxt = tr.first(moving, after=zero, default=None)
+            if nxt is None:
+                since = zero
+                break
+            zero = tr.first(still, after=nxt, default=None)
+        return f"every reference 0 from t = {since:.2f} s with {where}"
 
 
-def teach_three(op: Op) -> list[Frame]:
-    """Three frames of drive 1: where it is (16000), 3000 codes forward, 1000 back."""
-    f1 = op.record()
+def teach_two(op: Tur10Op, first_i15: Optional[int] = None,
+              second_i15: Optional[int] = None) -> tuple[Frame, Frame]:
+    """Two frames of drive 1: where it is (16000), then 3000 codes forward (I1.5 set first if
+    given)."""
+    f1 = op.record(i15=first_i15)
     op.jog_to(1, f1.codes[0] + 3000)
-    f2 = op.record()
+    return f1, op.record(i15=second_i15)
+
+
+def teach_three(op: Tur10Op) -> list[Frame]:
+    """Three frames of drive 1: where it is (16000), 3000 codes forward, 1000 back."""
+    f1, f2 = teach_two(op)
     op.jog_to(1, f2.codes[0] - 1000)
-    f3 = op.record()
-    return [f1, f2, f3]
-
-
-def start_auto(op: Op, i15: int = 1) -> float:
-    """Automatic mode with I1.5 as given; returns the time SA7 went to 1."""
-    t = op.set(SA7=1, I15=i15)
-    op.run(0.3)
-    return t
-
-
-def explain_miss(op: Op, frame: Frame, start: float, frames: list[Frame]) -> str:
-    """Why `frame` was not reached: where the links are and what the references did."""
-    tr = op.s.trace
-    pos = op.positions()
-    off = [k for k in AXES if abs(pos[k] - frame.codes[k - 1]) > ADMISSIBLE]
-    where = ", ".join(f"link {k} at {pos[k]} ({pos[k] - frame.codes[k - 1]:+d} from the target)"
-                      for k in off) or "every link within 16 codes"
-    for j, other in enumerate(frames, 1):
-        if other is not frame and off and all(abs(pos[k] - other.codes[k - 1]) <= ADMISSIBLE for k in AXES):
-            where += f" = the position of frame {j}"
-            break
-    refs = op.refs()
-    if any(refs.values()):
-        return f"after {op.now - start:.2f} s: {where}; {fmt_refs(refs)}"
-    zero = tr.first(still, after=start, default=None)
-    since = start
-    while zero is not None:          # the start of the last stretch of zero references
-        nxt = tr.first(moving, after=zero, default=None)
-        if nxt is None:
-            since = zero
-            break
-        zero = tr.first(still, after=nxt, default=None)
-    return f"every reference 0 from t = {since:.2f} s with {where}"
-
-
-def follow(op: Op, rid: str, frame: Frame, label: str, since: float, timeout: float,
-           frames: list[Frame], on_start: Optional[Callable[[], None]] = None) -> Optional[FrameRun]:
-    """Expect the next nonzero reference at or after `since` (within `timeout`) to start
-    `frame`, then the links to reach it. A failure is charged to requirement `rid`."""
-    start = op.when(moving, after=since, timeout=timeout)
-    if start is None:
-        pos = op.positions()
-        op.c.fail(rid, f"{label} starts within {timeout:g} s of t = {since:.2f} s (a nonzero reference "
-                  f"towards {frame.where()})",
-                  f"every reference stayed 0 (link 1 at {pos[1]})", since)
-        return None
-    if on_start is not None:
-        on_start()
-    done = op.when(frame.reached, after=start, timeout=DONE_WAIT)
-    if done is None:
-        op.c.fail(rid, f"{label} reached within {DONE_WAIT:g} s: {frame.where()} (+/- 16 codes), every "
-                  "reference back to 0", explain_miss(op, frame, start, frames), start)
-        return None
-    return FrameRun(start, done)
-
-
-def press_starts(op: Op, rid: str, frame: Frame, label: str, pressed: float,
-                 frames: list[Frame]) -> Optional[FrameRun]:
-    """The SB1 press at `pressed` must start `frame` on the debounced press (50 ms + one scan)."""
-    run = follow(op, rid, frame, label, pressed, DEBOUNCE + 1.0, frames)
-    if run is None:
-        return None
-    late = run.start - pressed
-    if not op.c.check(rid, -EPS <= late <= DEBOUNCE + op.tol,
-                      f"{label} starts on the press (50 ms debounce + one scan)",
-                      f"its first nonzero reference came {late:.2f} s after the press", run.start):
-        return None
-    return run
-
-
-def quiet(op: Op, rid: str, after: float, seconds: float, expected: str, what: str) -> bool:
-    """Every reference 0 in [after, after + seconds]; else a failure of `rid`."""
-    op.run_until(after + seconds)
-    t = op.motion(after, after + seconds)
-    if t is None:
-        return True
-    op.c.fail(rid, expected, f"{what}: {fmt_refs(op.refs(at=t))} {t - after:.2f} s after t = {after:.2f} s", t)
-    return False
+    return [f1, f2, op.record()]
 
 
 # --------------------------------------------------------------------------- every scenario
-
-def no_fault(s: Session, c: Checks) -> None:
-    f = s.fault
-    if f is None:
-        c.ok("G1")
-        return
-    offset = s.now - s.plc.now_ns / 1e9
-    c.fail("G1", "no runtime fault", str(f), offset + f.time_ns / 1e9)
-
 
 def no_overvoltage(s: Session, c: Checks) -> None:
     t = s.trace.first(lambda st: any(abs(ref(st, k)) > REF_LIMIT for k in AXES), default=None)
@@ -398,127 +332,83 @@ def no_collision(s: Session, c: Checks) -> None:
 
 # --------------------------------------------------------------------------- general (G5..G11)
 
-def sc_basics(s: Session, c: Checks) -> None:
-    """Empty-program lamp, bounce, long-press reset (manual mode, drive 1 only)."""
-    op = Op(s, c)
-    start_manual(op)
-    c.check("G5", op.hl1() == 1, "HL1=1 at power-up (no frame recorded)", "HL1=0", op.now)
-    t = op.press(0.03)
-    op.run(0.5)
-    off = s.trace.first(lambda st: not st.HL1, after=t, default=None)
-    if c.check("G6", off is None, "HL1 stays 1 after a 30 ms SB1 press (nothing recorded)",
-               "HL1 went 0: the bounce recorded a frame", off):
-        c.ok("G6")
+def record_here(op: Tur10Op) -> float:
+    """Record a frame where the links are; returns the SB1 release (`record` runs 0.2 s on)."""
     op.record()
-    released = op.now - 0.2
-    if c.check("G5", op.hl1(at=released + 2 * op.tol) == 0,
-               "HL1=0 once a frame is recorded (short SB1 press)", "HL1 still 1", released + 2 * op.tol):
-        c.ok("G5")
+    return op.now - 0.2
+
+
+def record_further(op: Tur10Op) -> None:
+    """Jog link 1 1500 codes forward and record a frame there."""
     op.jog_to(1, op.plant.true_code(1) + 1500)
     op.record()
-    pressed = op.now
-    s.console.hold("SB1")
-    on = op.when(lambda st: st.HL1, after=pressed, timeout=LONG_PRESS + 1.0)
-    if on is None:
-        c.fail("G7", "HL1=1 (program reset) 3.0 s after SB1 is pressed, while it is held",
-               f"HL1 still 0 after holding SB1 {LONG_PRESS + 1:g} s", pressed + LONG_PRESS)
-        op.run_until(pressed + LONG_PRESS + 1.5)
-    else:
-        held = on - pressed
-        c.check("G7", LONG_PRESS - op.tol <= held <= LONG_PRESS + DEBOUNCE + op.tol,
-                "the reset (HL1=1) 3.0 s after SB1 is pressed, while it is held",
-                f"HL1=1 {held:.2f} s after the press", on)
-        op.run_until(pressed + LONG_PRESS + 0.5)
-    released = op.now
-    s.console.release("SB1")
-    op.run(0.5)
-    off = s.trace.first(lambda st: not st.HL1, after=released, default=None)
-    c.check("G7", off is None, "HL1 stays 1 after the release (the release records nothing)",
-            "HL1 went 0: a frame was recorded (or the reset never happened)", off or released)
-    start_auto(op)
-    t = op.press()
-    if quiet(op, "G7", t, QUIET, "after the reset an SB1 press in automatic mode starts nothing",
-             "a frame started: the program was not empty"):
-        c.ok("G7")
-    op.set(SA7=0)
-    op.run(0.2)
+
+
+def sc_basics(s: Session, c: Checks) -> None:
+    """Empty-program lamp, bounce, long-press reset (manual mode, drive 1 only)."""
+    op = Tur10Op.begin(s, c)
+    basics_flow(op, ("G5", "G6", "G7"), record=lambda: record_here(op),
+                record_another=lambda: record_further(op))
 
 
 def sc_automatic(s: Session, c: Checks) -> None:
     """Three frames of drive 1 played continuously, wrapped, stopped and started again."""
-    op = Op(s, c)
-    start_manual(op)
-    frames = teach_three(op)
-    f1, f2, f3 = frames
-    entered = start_auto(op)
+    op = Tur10Op.begin(s, c)
+    f1, f2, f3 = teach_three(op)
+    entered = op.start_auto()
     op.run(0.7)
-    if not quiet(op, "G8", entered, 1.0, "every reference stays 0 on entering automatic mode (SA7 := 1), "
-                 "before any SB1 press", "in automatic mode, before any SB1 press"):
+    if not op.quiet("G8", entered, 1.0, "every reference stays 0 on entering automatic mode (SA7 := 1), "
+                    "before any SB1 press", "in automatic mode, before any SB1 press"):
         return
-    r1 = press_starts(op, "G8", f1, "frame 1", op.press(), frames)
-    r2 = r1 and follow(op, "G8", f2, "frame 2 after frame 1", r1.done, NEXT_WAIT, frames)
-    r3 = r2 and follow(op, "G8", f3, "frame 3 after frame 2", r2.done, NEXT_WAIT, frames)
-    r4 = r3 and follow(op, "G8", f1, "frame 1 after frame 3 (the last)", r3.done, NEXT_WAIT, frames)
+    r1 = op.press_starts("G8", f1, "frame 1", op.press())
+    r2 = r1 and op.follow("G8", f2, "frame 2 after frame 1", r1.done, NEXT_WAIT)
+    r3 = r2 and op.follow("G8", f3, "frame 3 after frame 2", r2.done, NEXT_WAIT)
+    r4 = r3 and op.follow("G8", f1, "frame 1 after frame 3 (the last)", r3.done, NEXT_WAIT)
     if not r4:
         return
     c.ok("G8")
+    stops_on_press(op, f1, r4.done)
 
-    stop: list[float] = []
 
-    def press_during_frame() -> None:
-        op.run(0.2)
-        stop.append(op.press(0.1))
-
-    start = op.when(moving, after=r4.done, timeout=NEXT_WAIT)
+def stops_on_press(op: Tur10Op, f1: Frame, done: float) -> None:
+    """G9: an SB1 press 0.2 s into frame 2 of the second cycle (which follows the frame done at
+    `done`) stops playback; the next press starts frame 1 (and one more stops it again)."""
+    c = op.c
+    start = op.when(moving, after=done, timeout=NEXT_WAIT)
     if start is None:
-        c.fail("G9", "frame 2 (second cycle) starts", "every reference stayed 0", r4.done)
+        c.fail("G9", "frame 2 (second cycle) starts", "every reference stayed 0", done)
         return
-    press_during_frame()
-    pressed = stop[0]
+    op.run(0.2)
+    pressed = op.press(0.1)
     settled = pressed + DEBOUNCE + op.tol
     op.run_until(settled + op.tol)
     refs = op.refs(at=settled)
     if not c.check("G9", not any(refs.values()), f"every reference 0 within 50 ms + one scan of the stop "
                    f"press (SB1 at t = {pressed:.2f} s during frame 2)", fmt_refs(refs), settled):
         return
-    if not quiet(op, "G9", settled, QUIET, "every reference stays 0 after the stop", "execution went on"):
+    if not op.quiet("G9", settled, QUIET, "every reference stays 0 after the stop", "execution went on"):
         return
-    if press_starts(op, "G9", f1, "frame 1 (SB1 pressed again after the stop)", op.press(), frames):
+    if op.press_starts("G9", f1, "frame 1 (SB1 pressed again after the stop)", op.press()):
         c.ok("G9")
     op.press()
-    op.run(0.5)
+    op.run(op.wind_down)
 
 
 def sc_restart(s: Session, c: Checks) -> None:
     """The recorded program survives a PLC restart."""
-    op = Op(s, c)
-    start_manual(op)
-    f1 = op.record()
-    op.jog_to(1, f1.codes[0] + 3000)
-    f2 = op.record()
-    t = op.now
-    s.restart_plc()
-    op.run(0.3)
-    if not c.check("G10", op.hl1() == 0, "HL1=0 after the restart (the program is kept)",
-                   "HL1=1: the program is empty after the restart", t):
-        return
-    start_auto(op)
-    r1 = press_starts(op, "G10", f1, "frame 1 after the restart", op.press(), [f1, f2])
-    if r1 and follow(op, "G10", f2, "frame 2 after the restart", r1.done, NEXT_WAIT, [f1, f2]):
-        c.ok("G10")
-    op.press()
-    op.run(0.5)
+    op = Tur10Op.begin(s, c)
+    f1, f2 = teach_two(op)
+    if restart_flow(op, "G10", f1, f2, off_time=0.0):
+        op.press()
+        op.run(op.wind_down)
 
 
 def sc_timeout(s: Session, c: Checks) -> None:
     """A dead sensor 1 (stuck 30 codes past frame 1): the frame times out after 20 s."""
-    op = Op(s, c)
-    start_manual(op)
-    f1 = op.record()
-    op.jog_to(1, f1.codes[0] + 3000)
-    op.record()
+    op = Tur10Op.begin(s, c)
+    f1, _ = teach_two(op)
     s.inject("dead_sensor", axis=1, value=f1.codes[0] + 30)
-    start_auto(op)
+    op.start_auto()
     pressed = op.press()
     start = op.when(moving, after=pressed, timeout=DEBOUNCE + 1.0)
     if start is None:
@@ -535,27 +425,21 @@ def sc_timeout(s: Session, c: Checks) -> None:
     if not c.check("G11", len(blinks) >= 2, "HL1 blinks after the timeout",
                    f"HL1 changed {len(blinks)} time(s) in 2 s", stop):
         return
-    if quiet(op, "G11", stop + op.tol, QUIET + 1.0, "execution stays stopped after the timeout "
-             "(every reference 0)", "a reference came back"):
+    if op.quiet("G11", stop + op.tol, QUIET + 1.0, "execution stays stopped after the timeout "
+                "(every reference 0)", "a reference came back"):
         c.ok("G11")
     s.clear_faults()
-    op.set(SA7=0)
-    op.run(0.5)
+    op.back_to_manual()
 
 
 GENERAL = (
-    Requirement("G1", "The program runs without a PLC fault (division by zero, array index out of "
-                "range, scan watchdog).", EVERY),
+    NO_FAULT,
     Requirement("G2", "Never an overvoltage: no speed reference DRIVE1..DRIVE5 beyond +/-1500 (a larger "
                 "DAC code damages the drive).", EVERY),
     Requirement("G3", "Never a bus contention: at most one read enable RE1..RE5 is OFF at a time (one "
                 "sensor on the bus).", EVERY),
     Requirement("G4", "Never a collision: no link is driven into a mechanical stop.", EVERY),
-    Requirement("G5", "HL1 is ON while the program is empty (at power-up) and OFF once a frame is "
-                "recorded with a short SB1 press.", "basics"),
-    Requirement("G6", "A press of SB1 shorter than 50 ms is contact bounce: it records nothing.", "basics"),
-    Requirement("G7", "Holding SB1 resets the program at 3.0 s, while it is still held (HL1 ON); the "
-                "release records nothing and a start then finds the program empty.", "basics"),
+    *lamp_requirements("G5", "G6", "G7"),
     Requirement("G8", "Automatic mode (SA7 = 1): entering it moves nothing; an SB1 press starts frame 1; "
                 "each frame brings the links to within 16 codes of the recorded positions with every "
                 "reference back to 0; the frames follow in order and frame 1 follows the last.",
@@ -579,7 +463,7 @@ def selected_alone(k: int) -> Callable[[Any], bool]:
     return lambda st: not st[ENABLES[k - 1]] and all(st[e] for e in ENABLES if e != ENABLES[k - 1])
 
 
-def sensors_read(op: Op, rid: str, after: float, until: float) -> bool:
+def sensors_read(op: Tur10Op, rid: str, after: float, until: float) -> bool:
     """Every sensor selected alone at least once in [after, until]."""
     tr = op.s.trace
     for k in AXES:
@@ -598,7 +482,7 @@ def sensors_read(op: Op, rid: str, after: float, until: float) -> bool:
     return True
 
 
-def jog_check(op: Op, k: int, direction: int, low: bool) -> None:
+def jog_check(op: Tur10Op, k: int, direction: int, low: bool) -> None:
     """Hold one button of drive k: its reference, its motion, the other drives, the release."""
     c = op.c
     rid = "T1.1" if low else "T1.2"
@@ -615,7 +499,7 @@ def jog_check(op: Op, k: int, direction: int, low: bool) -> None:
     if c.check(rid, got == want, f"{what}: DRIVE{k} = {fmt_ref(want)} within one scan",
                f"DRIVE{k} = {fmt_ref(got)}" + (f" (drive {k} is not jogged)" if got == 0 else ""), t):
         change = op.s.trace.next_change(DRIVES[k - 1], after=t + op.tol + EPS, until=released - EPS,
-                                              default=None)
+                                        default=None)
         if change is not None:
             c.fail(rid, f"{what}: DRIVE{k} stays {fmt_ref(want)} while the button is held",
                    f"DRIVE{k} = {fmt_ref(op.ref(k, change))}", change)
@@ -640,7 +524,7 @@ def jog_check(op: Op, k: int, direction: int, low: bool) -> None:
             f"DRIVE{k} = {fmt_ref(zero)}", released)
 
 
-def both_check(op: Op, k: int) -> None:
+def both_check(op: Tur10Op, k: int) -> None:
     """Both buttons of drive k held: reference 0, the link stands still."""
     fwd, bwd = f"SA{k}_FWD", f"SA{k}_BWD"
     op.set(SA6=0)
@@ -661,8 +545,7 @@ def both_check(op: Op, k: int) -> None:
 
 def sc_jog(s: Session, c: Checks) -> None:
     """Every drive jogged both ways at both speeds, then with both buttons."""
-    op = Op(s, c)
-    start_manual(op)
+    op = Tur10Op.begin(s, c)
     op.run(READ_WINDOW)
     refs = op.refs()
     c.check("T1.3", not any(refs.values()), "every reference 0 in manual mode with no button held",
@@ -702,143 +585,55 @@ TASK1 = (
 def sc_pauses(s: Session, c: Checks) -> None:
     """Frame 1 recorded with I1.5 = 1 (3 s), frame 2 with I1.5 = 0 (0.5 s); a cycle with
     I1.5 = 1, then a cycle during which I1.5 is 0 (frame 1) and 1 again (frame 2)."""
-    op = Op(s, c)
-    start_manual(op)
-    f1 = op.record(i15=1)
-    op.jog_to(1, f1.codes[0] + 3000)
-    f2 = op.record(i15=0)
-    frames = [f1, f2]
-    start_auto(op)
-    r1 = press_starts(op, "T2.2", f1, "frame 1", op.press(), frames)
-    r2 = r1 and follow(op, "T2.2", f2, "frame 2", r1.done, NEXT_WAIT, frames)
-    if not r1 or not r2:
-        return
-    p1 = r2.start - r1.done
-    if c.check("T2.2", abs(p1 - PAUSE_LONG) <= op.tol,
-               "a 3.0 s pause after frame 1 (recorded with I1.5 = 1)", f"{p1:.2f} s", r1.done):
-        c.ok("T2.2")
-    r3 = follow(op, "T2.1", f1, "frame 1 after frame 2", r2.done, NEXT_WAIT, frames,
-                on_start=lambda: op.set(I15=0))
-    if not r3:
-        return
-    p2 = r3.start - r2.done
-    if c.check("T2.1", abs(p2 - PAUSE_SHORT) <= op.tol,
-               "a 0.5 s pause after frame 2 (recorded with I1.5 = 0)", f"{p2:.2f} s", r2.done):
-        c.ok("T2.1")
-    r4 = follow(op, "T2.3", f2, "frame 2 (second cycle)", r3.done, NEXT_WAIT, frames,
-                on_start=lambda: op.set(I15=1))
-    if not r4:
-        return
-    p3 = r4.start - r3.done
-    if not c.check("T2.3", abs(p3 - p1) <= op.tol, f"the pause after frame 1 is {p1:.2f} s as in the first "
-                   "cycle although I1.5 is now 0", f"{p3:.2f} s", r3.done):
-        return
-    r5 = follow(op, "T2.3", f1, "frame 1 (third cycle)", r4.done, NEXT_WAIT, frames)
-    if not r5:
-        return
-    p4 = r5.start - r4.done
-    if c.check("T2.3", abs(p4 - p2) <= op.tol, f"the pause after frame 2 is {p2:.2f} s as in the first "
-               "cycle although I1.5 is now 1", f"{p4:.2f} s", r4.done):
-        c.ok("T2.3")
-    op.press()
-    op.run(0.5)
+    op = Tur10Op.begin(s, c)
+    pauses_flow(op, *teach_two(op, first_i15=1, second_i15=0))
 
 
-TASK2 = (
-    Requirement("T2.1", "A frame recorded with I1.5 = 0 is followed by a 0.5 s pause (from the frame being "
-                "reached, every reference back to 0 with the links within 16 codes, to the next frame's "
-                "first nonzero reference).", "pauses"),
-    Requirement("T2.2", "A frame recorded with I1.5 = 1 is followed by a 3.0 s pause.", "pauses"),
-    Requirement("T2.3", "I1.5 changes nothing in automatic mode: switched during execution, every frame "
-                "keeps the pause recorded with it.", "pauses"),
-)
+TASK2 = task2_requirements("I1.5", "from the frame being reached, every reference back to 0 with the links "
+                           "within 16 codes, to the next frame's first nonzero reference")
 
 
 # --------------------------------------------------------------------------- Task 3
 
-def sc_enable(s: Session, c: Checks) -> None:
-    """Three frames; start refused / accepted, wrap with I1.5 = 1, I1.5 dropped in frame 2."""
-    op = Op(s, c)
-    start_manual(op)
-    frames = teach_three(op)
-    start_auto(op, i15=0)
+def refused_start(op: Tur10Op) -> None:
+    """T3.1: an SB1 press with I1.5 = 0 starts nothing (no nonzero reference). A program that
+    starts is stopped in manual mode before the enabled start."""
     pressed = op.press(0.1)
     started = op.when(moving, after=pressed, timeout=QUIET)
     if started is None:
-        c.ok("T3.1")
-    else:
-        c.fail("T3.1", "an SB1 press with I1.5 = 0 starts nothing",
-               f"the program started: {fmt_refs(op.refs(at=started))} {started - pressed:.2f} s after the "
-               "press", started)
-        op.run(0.1)                         # the release is seen in automatic mode (no record)
-        op.set(SA7=0)                       # manual mode stops it
-        op.run(0.5)
-        start_auto(op, i15=0)
-    op.set(I15=1)
-    op.run(0.3)
-    run = press_starts(op, "T3.2", frames[0], "frame 1 (SB1 pressed with I1.5 = 1)", op.press(), frames)
-    if run is None:
+        op.c.ok("T3.1")
         return
-    c.ok("T3.2")
-    for k in (1, 2):
-        run = follow(op, "T3.3", frames[k], f"frame {k + 1}", run.done, NEXT_WAIT, frames)
-        if run is None:
-            return
-    run = follow(op, "T3.3", frames[0], "frame 1 after frame 3 (I1.5 = 1)", run.done, NEXT_WAIT, frames)
-    if run is None:
-        return
-    c.ok("T3.3")
-    dropped: list[float] = []
-    run = follow(op, "T3.4", frames[1], "frame 2 (second cycle; I1.5 dropped to 0 as it starts)",
-                 run.done, NEXT_WAIT, frames, on_start=lambda: dropped.append(op.set(I15=0)))
-    if run is None:
-        return
-    run = follow(op, "T3.4", frames[2], f"frame 3 (the last; I1.5 dropped to 0 at t = {dropped[0]:.2f} s)",
-                 run.done, NEXT_WAIT, frames)
-    if run is None:
-        return
-    c.ok("T3.4")
-    if not quiet(op, "T3.5", run.done, PAUSE_LONG + QUIET, "no frame starts after frame 3 (the last) and "
-                 "its pause, I1.5 being 0", "execution went on to frame 1"):
-        c.fail("T3.6", "", "not checked: execution did not stop after the last frame (see T3.5)", None)
-        return
-    c.ok("T3.5")
-    if not quiet(op, "T3.6", op.press(), QUIET, "after the stop, an SB1 press with I1.5 = 0 starts nothing",
-                 "the program started"):
-        return
-    if not quiet(op, "T3.6", op.set(I15=1), QUIET, "after the stop, I1.5 = 1 alone (no press) starts "
-                 "nothing", "the program started"):
-        return
-    if press_starts(op, "T3.6", frames[0], "frame 1 (a new start: SB1 with I1.5 = 1)", op.press(), frames):
-        c.ok("T3.6")
-    op.set(SA7=0)
+    op.c.fail("T3.1", "an SB1 press with I1.5 = 0 starts nothing",
+              f"the program started: {fmt_refs(op.refs(at=started))} {started - pressed:.2f} s after the "
+              "press", started)
+    op.run(0.1)                         # the release is seen in automatic mode (no record)
+    op.set(SA7=0)                       # manual mode stops it
     op.run(0.5)
+    op.start_auto(enable=0)
 
 
-TASK3 = (
-    Requirement("T3.1", "Automatic mode: an SB1 press with I1.5 = 0 starts nothing.", "enable"),
-    Requirement("T3.2", "An SB1 press with I1.5 = 1 starts frame 1.", "enable"),
-    Requirement("T3.3", "With I1.5 = 1 the frames run in order and frame 1 follows the last frame and its "
-                "pause.", "enable"),
-    Requirement("T3.4", "I1.5 dropped to 0 during frame 2: frame 2 and the remaining frame 3 (the last) "
-                "still run to completion.", "enable"),
-    Requirement("T3.5", "Then, after the last frame and its pause, no transition to frame 1: execution "
-                "stops there (every reference 0).", "enable"),
-    Requirement("T3.6", "After that stop nothing restarts by itself, on a press with I1.5 = 0 or on I1.5 = 1 "
-                "alone; an SB1 press with I1.5 = 1 starts again from frame 1.", "enable"),
-)
+def second_cycle(k: int, dropped: Optional[float]) -> str:
+    """Frame k's label in the cycle during which I1.5 drops (as frame 2 starts)."""
+    if dropped is None:
+        return "frame 2 (second cycle; I1.5 dropped to 0 as it starts)"
+    return f"frame {k} (the last; I1.5 dropped to 0 at t = {dropped:.2f} s)"
+
+
+def sc_enable(s: Session, c: Checks) -> None:
+    """Three frames; start refused / accepted, wrap with I1.5 = 1, I1.5 dropped in frame 2."""
+    op = Tur10Op.begin(s, c)
+    enable_flow(op, teach_three(op), lambda: refused_start(op), second_cycle)
+
+
+TASK3 = task3_requirements("I1.5", remaining="frame 3 (the last)",
+                           stops="execution stops there (every reference 0)",
+                           restarts="by itself, on a press with I1.5 = 0 or on I1.5 = 1 alone")
 
 
 # --------------------------------------------------------------------------- registration
 
-def _set(task: str, requirements: tuple[Requirement, ...], scenarios: tuple[Scenario, ...]) -> RequirementSet:
-    return register(RequirementSet(
-        stand="tur10", task=task,
-        title=f"{STAND.title}, {STAND.variants[task].doc}",
-        requirements=requirements + GENERAL, scenarios=scenarios + GENERAL_SCENARIOS,
-        make_session=make_session, every=(no_fault, no_overvoltage, no_contention, no_collision)))
-
-
-_set("task1", TASK1, (Scenario("jog", sc_jog),))
-_set("task2", TASK2, (Scenario("pauses", sc_pauses),))
-_set("task3", TASK3, (Scenario("enable", sc_enable),))
+register_tasks(STAND, {
+    "task1": (TASK1, (Scenario("jog", sc_jog),)),
+    "task2": (TASK2, (Scenario("pauses", sc_pauses),)),
+    "task3": (TASK3, (Scenario("enable", sc_enable),)),
+}, GENERAL, GENERAL_SCENARIOS, make_session, every=(no_fault, no_overvoltage, no_contention, no_collision))

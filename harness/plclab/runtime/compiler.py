@@ -726,7 +726,10 @@ def _inline_conversion(name: str, arg_types: list, result: Optional[T.Type], cod
     """Conversions that need no code at run time (on the hot path of every scan): an integer
     widened to a type that holds all its values, BOOL to an integer, a <= 16-bit integer to
     REAL or a <= 32-bit one to LREAL (exact in the float). Everything else calls the library."""
-    if "_TO_" not in name or len(codes) != 1 or len(arg_types) != 1:
+    if len(codes) != 1 or len(arg_types) != 1 or name.count("_TO_") != 1:
+        return None
+    src_name, dst_name = name.split("_TO_")
+    if src_name not in T.ELEMENTARY or dst_name not in T.ELEMENTARY:   # e.g. USINT_TO_BCD: not a cast
         return None
     src, dst = T.base_of(arg_types[0]), T.base_of(result) if result is not None else None
     if not isinstance(src, T.ElementaryType) or not isinstance(dst, T.ElementaryType):

@@ -1,0 +1,69 @@
+"""Helpers shared by tests/grader/test_grader_*.py: a stand's wrong-solution fixtures and the
+checks every stand's grade reports must pass.
+
+Imported by the test files after putting this directory on sys.path (the suite has no
+conftest.py and no package __init__), like tests/runtime/st_helpers.py.
+"""
+from __future__ import annotations
+
+import re
+from pathlib import Path
+from typing import Sequence
+
+from plclab.grader import GradeReport
+
+FIXTURES_DIR = Path(__file__).resolve().parent / "fixtures"
+HEADER = re.compile(r"plclab grader fixture: (task\d), expected to FAIL (\S+)\. Mistake: (.*)")
+TASKS = ("task1", "task2", "task3")
+
+
+def failed_ids(report: GradeReport) -> list[str]:
+    return [r.id for r in report.failed()]
+
+
+def fixtures(stand: str) -> list[tuple[str, str, str]]:
+    """(file name, task, the requirement that must fail) of each wrong solution in
+    fixtures/<stand>, as its first line says."""
+    out = []
+    for path in sorted((FIXTURES_DIR / stand).glob("*.st")):
+        m = HEADER.search(path.read_text(encoding="utf-8").splitlines()[0])
+        assert m, f"{path.name}: first line must say which task and requirement"
+        out.append((path.name, m.group(1), m.group(2)))
+    return out
+
+
+def fixtures_per_task(stand: str) -> dict[str, list[str]]:
+    return {task: [name for name, t, _ in fixtures(stand) if t == task] for task in TASKS}
+
+
+def assert_fails_exactly(report: GradeReport, rids: list[str]) -> None:
+    """The program runs but fails exactly the requirements `rids`, each row saying what it saw."""
+    assert not report.passed and report.exit_code == 1
+    assert failed_ids(report) == rids, report.text()
+    for row in report.failed():
+        assert row.observed
+    assert "FAIL" in report.text()
+
+
+def assert_fails_with(report: GradeReport, rid: str) -> None:
+    """A wrong solution runs and fails `rid` with a row that says why: what was expected, what
+    was seen instead and when (not a requirement left unchecked)."""
+    assert not report.passed and report.exit_code == 1
+    assert not report.errors, report.errors
+    assert rid in failed_ids(report), report.text()
+    row = report.row(rid)
+    assert row.expected and row.observed and row.time is not None, row
+    assert not row.observed.startswith("not checked")
+
+
+def trace_csvs(report: GradeReport, out: Path, scenarios: Sequence[str]) -> dict[str, str]:
+    """Each scenario wrote a CSV and a VCD trace to `out`, named in the report; their CSV texts."""
+    texts = {}
+    for scenario in scenarios:
+        csv = out / f"{report.stand}-{report.task}-{scenario}.csv"
+        vcd = out / f"{report.stand}-{report.task}-{scenario}.vcd"
+        texts[scenario] = csv.read_text(encoding="utf-8")
+        assert texts[scenario].startswith("time_s,name,value\n")
+        assert vcd.read_text(encoding="utf-8").startswith("$")
+        assert report.traces[scenario] == [csv, vcd]
+    return texts
