@@ -56,8 +56,9 @@ def assert_fails_with(report: GradeReport, rid: str) -> None:
     assert not row.observed.startswith("not checked")
 
 
-def trace_csvs(report: GradeReport, out: Path, scenarios: Sequence[str]) -> dict[str, str]:
-    """Each scenario wrote a CSV and a VCD trace to `out`, named in the report; their CSV texts."""
+def assert_traces_written(report: GradeReport, out: Path, scenarios: Sequence[str]) -> dict[str, str]:
+    """Each scenario wrote a CSV and a VCD trace to `out`, as the report names them; returns the
+    CSV texts by scenario (for a stand's own checks of what is traced)."""
     texts = {}
     for scenario in scenarios:
         csv = out / f"{report.stand}-{report.task}-{scenario}.csv"

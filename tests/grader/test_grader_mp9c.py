@@ -14,13 +14,14 @@ from pathlib import Path
 import pytest
 
 sys.path.insert(0, str(Path(__file__).resolve().parent))
+pytest.register_assert_rewrite("grader_helpers")      # its asserts report like the tests' own
 
 from plclab.errors import PlcLabError  # noqa: E402
 from plclab.grader import GradeReport, Row, grade, grade_sources, requirement_table, tasks  # noqa: E402
 from plclab.stands import bundle, sources  # noqa: E402
 from plclab.stands.mp9c import STAND  # noqa: E402
 from grader_helpers import (FIXTURES_DIR, TASKS, assert_fails_exactly, assert_fails_with,  # noqa: E402
-                            fixtures, fixtures_per_task, trace_csvs)
+                            assert_traces_written, fixtures, fixtures_per_task)
 
 FIXTURES = FIXTURES_DIR / "mp9c"
 DIAGNOSTIC = re.compile(r"^.+:\d+:\d+: error: .+$")
@@ -47,7 +48,7 @@ def test_reference_solution_passes_its_task(task, tmp_path):
     assert report.exit_code == 0
     assert all(r.passed for r in report.rows)
     assert [r.id for r in report.rows][0] == f"T{task[-1]}.1"
-    trace_csvs(report, out, SCENARIOS[task] + GENERAL_SCENARIOS)
+    assert_traces_written(report, out, SCENARIOS[task] + GENERAL_SCENARIOS)
 
 
 @pytest.mark.parametrize("task", TASKS)

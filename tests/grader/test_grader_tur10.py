@@ -15,13 +15,14 @@ from pathlib import Path
 import pytest
 
 sys.path.insert(0, str(Path(__file__).resolve().parent))
+pytest.register_assert_rewrite("grader_helpers")      # its asserts report like the tests' own
 
 from plclab.grader import GradeReport, grade, grade_sources, requirement_table, tasks  # noqa: E402
 from plclab.grader.tur10 import POS, make_session  # noqa: E402
 from plclab.stands import bundle, sources  # noqa: E402
 from plclab.stands.tur10 import STAND  # noqa: E402
 from grader_helpers import (FIXTURES_DIR, TASKS, assert_fails_exactly, assert_fails_with,  # noqa: E402
-                            fixtures, fixtures_per_task, trace_csvs)
+                            assert_traces_written, fixtures, fixtures_per_task)
 
 FIXTURES = FIXTURES_DIR / "tur10"
 SCENARIOS = {"task1": ("jog",), "task2": ("pauses",), "task3": ("enable",)}
@@ -47,7 +48,8 @@ def test_reference_solution_passes_its_task(task, tmp_path):
     assert report.exit_code == 0
     ids = [r.id for r in report.rows]
     assert ids[0] == f"T{task[-1]}.1" and ids[-len(GENERAL_IDS):] == GENERAL_IDS
-    for text in trace_csvs(report, out, SCENARIOS[task] + GENERAL_SCENARIOS).values():
+    csvs = assert_traces_written(report, out, SCENARIOS[task] + GENERAL_SCENARIOS)
+    for text in csvs.values():
         assert "\n0,plant.pos1,16000\n" in text and ",%QW0," in text      # links next to references
 
 

@@ -306,35 +306,36 @@ def pauses_flow(op: Op[F], first: F, second: F, start_checked: bool = True) -> N
     r2 = r1 and op.follow("T2.2", second, "frame 2", r1.done, NEXT_WAIT)
     if not r1 or not r2:
         return
-    p1 = r2.start - r1.done
-    if c.check("T2.2", abs(p1 - PAUSE_LONG) <= op.tol,
-               f"a 3.0 s pause after frame 1 (recorded with {name} = 1)", f"{p1:.2f} s", r1.done):
+    if _paused(op, "T2.2", r1, r2, PAUSE_LONG, f"a 3.0 s pause after frame 1 (recorded with {name} = 1)"):
         c.ok("T2.2")
     r3 = op.follow("T2.1", first, "frame 1 after frame 2", r2.done, NEXT_WAIT,
                    on_start=lambda: op.set_enable(0))
     if not r3:
         return
-    p2 = r3.start - r2.done
-    if c.check("T2.1", abs(p2 - PAUSE_SHORT) <= op.tol,
-               f"a 0.5 s pause after frame 2 (recorded with {name} = 0)", f"{p2:.2f} s", r2.done):
+    if _paused(op, "T2.1", r2, r3, PAUSE_SHORT, f"a 0.5 s pause after frame 2 (recorded with {name} = 0)"):
         c.ok("T2.1")
     r4 = op.follow("T2.3", second, "frame 2 (second cycle)", r3.done, NEXT_WAIT,
                    on_start=lambda: op.set_enable(1))
     if not r4:
         return
-    p3 = r4.start - r3.done
-    if not c.check("T2.3", abs(p3 - p1) <= op.tol, f"the pause after frame 1 is {p1:.2f} s as in the first "
-                   f"cycle although {name} is now 0", f"{p3:.2f} s", r3.done):
+    p1, p2 = r2.start - r1.done, r3.start - r2.done
+    if not _paused(op, "T2.3", r3, r4, p1, f"the pause after frame 1 is {p1:.2f} s as in the first cycle "
+                   f"although {name} is now 0"):
         return
     r5 = op.follow("T2.3", first, "frame 1 (third cycle)", r4.done, NEXT_WAIT)
     if not r5:
         return
-    p4 = r5.start - r4.done
-    if c.check("T2.3", abs(p4 - p2) <= op.tol, f"the pause after frame 2 is {p2:.2f} s as in the first "
-               f"cycle although {name} is now 1", f"{p4:.2f} s", r4.done):
+    if _paused(op, "T2.3", r4, r5, p2, f"the pause after frame 2 is {p2:.2f} s as in the first cycle "
+               f"although {name} is now 1"):
         c.ok("T2.3")
     op.press()
     op.run(op.wind_down)
+
+
+def _paused(op: Op[Any], rid: str, before: FrameRun, after: FrameRun, seconds: float, expected: str) -> bool:
+    """The pause from `before` done to `after` starting lasts `seconds` (+/- one scan)."""
+    pause = after.start - before.done
+    return op.c.check(rid, abs(pause - seconds) <= op.tol, expected, f"{pause:.2f} s", before.done)
 
 
 # --------------------------------------------------------------------------- Task 3
@@ -358,11 +359,11 @@ def task3_requirements(enable: str, remaining: str, stops: str, restarts: str) -
 
 
 def enable_flow(op: Op[F], frames: Sequence[F], refused_start: Callable[[], None],
-                second_cycle: Callable[[int, Optional[float]], str]) -> None:
+                dropped_labels: tuple[str, str]) -> None:
     """Task 3 on the taught `frames` (three or more). `refused_start` checks T3.1 (an SB1 press
-    in automatic mode with the input at 0) and leaves the program waiting for a start; the
-    second cycle drops the input as frame 2 starts, `second_cycle(k, dropped)` labelling its
-    frame k (`dropped`: when the input went to 0, None for frame 2 itself)."""
+    in automatic mode with the input at 0) and leaves the program waiting for a start. The
+    second cycle drops the input as frame 2 starts; `dropped_labels` name its frame 2 and, as
+    templates of `k` and `dropped` (when the input went to 0), its frames k = 3..."""
     c, name, n = op.c, op.enable_label, len(frames)
     op.start_auto(enable=0)
     refused_start()
@@ -381,12 +382,13 @@ def enable_flow(op: Op[F], frames: Sequence[F], refused_start: Callable[[], None
         return
     c.ok("T3.3")
     dropped: list[float] = []
-    run = op.follow("T3.4", frames[1], second_cycle(2, None), run.done, NEXT_WAIT,
+    frame2, later = dropped_labels
+    run = op.follow("T3.4", frames[1], frame2, run.done, NEXT_WAIT,
                     on_start=lambda: dropped.append(op.set_enable(0)))
     for k in range(2, n):
         if run is None:
             return
-        run = op.follow("T3.4", frames[k], second_cycle(k + 1, dropped[0]), run.done, NEXT_WAIT)
+        run = op.follow("T3.4", frames[k], later.format(k=k + 1, dropped=dropped[0]), run.done, NEXT_WAIT)
     if run is None:
         return
     c.ok("T3.4")

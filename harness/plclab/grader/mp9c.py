@@ -450,19 +450,13 @@ def refused_start(op: Mp9cOp) -> None:
     op.run(0.3)
 
 
-def second_cycle(k: int, dropped: Optional[float]) -> str:
-    """Frame k's label in the cycle during which I0.7 drops (as frame 2 starts)."""
-    if dropped is None:
-        return "frame 2 (second cycle)"
-    return f"frame {k} (I0.7 dropped to 0 at t = {dropped:.2f} s)"
-
-
 def sc_enable(s: Session, c: Checks) -> None:
     """Four lift frames; start refused / accepted, wrap with I0.7 = 1, I0.7 dropped in frame 2."""
     op = Mp9cOp.begin(s, c)
     frames = [DOWN, UP, DOWN, UP]
     teach(op, frames)
-    enable_flow(op, frames, lambda: refused_start(op), second_cycle)
+    enable_flow(op, frames, lambda: refused_start(op),
+                ("frame 2 (second cycle)", "frame {k} (I0.7 dropped to 0 at t = {dropped:.2f} s)"))
 
 
 TASK3 = task3_requirements("I0.7", remaining="frames 3 and 4", stops="execution stops there",

@@ -612,17 +612,12 @@ def refused_start(op: Tur10Op) -> None:
     op.start_auto(enable=0)
 
 
-def second_cycle(k: int, dropped: Optional[float]) -> str:
-    """Frame k's label in the cycle during which I1.5 drops (as frame 2 starts)."""
-    if dropped is None:
-        return "frame 2 (second cycle; I1.5 dropped to 0 as it starts)"
-    return f"frame {k} (the last; I1.5 dropped to 0 at t = {dropped:.2f} s)"
-
-
 def sc_enable(s: Session, c: Checks) -> None:
     """Three frames; start refused / accepted, wrap with I1.5 = 1, I1.5 dropped in frame 2."""
     op = Tur10Op.begin(s, c)
-    enable_flow(op, teach_three(op), lambda: refused_start(op), second_cycle)
+    enable_flow(op, teach_three(op), lambda: refused_start(op),
+                ("frame 2 (second cycle; I1.5 dropped to 0 as it starts)",
+                 "frame {k} (the last; I1.5 dropped to 0 at t = {dropped:.2f} s)"))
 
 
 TASK3 = task3_requirements("I1.5", remaining="frame 3 (the last)",

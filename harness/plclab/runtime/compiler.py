@@ -29,8 +29,7 @@ from plclab.frontend import ast as A
 from plclab.frontend.checker import CheckedUnit, EnumValue, _LitType
 from plclab.frontend.stdsigs import FBSig
 from plclab.iec import types as T
-from plclab.runtime import stdlib
-from plclab.runtime import stdfb
+from plclab.runtime import stdfb, stdlib
 from plclab.runtime.faults import PlcFault
 
 
@@ -110,7 +109,6 @@ class Compiler:
     def __init__(self, checked: CheckedUnit):
         self.cu = checked
         self.out = _Emitter()
-        self.consts: dict[str, Any] = {}
         self.const_ids: dict[int, str] = {}
         self.ns: dict[str, Any] = {
             "_bound": _bound, "_cmod": _cmod, "_store_into": _store_into,
@@ -136,7 +134,6 @@ class Compiler:
             name = f"_k{len(self.const_ids)}"
             self.const_ids[key] = name
             self.ns[name] = value
-            self.consts[name] = value
         return self.const_ids[key]
 
     def init_code(self, value: Any) -> str:
@@ -674,8 +671,6 @@ class Compiler:
         default = self.const(T.default_value(c.ty)) if c.ty is not None else "None"
         call = f"({code} if _en else {default})"
         if eno is not None:
-            setter = self.bind(None, "_eno")
-            self.ns[setter] = None
             target = self.ref_to(eno.value, T.BOOL)
             return f"(lambda _en: ({target}.set(_en), {call})[1])({en_code})"
         return f"(lambda _en: {call})({en_code})"
