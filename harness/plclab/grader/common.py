@@ -124,8 +124,13 @@ class Op(ABC, Generic[F]):
         return t
 
     def back_to_manual(self) -> None:
-        """The last step of a scenario: manual mode, and the stand run on to show the stop."""
+        """A scenario's last step: manual mode, and the stand run on to show the stop."""
         self.set(**{self.auto: 0})
+        self.run(self.wind_down)
+
+    def stop_playback(self) -> None:
+        """A scenario's last step: an SB1 press stops playback, and the stand runs on to show it."""
+        self.press()
         self.run(self.wind_down)
 
     # ----------------------------------------------------------------- stand hooks
@@ -328,8 +333,7 @@ def pauses_flow(op: Op[F], first: F, second: F, start_checked: bool = True) -> N
     if _paused(op, "T2.3", r4, r5, p2, f"the pause after frame 2 is {p2:.2f} s as in the first cycle "
                f"although {name} is now 1"):
         c.ok("T2.3")
-    op.press()
-    op.run(op.wind_down)
+    op.stop_playback()
 
 
 def _paused(op: Op[Any], rid: str, before: FrameRun, after: FrameRun, seconds: float, expected: str) -> bool:

@@ -402,8 +402,7 @@ def sc_playback(s: Session, c: Checks) -> None:
             return
         since = run.done
     c.ok("T1.5")
-    op.press()
-    op.run(op.wind_down)
+    op.stop_playback()
 
 
 TASK1 = (

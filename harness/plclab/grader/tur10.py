@@ -390,8 +390,7 @@ def stops_on_press(op: Tur10Op, f1: Frame, done: float) -> None:
         return
     if op.press_starts("G9", f1, "frame 1 (SB1 pressed again after the stop)", op.press()):
         c.ok("G9")
-    op.press()
-    op.run(op.wind_down)
+    op.stop_playback()
 
 
 def sc_restart(s: Session, c: Checks) -> None:
@@ -399,8 +398,7 @@ def sc_restart(s: Session, c: Checks) -> None:
     op = Tur10Op.begin(s, c)
     f1, f2 = teach_two(op)
     if restart_flow(op, "G10", f1, f2, off_time=0.0):
-        op.press()
-        op.run(op.wind_down)
+        op.stop_playback()
 
 
 def sc_timeout(s: Session, c: Checks) -> None:
