@@ -368,35 +368,49 @@ def enable_flow(op: Op[F], frames: Sequence[F], refused_start: Callable[[], None
     in automatic mode with the input at 0) and leaves the program waiting for a start. The
     second cycle drops the input as frame 2 starts; `dropped_labels` name its frame 2 and, as
     templates of `k` and `dropped` (when the input went to 0), its frames k = 3..."""
-    c, name, n = op.c, op.enable_label, len(frames)
     op.start_auto(enable=0)
     refused_start()
     op.set_enable(1)
     op.run(0.3)
+    run = _enabled_cycle(op, frames)
+    run = run and _dropped_cycle(op, frames, run, dropped_labels)
+    if run:
+        _stops_after_last(op, frames, run.done)
+
+
+def _enabled_cycle(op: Op[F], frames: Sequence[F]) -> Optional[FrameRun]:
+    """T3.2 and T3.3: with the input at 1 an SB1 press starts frame 1, the frames run in order
+    and frame 1 follows the last; that frame 1's run, or None."""
+    c, name, n = op.c, op.enable_label, len(frames)
     run = op.press_starts("T3.2", frames[0], f"frame 1 (SB1 pressed with {name} = 1)", op.press())
     if run is None:
-        return
+        return None
     c.ok("T3.2")
     for k in range(1, n):
         run = op.follow("T3.3", frames[k], f"frame {k + 1}", run.done, NEXT_WAIT)
         if run is None:
-            return
+            return None
     run = op.follow("T3.3", frames[0], f"frame 1 after frame {n} ({name} = 1)", run.done, NEXT_WAIT)
-    if run is None:
-        return
-    c.ok("T3.3")
+    if run is not None:
+        c.ok("T3.3")
+    return run
+
+
+def _dropped_cycle(op: Op[F], frames: Sequence[F], first: FrameRun,
+                   labels: tuple[str, str]) -> Optional[FrameRun]:
+    """T3.4: the input dropped to 0 as frame 2 starts (after `first`, frame 1's run), frames 2
+    to the last still run; the last frame's run, or None."""
     dropped: list[float] = []
-    frame2, later = dropped_labels
-    run = op.follow("T3.4", frames[1], frame2, run.done, NEXT_WAIT,
+    frame2, later = labels
+    run = op.follow("T3.4", frames[1], frame2, first.done, NEXT_WAIT,
                     on_start=lambda: dropped.append(op.set_enable(0)))
-    for k in range(2, n):
+    for k in range(2, len(frames)):
         if run is None:
-            return
+            return None
         run = op.follow("T3.4", frames[k], later.format(k=k + 1, dropped=dropped[0]), run.done, NEXT_WAIT)
-    if run is None:
-        return
-    c.ok("T3.4")
-    _stops_after_last(op, frames, run.done)
+    if run is not None:
+        op.c.ok("T3.4")
+    return run
 
 
 def _stops_after_last(op: Op[F], frames: Sequence[F], done: float) -> None:
