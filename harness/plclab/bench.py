@@ -24,7 +24,10 @@ def bench_program(path: Path, sim_seconds: float = 20.0, sources=None, plant_fac
     from plclab.runtime.plc import PLC
     from plclab.runtime.sim import Simulation
 
+    import gc
+
     checked = check_sources(sources) if sources is not None else load_files([path])
+    gc.collect()          # no collection of earlier benchmarks' garbage inside the timed runs
     best = None
     for _ in range(3):
         plc = PLC(compile_unit(checked))
