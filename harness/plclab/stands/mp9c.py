@@ -161,6 +161,16 @@ def start_automatic(s: Session, step: bool = False, enable: int = 1) -> None:
     s.console.press("SB1", hold=0.2)
 
 
+def teach_down_up(s: Session) -> None:
+    """Manual mode, I0.7 = 0: two lift frames, arm down then arm up (every variant can)."""
+    s.console.set(SA1=0, I07=0)
+    s.run(0.1)
+    move(s, "arm down", SA5=1)
+    record(s)
+    move(s, "arm up", SA5=0)
+    record(s)
+
+
 # --------------------------------------------------------------------------- scenarios
 
 def demo(s: Session) -> None:
@@ -181,12 +191,7 @@ def demo(s: Session) -> None:
 
 def step_mode(s: Session) -> None:
     """Teach two frames; in step mode each SB1 press runs exactly one frame and its pause."""
-    s.console.set(SA1=0, I07=0)
-    s.run(0.1)
-    move(s, "arm down", SA5=1)
-    record(s)
-    move(s, "arm up", SA5=0)
-    record(s)
+    teach_down_up(s)
     start_automatic(s, step=True)
     s.wait_until(lambda io: io.SQ2, 3, "frame 1 (arm down)")
     s.run(3.0)
@@ -198,12 +203,7 @@ def step_mode(s: Session) -> None:
 
 def long_press_reset(s: Session) -> None:
     """Teach two frames, hold SB1: at 3.0 s the program is reset (HL1 on) while still held."""
-    s.console.set(SA1=0)
-    s.run(0.1)
-    move(s, "arm down", SA5=1)
-    record(s)
-    move(s, "arm up", SA5=0)
-    record(s)
+    teach_down_up(s)
     if s.io.HL1:
         raise ScenarioFailure(f"t={s.now:.2f} s: HL1 on although the program has frames")
     pressed = s.now
@@ -230,12 +230,7 @@ def bounce(s: Session) -> None:
 
 def retain(s: Session) -> None:
     """A recorded program survives a PLC restart (power cycle of the controller)."""
-    s.console.set(SA1=0, I07=0)
-    s.run(0.1)
-    move(s, "arm down", SA5=1)
-    record(s)
-    move(s, "arm up", SA5=0)
-    record(s)
+    teach_down_up(s)
     s.restart_plc(off_time=1.0)
     s.run(0.2)
     if s.plc.read(FRAME_COUNT) != 2:
@@ -247,12 +242,7 @@ def retain(s: Session) -> None:
 def jammed(s: Session) -> None:
     """A jammed cylinder: the frame times out after 10 s, execution stops, HL1 blinks 2 Hz
     until manual mode."""
-    s.console.set(SA1=0, I07=0)
-    s.run(0.1)
-    move(s, "arm down", SA5=1)
-    record(s)
-    move(s, "arm up", SA5=0)
-    record(s)
+    teach_down_up(s)
     s.inject("jammed", mechanism="lift")
     start_automatic(s)
     started = s.now
