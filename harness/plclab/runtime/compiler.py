@@ -507,7 +507,9 @@ class Compiler:
             else:
                 ptype = decl.ty if decl is not None else a.value.ty
                 out.emit(ind, f"{iv}.{key} = {self.expr_as(a.value, ptype)}", a)
-        out.emit(ind, f"{iv}()", s)
+        # a standard FB's body directly (its __call__ only handles EN, which is TRUE here)
+        std = isinstance(fb.pou, FBSig) and en is None
+        out.emit(ind, f"{iv}._body()" if std else f"{iv}()", s)
         for a in outputs:
             code = f"{iv}.{a.key}"
             if a.negated:
