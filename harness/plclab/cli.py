@@ -56,6 +56,17 @@ def _cmd_bench(args: argparse.Namespace) -> int:
     return 0
 
 
+def _port(text: str) -> int:
+    """A TCP port: 1..65535, or 0 for "any free port" (printed when listening)."""
+    try:
+        port = int(text)
+    except ValueError:
+        port = -1
+    if not 0 <= port <= 65535:
+        raise argparse.ArgumentTypeError(f"not a TCP port: '{text}' (1..65535, or 0 for any free port)")
+    return port
+
+
 def _load_config(path: Optional[str]):
     from pathlib import Path
 
@@ -234,7 +245,7 @@ def build_parser() -> argparse.ArgumentParser:
     c.add_argument("stand", choices=stands)
     c.add_argument("--variant", choices=("baseline", "task1", "task2", "task3", "full"))
     c.add_argument("--config", metavar="FILE", help="openplc.conf to use (default: ./openplc.conf)")
-    c.add_argument("--port", type=int, metavar="P", help="Modbus TCP port (overrides the config)")
+    c.add_argument("--port", type=_port, metavar="P", help="Modbus TCP port (overrides the config)")
     c.add_argument("--bind", metavar="ADDR", help="address to listen on (default 127.0.0.1)")
     c.add_argument("--program", nargs="+", metavar="FILE.st", help="run these ST files instead of the variant")
     c.add_argument("--duration", type=_seconds, metavar="T", help="stop by itself after T (for scripts)")

@@ -84,6 +84,8 @@ class ModbusTcpServer:
                  port: int = DEFAULT_PORT, *, unit_ids: Iterable[int] | None = None,
                  idle_timeout: float | None = DEFAULT_IDLE_TIMEOUT,
                  max_clients: int = DEFAULT_MAX_CLIENTS, name: str = "modbus"):
+        if not 0 <= int(port) <= 65535:
+            raise ServerError(f"{name}: port {port} is not a TCP port (1..65535, or 0 for any free port)")
         self.register_map = register_map
         self.host = host
         self.name = name
