@@ -114,6 +114,7 @@ class PLC:
         self.bindings = self._bind_located()
         self._inputs = [b for b in self.bindings if b.is_input]
         self._outputs = [b for b in self.bindings if not b.is_input]
+        self._compile_io()
         if self.retain_store is not None:
             self.restore_retain()
         self.write_outputs()      # located outputs / memory hold their initial values from the start
@@ -205,22 +206,56 @@ class PLC:
 
     # ------------------------------------------------------------------ the scan
     def read_inputs(self) -> None:
-        image = self.image
-        external = image.apply_pending()
-        areas = image.areas
-        for b in self._inputs:
-            setattr(b.owner, b.attr, b.from_raw(areas[b.area][b.index]))
-        if external:
-            for b in self._outputs:
-                setattr(b.owner, b.attr, b.from_raw(areas[b.area][b.index]))
+        """Queued Modbus writes in, then the input image into the located variables (and the
+        output / memory image too when a client wrote to it)."""
+        external = self.image.apply_pending()
+        self._copy_in(self.image.areas, external)
 
     def write_outputs(self) -> None:
-        outs = self._outputs
+        self.image.publish(self._copy_out)
 
-        def publish(areas: dict) -> None:
-            for b in outs:
-                areas[b.area][b.index] = b.to_raw(getattr(b.owner, b.attr))
-        self.image.publish(publish)
+    def _compile_io(self) -> None:
+        """Generate the image <-> variable copies of this program's located variables: one
+        straight-line function each way instead of a loop of conversions every scan."""
+        ns: dict[str, Any] = {}
+        lines_in = ["def _copy_in(areas, external):"]
+        lines_out = ["def _copy_out(areas):"]
+
+        def access(b: LocatedBinding, i: int) -> str:
+            ns[f"o{i}"] = b.owner
+            return f"o{i}.{b.attr}"
+
+        def from_raw(b: LocatedBinding, raw: str, i: int) -> str:
+            t = T.base_of(b.ty)
+            if t is T.BOOL:
+                return f"{raw} != 0"
+            if isinstance(t, T.ElementaryType) and t.kind in ("sint", "uint", "bits"):
+                mask = (1 << t.bits) - 1
+                if t.kind == "sint":
+                    return f"(({raw} + {1 << (t.bits - 1)}) & {mask}) - {1 << (t.bits - 1)}"
+                return f"{raw} & {mask}"
+            ns[f"f{i}"] = b.from_raw
+            return f"f{i}({raw})"
+
+        def to_raw(b: LocatedBinding, value: str, i: int) -> str:
+            t = T.base_of(b.ty)
+            if t is T.BOOL:
+                return f"1 if {value} else 0"
+            if isinstance(t, T.ElementaryType) and t.kind in ("sint", "uint", "bits"):
+                return f"{value} & {(1 << _AREA_BITS[b.area[1]]) - 1}"
+            ns[f"t{i}"] = b.to_raw
+            return f"t{i}({value})"
+
+        for i, b in enumerate(self._inputs):
+            lines_in.append(f"    {access(b, i)} = {from_raw(b, f'areas[{b.area!r}][{b.index}]', i)}")
+        lines_in.append("    if external:")
+        for j, b in enumerate(self._outputs, start=len(self._inputs)):
+            lines_in.append(f"        {access(b, j)} = {from_raw(b, f'areas[{b.area!r}][{b.index}]', j)}")
+            lines_out.append(f"    areas[{b.area!r}][{b.index}] = {to_raw(b, access(b, j), j)}")
+        lines_in.append("        pass")
+        lines_out.append("    pass")
+        exec(compile("\n".join(lines_in + lines_out) + "\n", "<plc-io>", "exec"), ns)
+        self._copy_in, self._copy_out = ns["_copy_in"], ns["_copy_out"]
 
     def scan(self) -> bool:
         """Run one tick at the current PLC time; returns False if the PLC is (now) faulted."""

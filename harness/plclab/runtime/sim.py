@@ -53,14 +53,14 @@ class Simulation:
         self._event_times: list[int] = []
         self._next_event = 0
         self._names: list[str] = []
-        self._getters: list[Callable[[], Any]] = []
+        self._sources: list[tuple[Any, Any, str]] = []   # (container, key, 'attr' | 'item' | 'bit')
         seen = set()
         if record_located:
             for b in sorted(plc.bindings, key=lambda b: (b.area[0] != "I", b.area, b.index)):
                 if b.address in seen:
                     continue
                 seen.add(b.address)
-                self._add_signal(b.address, b.ty, self._binding_getter(b))
+                self._add_signal(b.address, b.ty, b.owner, b.attr, "attr")
         for addr in extra_addresses:
             area, index = parse_address(addr)
             norm = _format_address(area, index)
@@ -68,22 +68,25 @@ class Simulation:
                 continue
             seen.add(norm)
             ty = T.BOOL if area[1] == "X" else {"W": T.WORD, "D": T.DWORD, "L": T.LWORD}[area[1]]
-            arr = plc.image.areas[area]
-            self._add_signal(norm, ty, (lambda a=arr, i=index: bool(a[i])) if area[1] == "X"
-                             else (lambda a=arr, i=index: a[i]))
+            self._add_signal(norm, ty, plc.image.areas[area], index, "bit" if area[1] == "X" else "item")
         for name in watch:
             owner, key = plc.resolve(name)
-            getter = (lambda o=owner, k=key: o[k]) if isinstance(owner, list) else \
-                (lambda o=owner, k=key: getattr(o, k))
-            ty = self._type_of(name, getter())
-            self._add_signal(name, ty, getter)
+            how = "item" if isinstance(owner, list) else "attr"
+            ty = self._type_of(name, owner[key] if how == "item" else getattr(owner, key))
+            self._add_signal(name, ty, owner, key, how)
+        self._sample = self._compile_sampler()
         self.recorder = Recorder(self.trace, names=self._names)
         self.fault_reported = False
 
-    @staticmethod
-    def _binding_getter(b) -> Callable[[], Any]:
-        owner, attr = b.owner, b.attr
-        return lambda: getattr(owner, attr)
+    def _compile_sampler(self) -> Callable[[], list]:
+        """One generated function reading every recorded signal (once per scan, on the hot path)."""
+        ns: dict[str, Any] = {}
+        parts = []
+        for i, (container, key, how) in enumerate(self._sources):
+            ns[f"c{i}"] = container
+            parts.append(f"c{i}.{key}" if how == "attr" else f"c{i}[{key}] != 0" if how == "bit" else f"c{i}[{key}]")
+        exec(compile(f"def _sample():\n    return [{', '.join(parts)}]\n", "<sim-sample>", "exec"), ns)
+        return ns["_sample"]
 
     def _type_of(self, name: str, value: Any) -> T.Type:
         if isinstance(value, bool):
@@ -96,11 +99,12 @@ class Simulation:
             return T.STRING
         raise PlcLabError(f"'{name}' is not an elementary variable; watch one of its elements or fields")
 
-    def _add_signal(self, name: str, ty: T.Type, getter: Callable[[], Any]) -> None:
+    def _add_signal(self, name: str, ty: T.Type, container: Any, key: Any, how: str) -> None:
         kind, width = _kind(ty)
-        self.trace.declare(name, kind, getter(), 0, width=width)
+        value = getattr(container, key) if how == "attr" else container[key]
+        self.trace.declare(name, kind, bool(value) if how == "bit" else value, 0, width=width)
         self._names.append(name)
-        self._getters.append(getter)
+        self._sources.append((container, key, how))
 
     # ------------------------------------------------------------------ inputs
     def schedule(self, events: Iterable[InputEvent]) -> None:
@@ -150,7 +154,7 @@ class Simulation:
         dt = plc.tick_ns
         dt_s = dt / 1e9
         events, times = self._events, self._event_times
-        getters = self._getters
+        sample = self._sample
         record = self.recorder.record
         for _ in range(ticks):
             now = plc.now_ns
@@ -161,7 +165,7 @@ class Simulation:
                 self.set(ev.name, ev.value)
                 self._next_event += 1
             plc.scan()
-            record(now, [g() for g in getters])
+            record(now, sample())
             plc.advance()
         self.trace.advance(plc.now_ns - dt if plc.ticks else 0)
 
