@@ -81,20 +81,12 @@ def _load_config(path: Optional[str]):
 
 
 def _program_sources(stand_name: str, variant: Optional[str], program: Optional[list[str]], cfg) -> list:
-    from pathlib import Path
-
-    from plclab.frontend import read_source
+    from plclab.frontend import read_sources
     from plclab.stands import get_stand, sources
 
     files = program or ([str(cfg.program)] if cfg.program else None)
     if files:
-        out = []
-        for f in files:
-            text, errs = read_source(f)
-            if errs:
-                raise CompileError(errs)
-            out.append((f, text))
-        return out
+        return read_sources(files)
     return sources(get_stand(stand_name), variant or cfg.variant)
 
 

@@ -12,7 +12,7 @@ from plclab.frontend import ast as A
 from plclab.frontend.checker import CheckedUnit, check_unit
 from plclab.frontend.parser import parse_source
 
-__all__ = ["CheckedUnit", "check_sources", "load_files", "read_source"]
+__all__ = ["CheckedUnit", "check_sources", "load_files", "read_source", "read_sources"]
 
 
 def read_source(path: str | Path) -> tuple[str, list[Diagnostic]]:
@@ -55,8 +55,8 @@ def check_sources(sources: Iterable[tuple[str, str]]) -> CheckedUnit:
     return checked
 
 
-def load_files(paths: Iterable[str | Path]) -> CheckedUnit:
-    """Read, parse and check ST files as one compilation unit; raises CompileError."""
+def read_sources(paths: Iterable[str | Path]) -> list[tuple[str, str]]:
+    """(name, text) of each ST file; raises CompileError naming every file that cannot be read."""
     sources = []
     diags: list[Diagnostic] = []
     for p in paths:
@@ -66,4 +66,9 @@ def load_files(paths: Iterable[str | Path]) -> CheckedUnit:
             sources.append((str(p), text))
     if diags:
         raise CompileError(diags)
-    return check_sources(sources)
+    return sources
+
+
+def load_files(paths: Iterable[str | Path]) -> CheckedUnit:
+    """Read, parse and check ST files as one compilation unit; raises CompileError."""
+    return check_sources(read_sources(paths))

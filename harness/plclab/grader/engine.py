@@ -11,8 +11,8 @@ import tempfile
 from pathlib import Path
 from typing import Optional, Sequence
 
-from plclab.errors import CompileError, Diagnostic, PlcLabError
-from plclab.frontend import check_sources, read_source
+from plclab.errors import CompileError, PlcLabError
+from plclab.frontend import check_sources, read_sources
 from plclab.scenario import ScenarioFailure, Session
 from plclab.trace import write_csv, write_vcd
 
@@ -27,17 +27,12 @@ def grade(stand: str, task: str, files: Sequence[str], out_dir: Optional[str] = 
     not compile or does not run is a report that fails.
     """
     requirement_set(stand, task)                     # unknown stand / task: one-line error
-    sources: list[tuple[str, str]] = []
-    diags: list[Diagnostic] = []
-    for f in files:
-        text, errs = read_source(f)
-        diags.extend(errs)
-        if not errs:
-            sources.append((str(f), text))
-    if diags:
+    try:
+        sources = read_sources(files)
+    except CompileError as e:
         req = requirement_set(stand, task)
         return GradeReport(stand, task, req.title, [str(f) for f in files],
-                           errors=[str(d) for d in sorted(set(diags))])
+                           errors=[str(d) for d in e.diagnostics])
     return grade_sources(stand, task, sources, out_dir)
 
 
