@@ -14,11 +14,11 @@ aliases) plus chosen internal variables, and a log of the console actions for th
 """
 from __future__ import annotations
 
-from dataclasses import dataclass, field
+from dataclasses import dataclass
 from pathlib import Path
 from typing import Any, Callable, Iterable, Optional, Sequence
 
-from plclab.errors import CompileError, PlcLabError
+from plclab.errors import CompileError
 from plclab.frontend import check_sources
 from plclab.runtime.compiler import compile_unit
 from plclab.runtime.plc import PLC

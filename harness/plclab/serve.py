@@ -12,11 +12,9 @@ import sys
 import threading
 import time
 from dataclasses import dataclass
-from pathlib import Path
 from typing import Any, Callable, Optional, Sequence, TextIO
 
 from plclab.config import ModbusConfig, StandConfig
-from plclab.errors import PlcLabError
 from plclab.frontend import check_sources
 from plclab.runtime.compiler import compile_unit
 from plclab.runtime.plc import PLC

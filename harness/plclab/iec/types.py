@@ -263,7 +263,6 @@ def wrapper_for(t: Type) -> Optional[Callable[[Any], Any]]:
             mask = (1 << bits) - 1
             if t.kind == "sint":
                 half = 1 << (bits - 1)
-                full = 1 << bits
                 return lambda v: ((int(v) & mask) ^ half) - half
             return lambda v: int(v) & mask
         if t is REAL:

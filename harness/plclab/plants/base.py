@@ -9,7 +9,7 @@ Standard library only (see the package docstring).
 """
 from __future__ import annotations
 
-from dataclasses import dataclass, field
+from dataclasses import dataclass
 from typing import Any
 
 

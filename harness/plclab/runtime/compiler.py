@@ -23,7 +23,7 @@ from __future__ import annotations
 import itertools
 import math
 from dataclasses import dataclass, field
-from typing import Any, Callable, Optional
+from typing import Any, Optional
 
 from plclab.frontend import ast as A
 from plclab.frontend.checker import CheckedUnit, EnumValue, _LitType

@@ -8,7 +8,7 @@ real OpenPLC runtime through the PSM protocol (plclab.modbus.psm), which uses th
 """
 from __future__ import annotations
 
-from typing import Any, Protocol
+from typing import Protocol
 
 from plclab.runtime.image import ProcessImage
 

@@ -12,10 +12,9 @@ from __future__ import annotations
 import math
 import re
 import struct
-import sys
 import time
 from dataclasses import dataclass
-from typing import Any, Callable, Iterable, Optional
+from typing import Any, Callable, Optional
 
 from plclab.errors import PlcLabError
 from plclab.frontend import ast as A

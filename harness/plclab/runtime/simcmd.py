@@ -14,7 +14,7 @@ from plclab.runtime.faults import FaultRecord
 from plclab.runtime.plc import PLC
 from plclab.runtime.compiler import compile_unit
 from plclab.runtime.sim import InputEvent, Simulation
-from plclab.trace import Trace, TraceFormatError, plot_trace, read_csv, write_csv, write_vcd
+from plclab.trace import Trace, plot_trace, read_csv, write_csv, write_vcd
 
 
 @dataclass
