@@ -1,7 +1,6 @@
 """`plclab serve` as a user runs it: a real process, a real Modbus client, SIGTERM to stop."""
 from __future__ import annotations
 
-import os
 import re
 import signal
 import subprocess
@@ -9,7 +8,6 @@ import sys
 import time
 from pathlib import Path
 
-import pytest
 
 from plclab.modbus.rawclient import RawModbusClient
 

@@ -11,7 +11,6 @@ import textwrap
 import time
 from pathlib import Path
 
-import pytest
 
 from plclab.frontend import check_sources
 from plclab.runtime.compiler import compile_unit
