@@ -87,6 +87,14 @@ def test_mod_and_division_with_negative_operands_truncate_like_c():
     assert sim.plc.state == "RUN"
 
 
+def test_mod_by_a_positive_constant_keeps_the_sign_of_the_dividend():
+    # the compiler inlines MOD by a positive constant: same C semantics as the general case
+    sim = once("VAR a : INT := -7; m1, m2, m3, m4 : INT; d : DINT := -2147483648; m5 : DINT; END_VAR",
+               "m1 := a MOD 3; m2 := (a - 3) MOD 4; m3 := (a * a) MOD 5; m4 := (a + 7) MOD 6; m5 := d MOD 10;")
+    assert (val(sim, "m1"), val(sim, "m2"), val(sim, "m3"), val(sim, "m4")) == (-1, -2, 4, 0)
+    assert val(sim, "m5") == -8
+
+
 # --------------------------------------------------------------------------- REAL
 
 def test_real_is_single_precision():

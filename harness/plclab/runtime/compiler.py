@@ -655,6 +655,12 @@ class Compiler:
             # rounded to REAL only where it is stored or passed
             lt = rt_ = rt = T.LREAL
         if op == "MOD" and isinstance(rb, T.ElementaryType) and rb.kind in ("sint", "uint"):
+            divisor = e.right.value if isinstance(e.right, A.Literal) else None
+            if isinstance(divisor, int) and divisor > 0:
+                # C's `%` by a positive constant, inline (a MOD in every scan is common):
+                # the result takes the dividend's sign
+                t = f"_m{next(self.tmp)}"
+                return f"(-(-{t} % {divisor}) if ({t} := {l}) < 0 else {t} % {divisor})"
             return f"_cmod({l}, {r})"      # |result| < |divisor|: no wrap needed
         if op in ("/", "MOD", "**") or (op == "*" and isinstance(rb, T.ElementaryType) and rb.kind == "time"):
             return f"{self.operator(op, [lt, rt_], rt)}({l}, {r})"
