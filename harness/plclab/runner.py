@@ -55,7 +55,12 @@ def run_scenario(stand: str, variant: Optional[str] = None, scenario: Optional[s
             files.append(Path(path))
     if plot:
         Path(plot).parent.mkdir(parents=True, exist_ok=True)
-        signals = [n for n in mod.PLOT_SIGNALS if n in s.trace]
+        signals: list = []                   # a name, or a group sharing one subplot
+        for entry in mod.PLOT_SIGNALS:
+            group = [entry] if isinstance(entry, str) else list(entry)
+            present = [n for n in group if n in s.trace]
+            if present:
+                signals.append(present[0] if isinstance(entry, str) else tuple(present))
         plot_trace(s.trace, plot, names=signals, title=f"{mod.STAND.title}: {variant}, scenario {name}")
         files.append(Path(plot))
     return RunResult(s, mod.timeline(s), failure, files)

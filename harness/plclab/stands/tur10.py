@@ -236,7 +236,8 @@ def dead_sensor(s: Session) -> None:
 SCENARIOS: dict[str, Callable[[Session], None]] = {
     "demo": demo, "jog": jog_all, "reset": reset, "retain": retain, "dead_sensor": dead_sensor,
 }
-PLOT_SIGNALS = ["SB1", "SA7"] + DRIVES + POSITIONS + TARGETS + [FRAME_PTR]
+# a link's position (as the PLC reads it) and its target share one subplot
+PLOT_SIGNALS = ["SB1", "SA7"] + [(POSITIONS[k - 1], TARGETS[k - 1]) for k in AXES] + DRIVES + [FRAME_PTR]
 
 
 def timeline(s: Session) -> list[str]:
