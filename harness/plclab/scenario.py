@@ -18,7 +18,6 @@ from dataclasses import dataclass
 from pathlib import Path
 from typing import Any, Callable, Iterable, Optional, Sequence
 
-from plclab.errors import CompileError
 from plclab.frontend import check_sources
 from plclab.runtime.compiler import compile_unit
 from plclab.runtime.plc import PLC
@@ -202,6 +201,3 @@ class Session:
     def fault(self):
         return self.plc.fault
 
-
-def compile_error_lines(exc: CompileError) -> list[str]:
-    return [str(d) for d in exc.diagnostics]

@@ -1719,9 +1719,8 @@ class Checker:
                                              "connect programs through VAR_GLOBAL / VAR_EXTERNAL")
 
     # ------------------------------------------------------------------ text helpers
-    def _tname(self, t: T.Type) -> str:
-        if isinstance(t, _LitType):
-            return t.name
+    @staticmethod
+    def _tname(t: T.Type) -> str:
         return t.name
 
     def _path_text(self, e: A.Expr) -> str:

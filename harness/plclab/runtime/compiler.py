@@ -77,7 +77,6 @@ class CompiledProgram:
     line_map: dict[int, LineInfo]
     filename: str
     program_classes: dict[str, str] = field(default_factory=dict)   # PROGRAM key -> class name
-    fb_classes: dict[str, str] = field(default_factory=dict)
     retained_globals: list[str] = field(default_factory=list)
 
     def where(self, py_line: int) -> Optional[LineInfo]:
@@ -189,7 +188,8 @@ class Compiler:
                 self.function(pou)
             else:
                 cls = self.pou_class(pou)
-                (result.program_classes if pou.kind == "PROGRAM" else result.fb_classes)[pou.key] = cls
+                if pou.kind == "PROGRAM":
+                    result.program_classes[pou.key] = cls
         out.pou = "CONFIGURATION"
         self.globals_init(result)
         source = "\n".join(out.lines) + "\n"

@@ -20,7 +20,6 @@ from plclab.errors import PlcLabError
 from plclab.frontend import ast as A
 from plclab.frontend.checker import CheckedUnit
 from plclab.iec import types as T
-from plclab.runtime import stdlib
 from plclab.runtime.compiler import CompiledProgram, compile_unit, located_attr
 from plclab.runtime.faults import FaultRecord, PlcFault
 from plclab.runtime.image import ProcessImage
@@ -98,7 +97,6 @@ class PLC:
         self.ticks = 0
         self._loop_count = 0
         self._scan_started = 0.0
-        self.scan_hooks: list[Callable[["PLC"], None]] = []
         ns = compiled.namespace
         ns["_rt"] = self
         self.G = ns["G"]
@@ -268,7 +266,7 @@ class PLC:
             for period, run in self._schedule:
                 if period == 1 or tick % period == 0:
                     run()
-        except (PlcFault, stdlib.PlcRuntimeFault, ZeroDivisionError, OverflowError, RecursionError,
+        except (PlcFault, ZeroDivisionError, OverflowError, RecursionError,
                 IndexError, ValueError, TypeError, AttributeError) as exc:
             self._enter_fault(exc)
             return False
@@ -276,8 +274,6 @@ class PLC:
         if self.retain_store is not None and self.now_ns - self._last_persist_ns >= self.retain_period_ns:
             self._last_persist_ns = self.now_ns
             self.persist_retain()
-        for hook in self.scan_hooks:
-            hook(self)
         return True
 
     def advance(self) -> None:

@@ -76,7 +76,6 @@ class Simulation:
             self._add_signal(name, ty, owner, key, how)
         self._sample = self._compile_sampler()
         self.recorder = Recorder(self.trace, names=self._names)
-        self.fault_reported = False
 
     def _compile_sampler(self) -> Callable[[], list]:
         """One generated function reading every recorded signal (once per scan, on the hot path)."""

@@ -72,6 +72,7 @@ from typing import Any, Callable, Iterable, Optional, Sequence
 
 from plclab.iec import types as T
 from plclab.iec.types import ElementaryType, StringType, Type, base_of, to_f32, wrapper_for
+from plclab.runtime.faults import PlcFault
 
 Fn = Callable[..., Any]
 
@@ -83,17 +84,10 @@ _M64 = (1 << 64) - 1
 # --------------------------------------------------------------------------- errors
 
 
-class PlcRuntimeFault(Exception):
-    """A run-time error of the PLC program (OpenPLC's runtime would crash or trap here).
-
-    `kind` is a stable machine-readable tag ("division_by_zero", "division_overflow",
-    "memory_fault"); the runtime adds the POU and source line and puts the PLC in FAULT.
-    """
-
-    def __init__(self, kind: str, message: str) -> None:
-        super().__init__(message)
-        self.kind = kind
-        self.message = message
+# A run-time error of the PLC program (OpenPLC's runtime would crash or trap here): the
+# runtime's one fault class. `kind` is "division_by_zero", "division_overflow" or
+# "memory_fault" here; the runtime adds the POU and source line and puts the PLC in FAULT.
+PlcRuntimeFault = PlcFault
 
 
 class NoSuchFunction(LookupError):

@@ -19,6 +19,7 @@ from typing import Callable, Iterable, Optional
 from plclab.modbus.maps import TwidoMap
 from plclab.modbus.profiles import THERMO
 from plclab.modbus.protocol import ModbusException, Table
+from plclab.plants.base import signed16
 from plclab.scenario import ScenarioFailure, Session
 from plclab.stands import PLC_DIR, Stand, Task, Variant, sources
 
@@ -139,10 +140,6 @@ def disturbance(s: Session, on: bool) -> None:
 
 # --------------------------------------------------------------------------- measurements
 
-def _signed(v: int) -> int:
-    return v - 65536 if v >= 32768 else v
-
-
 def celsius(s: Session, t: Optional[float] = None) -> float:
     """The measured temperature (ADC %IW0, 0.1 C) at time t (default: now)."""
     if t is None:
@@ -153,8 +150,8 @@ def celsius(s: Session, t: Optional[float] = None) -> float:
 def samples(s: Session, name: str, after: float, until: Optional[float] = None) -> list[tuple[float, int]]:
     """(time, value) of `name` in [after, until]: the value in effect at `after`, then each change."""
     end = s.trace.end_s if until is None else until
-    out = [(after, _signed(s.trace.value_at(name, after)))]
-    out += [(t / 1e9, _signed(v)) for t, v in s.trace.changes(name) if after * 1e9 < t <= end * 1e9]
+    out = [(after, signed16(s.trace.value_at(name, after)))]
+    out += [(t / 1e9, signed16(v)) for t, v in s.trace.changes(name) if after * 1e9 < t <= end * 1e9]
     return out
 
 
@@ -237,7 +234,7 @@ def check_never(s: Session) -> None:
     tr = s.trace
     names = ["FAN", "HEATER", "TEMP_ADC", "MODE", "FAN_CTRL", "HEATER_CTRL", "TEMPERATURE", "RESERVED"]
     for t_ns in _instants(s, names):
-        v = {n: _signed(tr.value_at_ns(n, t_ns)) for n in names}
+        v = {n: signed16(tr.value_at_ns(n, t_ns)) for n in names}
         t = t_ns / 1e9
         if not 0 <= v["FAN"] <= FAN_MAX:
             raise ScenarioFailure(f"t={t:.2f} s: fan command {v['FAN']} outside 0..{FAN_MAX}")
@@ -479,7 +476,7 @@ def timeline(s: Session) -> list[str]:
     rows = [f"{'time s':>8}  {'SCADA / console':<34} {'mode':>4} {'sp C':>4} {'temp C':>6} {'%MW3':>4} "
             f"{'heater':>6} {'fan':>5} {'pulse/s':>7} dist"]
     for t in sorted(times):
-        v = {n: _signed(tr.value_at(n, t)) for n in
+        v = {n: signed16(tr.value_at(n, t)) for n in
              ("MODE", "SETPOINT", "TEMP_ADC", "TEMPERATURE", "HEATER", "FAN", "FAN_SPEED", "DISTURBANCE")}
         text = "; ".join(acts.get(round(t, 6), []))
         rows.append(f"{t:8.1f}  {text[:34]:<34} {v['MODE']:>4} {v['SETPOINT']:>4} {v['TEMP_ADC'] / 10:>6.1f} "

@@ -10,6 +10,7 @@ import re
 from pathlib import Path
 from typing import Callable, Optional
 
+from plclab.plants.base import signed16
 from plclab.scenario import ScenarioFailure, Session
 from plclab.stands import PLC_DIR, Stand, Task, Variant, sources
 
@@ -119,11 +120,11 @@ def frame_results(s: Session, axes: tuple[int, ...] = AXES) -> list[str]:
         until = spans[i + 1][0] if i + 1 < len(spans) else tr.end_s     # the frame and its pause
         parts, errors = [], []
         for k in regulated:
-            target = _signed(tr.value_at(TARGETS[k - 1], start))
-            begin = _signed(tr.value_at(POSITIONS[k - 1], start))
-            final = _signed(tr.value_at(POSITIONS[k - 1], end if end is not None else until))
+            target = signed16(tr.value_at(TARGETS[k - 1], start))
+            begin = signed16(tr.value_at(POSITIONS[k - 1], start))
+            final = signed16(tr.value_at(POSITIONS[k - 1], end if end is not None else until))
             direction = 1 if target >= begin else -1
-            past = [(_signed(v) - target) * direction for t, v in tr.changes(POSITIONS[k - 1])
+            past = [(signed16(v) - target) * direction for t, v in tr.changes(POSITIONS[k - 1])
                     if start * 1e9 <= t <= until * 1e9]
             errors.append(abs(target - final))
             parts.append(f"{k}:{target - final:+d}/{max([0] + past)}")
@@ -131,10 +132,6 @@ def frame_results(s: Session, axes: tuple[int, ...] = AXES) -> list[str]:
         when = f"{end - start:16.2f}" if reached else f"{'stopped':>16}"
         rows.append(f"{frame:>5} {start:8.2f} {when}  {'  '.join(parts)}")
     return rows
-
-
-def _signed(v: int) -> int:
-    return v - 65536 if v >= 32768 else v
 
 
 # --------------------------------------------------------------------------- scenarios
@@ -250,8 +247,7 @@ def timeline(s: Session) -> list[str]:
         acts.setdefault(round(a.time, 6), []).append(a.text)
     rows = [f"{'time s':>8}  {'console / event':<30} " + " ".join(f"{'drive' + str(k):>6}" for k in AXES) + "  frame"]
     for t in sorted(times):
-        refs = " ".join(f"{tr.value_at(d, t) if tr.value_at(d, t) < 32768 else tr.value_at(d, t) - 65536:>6}"
-                        for d in DRIVES)
+        refs = " ".join(f"{signed16(tr.value_at(d, t)):>6}" for d in DRIVES)
         frame = tr.value_at(FRAME_PTR, t) if FRAME_PTR in tr else ""
         rows.append(f"{t:8.2f}  {'; '.join(acts.get(round(t, 6), []))[:30]:<30} {refs}  {frame}")
     results = frame_results(s)
