@@ -3,9 +3,14 @@
 Every POU becomes Python code once, at load time, so a scan is plain Python calls with no
 tree walking:
   PROGRAM / FUNCTION_BLOCK -> a class with __slots__ (one attribute per variable, named by
-                              the variable's upper-case key) and __call__ = the body
-  FUNCTION                 -> a Python function; VAR_OUTPUT / VAR_IN_OUT are Ref cells
+                              the variable's upper-case key) and _run = the body (also its
+                              __call__); while the body runs, the variables it names often
+                              live in Python locals (`v_KEY`), stored back when it ends
+  FUNCTION                 -> a Python function with positional parameters and Python
+                              locals; VAR_OUTPUT / VAR_IN_OUT arrive as Ref cells
   globals                  -> attributes of one `G` object
+A variable passed by reference (plclab.runtime.varuse) stays in its object, so the callee
+writes where the caller reads.
 Expressions compute what the C that matiec generates (stage4/generate_c/generate_c_st.cc:
 plain C operators, no casts) computes:
   * SINT/INT/USINT/UINT/BYTE/WORD operands are promoted to C `int`: intermediates (also of
@@ -22,6 +27,7 @@ from __future__ import annotations
 
 import itertools
 import math
+from array import array
 from dataclasses import dataclass, field
 from typing import Any, Optional
 
@@ -31,6 +37,9 @@ from plclab.frontend.stdsigs import FBSig
 from plclab.iec import types as T
 from plclab.runtime import stdfb, stdlib
 from plclab.runtime.faults import PlcFault
+from plclab.runtime.ranges import Range, RangeOf, concrete as _concrete, ring_type, type_range, \
+    within, wrap_bounds
+from plclab.runtime.varuse import body_use
 
 
 class Ref:
@@ -113,12 +122,15 @@ class Compiler:
             "_bound": _bound, "_cmod": _cmod, "_store_into": _store_into,
             "_f32": T.to_f32, "_copy": T.copy_value, "Ref": Ref, "PlcFault": PlcFault,
             "_StructValue": T.StructValue,
-            "_Locals": _Locals, "_NegRef": _NegRef,
+            "_Locals": _Locals, "_NegRef": _NegRef, "_fa": array("f", [0.0]),
         }
         self.tmp = itertools.count()
         self.pou: Optional[A.PouDecl] = None
         self.in_function = False
         self.loop_stack: list[str] = []
+        self.local: dict[int, str] = {}     # id(VarDecl) -> its storage while the body runs
+        self.ret_code = "None"              # a FUNCTION's result (a local, or _L.RET_)
+        self.ranges = RangeOf()
 
     # ------------------------------------------------------------------ helpers
     def const(self, value: Any) -> str:
@@ -146,26 +158,31 @@ class Compiler:
         self.ns[name] = obj
         return name
 
-    @staticmethod
-    def wrap(code: str, ty: Optional[T.Type]) -> str:
-        """Normalise an arithmetic result to the C type of `ty`."""
+    def wrap(self, code: str, ty: Optional[T.Type], rng: Optional[Range] = None) -> str:
+        """Normalise an arithmetic result to the C type of `ty`; nothing to do when its range
+        `rng` (plclab.runtime.ranges) shows it cannot leave the type."""
         b = T.base_of(ty) if ty is not None else None
         if isinstance(b, _LitType) or b is None:
             return code
         if isinstance(b, T.ElementaryType):
-            if b.kind in ("sint", "uint") and b.bits < 32:
-                # C promotes SINT/INT/USINT/UINT operands to int: the intermediate is 32-bit
-                return f"(((({code}) + 2147483648) & 4294967295) - 2147483648)"
-            if b.kind == "sint":
-                half = 1 << (b.bits - 1)
-                return f"(((({code}) + {half}) & {(1 << b.bits) - 1}) - {half})"
-            if b.kind in ("uint", "bits"):
-                return f"(({code}) & {(1 << b.bits) - 1})"
+            if b.kind in ("sint", "uint", "bits"):
+                lo, hi = wrap_bounds(b)
+                if within(rng, (lo, hi)):
+                    return code
+                if lo == 0:
+                    return f"(({code}) & {hi})"
+                # C promotes SINT/INT/USINT/UINT operands to int: the intermediate is 32-bit.
+                # A test first: the value nearly always fits, and comparing is cheaper.
+                return self._signed_wrap(code, lo, hi)
             if b is T.REAL:
-                return f"_f32({code})"
+                return F32Code(code)
             if b.kind in ("time", "date", "tod", "dt"):
-                return f"(((({code}) + (1 << 63)) & ((1 << 64) - 1)) - (1 << 63))"
+                return self._signed_wrap(code, -(1 << 63), (1 << 63) - 1)
         return code
+
+    def _signed_wrap(self, code: str, lo: int, hi: int) -> str:
+        t = f"_w{next(self.tmp)}"
+        return f"({t} if {lo} <= ({t} := {code}) <= {hi} else (({t} + {-lo}) & {hi - lo}) + {lo})"
 
     # ------------------------------------------------------------------ driver
     def compile(self) -> CompiledProgram:
@@ -227,7 +244,7 @@ class Compiler:
         inits = getattr(d, "fb_init", None) if d is not None else None
         if isinstance(ty.pou, FBSig):
             cls = self.bind(getattr(stdfb, ty.pou.name), "_std")
-            code = f"{cls}(_rt.clock)"
+            code = f"{cls}(_rt.scan_clock)"
         else:
             code = f"{_pyname('FB', ty.pou.name)}()"
         if inits:
@@ -242,7 +259,9 @@ class Compiler:
         name = _pyname("FB" if pou.kind == "FUNCTION_BLOCK" else "PRG", pou.name)
         decls = [d for d in pou.decls if d.name]
         located = [d for d in pou.decls if d.location is not None]
-        attrs = [d.key for d in decls] + [located_attr(d) for d in located if not d.name]
+        eno = getattr(pou, "eno_decl", None)
+        attrs = [d.key for d in decls] + [located_attr(d) for d in located if not d.name] + \
+            (["ENO"] if eno is not None else [])
         out.emit(0, f"class {name}:")
         out.emit(1, f"__slots__ = {tuple(attrs)!r}")
         out.emit(1, f"_ST_NAME = {pou.name!r}")
@@ -257,44 +276,102 @@ class Compiler:
         for d in located:
             if not d.name:
                 out.emit(2, f"self.{located_attr(d)} = {self.var_init(d)}", d)
+        if eno is not None:
+            out.emit(2, "self.ENO = True")
         out.emit(2, "pass")
-        out.emit(1, "def __call__(self):", pou)
-        temps = [d for d in decls if d.section == "VAR_TEMP"]
-        for d in temps:
-            out.emit(2, f"self.{d.key} = {self.var_init(d)}", d)
-        self.block(pou.body, 2)
+        out.emit(1, "def _run(self):", pou)
+        use = body_use(pou.body)
+        own = [d for d in pou.decls if d.section != "VAR_EXTERNAL"] + ([eno] if eno is not None else [])
+        self.local = {}
+        loads, stores = [], []
+        for d in own:
+            i = id(d)
+            attr = d.key if d.name else located_attr(d)
+            temp = d.section == "VAR_TEMP"
+            if d is eno and use.count[i]:
+                self.local[i] = "v_ENO"
+                out.emit(2, "v_ENO = True")          # matiec: ENO is TRUE when the body starts
+                stores.append(("ENO", "v_ENO"))
+            elif i in use.by_ref or not (temp or use.count[i] >= _LOCAL_MIN_USES):
+                if temp:
+                    out.emit(2, f"self.{attr} = {self.var_init(d)}", d)
+            else:
+                local = f"v_{attr}"
+                self.local[i] = local
+                loads.append(f"{local} = {self.var_init(d)}" if temp else f"{local} = self.{attr}")
+                if temp or (i in use.written and self._is_scalar(d.ty)):
+                    stores.append((attr, local))
+        for line in loads:
+            out.emit(2, line)
+        if stores:
+            out.emit(2, "try:")
+            self.block(pou.body, 3)
+            out.emit(2, "finally:")
+            for attr, local in stores:
+                out.emit(3, f"self.{attr} = {local}")
+        else:
+            self.block(pou.body, 2)
         out.emit(2, "return")
+        out.emit(1, "__call__ = _run")
+        self.local = {}
         return name
 
     def function(self, pou: A.PouDecl) -> None:
+        """A FUNCTION: positional parameters in declaration order (see user_call), every
+        variable a Python local unless something takes its reference (then it lives in `_L`)."""
         out = self.out
         self.pou = pou
         self.in_function = True
-        params = [d for d in pou.decls if d.section in ("VAR_INPUT", "VAR_OUTPUT", "VAR_IN_OUT")]
-        sig = ", ".join(f"{d.key}=None" if d.section != "VAR_INPUT" else f"{d.key}={self.init_code(d.init_value)}"
-                        if not isinstance(d.init_value, (list, T.StructValue)) else f"{d.key}=None"
-                        for d in params)
-        fname = _pyname("FC", pou.name)
-        out.emit(0, f"def {fname}({sig}):", pou)
-        out.emit(1, "_L = _Locals()")
-        outs = [d for d in params if d.section == "VAR_OUTPUT"]
+        use = body_use(pou.body)
+        params = _params(pou)
+        ret = getattr(pou, "ret_decl", None)
+        eno = getattr(pou, "eno_decl", None)
+        boxed = lambda d: id(d) in use.by_ref   # noqa: E731
+        self.local = {}
+        for d in pou.decls:
+            if d.name:
+                self.local[id(d)] = f"_L.{d.key}" if boxed(d) else f"v_{d.key}"
+        if ret is not None:
+            self.local[id(ret)] = "_L.RET_" if boxed(ret) else "_ret"
+        if eno is not None:
+            self.local[id(eno)] = "_L.ENO" if boxed(eno) else "v_ENO"
+        self.ret_code = self.local[id(ret)] if ret is not None else "None"
+        # an input or in-out parameter kept in a local is the Python parameter itself
+        direct = {id(d) for d in params if d.section != "VAR_OUTPUT" and not boxed(d)}
+        sig = [self.local[id(d)] if id(d) in direct else f"p_{d.key}" for d in params] + ["_eno=None"]
+        out.emit(0, f"def {_pyname('FC', pou.name)}({', '.join(sig)}):", pou)
+        if any(boxed(d) for d in pou.decls) or (ret is not None and boxed(ret)) or \
+                (eno is not None and boxed(eno)):
+            out.emit(1, "_L = _Locals()")
+        outs = []
         for d in params:
+            store = self.local[id(d)]
             if d.section == "VAR_OUTPUT":
-                out.emit(1, f"_out_{d.key} = {d.key}; _L.{d.key} = {self.var_init(d)}", d)
-            else:
-                out.emit(1, f"_L.{d.key} = {d.key}", d)
+                outs.append((f"p_{d.key}", store))
+                out.emit(1, f"{store} = {self.var_init(d)}", d)
+            elif id(d) not in direct:
+                out.emit(1, f"{store} = p_{d.key}", d)
         for d in pou.decls:
             if d.section in ("VAR", "VAR_TEMP") and d.name:
-                out.emit(1, f"_L.{d.key} = {self.var_init(d)}", d)
-        ret = getattr(pou, "ret_decl", None)
-        out.emit(1, f"_L.RET_ = {self.init_code(ret.init_value) if ret is not None else 'None'}", pou)
-        out.emit(1, "try:")
-        self.block(pou.body, 2)
-        out.emit(1, "finally:")
-        for d in outs:
-            out.emit(2, f"if _out_{d.key} is not None: _out_{d.key}.set(_L.{d.key})", d)
-        out.emit(2, "pass")
-        out.emit(1, "return _L.RET_")
+                out.emit(1, f"{self.local[id(d)]} = {self.var_init(d)}", d)
+        if ret is not None:
+            out.emit(1, f"{self.ret_code} = {self.init_code(ret.init_value)}", pou)
+        if eno is not None and (use.count[id(eno)] or id(eno) in use.by_ref):
+            out.emit(1, f"{self.local[id(eno)]} = True")        # the body may clear it
+            outs.append(("_eno", self.local[id(eno)]))
+        elif eno is not None:
+            out.emit(1, "if _eno is not None: _eno.set(True)")
+        if outs:
+            out.emit(1, "try:")
+            self.block(pou.body, 2)
+            out.emit(1, "finally:")
+            for ref, store in outs:
+                out.emit(2, f"if {ref} is not None: {ref}.set({store})")
+        else:
+            self.block(pou.body, 1)
+        out.emit(1, f"return {self.ret_code}")
+        self.local = {}
+        self.ret_code = "None"
 
     # ------------------------------------------------------------------ statements
     def block(self, body: list[A.Stmt], ind: int) -> None:
@@ -358,7 +435,7 @@ class Compiler:
             flag = self.loop_stack[-1] if self.loop_stack else ""
             out.emit(ind, "break" if flag else "continue", s)
         elif isinstance(s, A.Return):
-            out.emit(ind, "return" if not self.in_function else "return _L.RET_", s)
+            out.emit(ind, "return" if not self.in_function else f"return {self.ret_code}", s)
         elif isinstance(s, A.Empty):
             out.emit(ind, "pass", s)
         else:  # pragma: no cover - the checker admits nothing else
@@ -408,6 +485,10 @@ class Compiler:
             # VAR_IN_OUT references and watched elements pointing at the variable)
             self.out.emit(ind, f"_store_into({self.lvalue_get(target)}, {value_code})", node)
             return
+        if isinstance(value_code, F32Code):
+            # rounding to single precision through a float array is the cheapest way Python has
+            self.out.emit(ind, f"_fa[0] = {value_code.inner}", node)
+            value_code = "_fa[0]"
         self.out.emit(ind, self.store(target, value_code), node)
 
     def store(self, target: A.Expr, value_code: str) -> str:
@@ -426,14 +507,15 @@ class Compiler:
         """The storage of a name (without the .get() of scalar VAR_IN_OUT refs)."""
         sym = e.sym
         if isinstance(sym, A.VarDecl):
+            local = self.local.get(id(sym))
+            if local is not None:
+                return local
             if not sym.name:                       # `%QW1` of an anonymous AT declaration
                 return f"G.{located_attr(sym)}" if sym.section == "VAR_GLOBAL" else f"self.{located_attr(sym)}"
             if sym.section == "VAR_EXTERNAL":
                 return f"G.{sym.key}"
             if sym.section == "VAR_GLOBAL":
                 return f"G.{sym.key}"
-            if self.in_function:
-                return "_L.RET_" if sym.section == "RETURN" else f"_L.{sym.key}"
             return f"self.{sym.key}"
         raise TypeError(f"not a variable: {e.name}")
 
@@ -481,17 +563,21 @@ class Compiler:
         out = self.out
         inst = self.lvalue_get(s.target)
         fb: T.FBType = s.fb_type
-        iv = f"_i{next(self.tmp)}"
-        out.emit(ind, f"{iv} = {inst}", s)
+        if inst.isidentifier():
+            iv = inst            # the instance is in a local already
+        else:
+            iv = f"_i{next(self.tmp)}"
+            out.emit(ind, f"{iv} = {inst}", s)
         outputs = []
         en = next((a for a in s.args if a.key == "EN" and not a.is_output), None)
         eno = next((a for a in s.args if a.key == "ENO" and a.is_output), None)
-        if en is not None or eno is not None:
-            # EN/ENO, which matiec gives every FB: the block runs only when EN is TRUE
+        outer = ind
+        if en is not None:
+            # EN, which matiec gives every FB: the block runs only when EN is TRUE, else its
+            # ENO goes FALSE
             flag = f"_en{next(self.tmp)}"
-            out.emit(ind, f"{flag} = {self.expr(en.value) if en is not None else 'True'}", s)
-            if eno is not None:
-                self.assign(eno.value, flag, ind, eno)
+            out.emit(ind, f"{flag} = {self.expr(en.value)}", s)
+            out.emit(ind, f"if not {flag}: {iv}.ENO = False")
             out.emit(ind, f"if {flag}:")
             ind += 1
         for a in s.args:
@@ -506,15 +592,27 @@ class Compiler:
                 out.emit(ind, f"{iv}.{key} = {self.ref_to(a.value, decl.ty)}", a)
             else:
                 ptype = decl.ty if decl is not None else a.value.ty
+                if isinstance(T.base_of(ptype) if ptype is not None else None, (T.ArrayType, T.StructType)):
+                    # passed by value: copied into the block's own input (as C copies it)
+                    out.emit(ind, f"_store_into({iv}.{key}, {self.expr(a.value)})", a)
+                    continue
                 out.emit(ind, f"{iv}.{key} = {self.expr_as(a.value, ptype)}", a)
         # a standard FB's body directly (its __call__ only handles EN, which is TRUE here)
-        std = isinstance(fb.pou, FBSig) and en is None
-        out.emit(ind, f"{iv}._body()" if std else f"{iv}()", s)
+        if isinstance(fb.pou, FBSig):
+            if eno is not None:
+                out.emit(ind, f"{iv}.ENO = True")
+            out.emit(ind, f"{iv}._body()", s)
+        else:
+            if eno is not None:
+                out.emit(ind, f"{iv}.ENO = True")
+            out.emit(ind, f"{iv}._run()", s)
         for a in outputs:
             code = f"{iv}.{a.key}"
             if a.negated:
                 code = f"not {code}"
             self.assign(a.value, code, ind, a)
+        if eno is not None:
+            self.assign(eno.value, f"{iv}.ENO", outer, eno)
 
     def ref_to(self, e: A.Expr, ty: Optional[T.Type]) -> str:
         """A reference to variable `e` for a VAR_IN_OUT parameter."""
@@ -526,6 +624,8 @@ class Compiler:
                 return self.name_code(e)   # pass the caller's reference on
             code = self.name_code(e)
             obj, _, attr = code.rpartition(".")
+            if not obj:   # pragma: no cover - varuse keeps variables passed by reference in objects
+                raise AssertionError(f"{e.name} is passed by reference but was compiled as a local")
             return f"Ref({obj}, {attr!r})"
         if isinstance(e, A.Member):
             return f"Ref({self.lvalue_get(e.base)}, {e.key!r})"
@@ -539,25 +639,26 @@ class Compiler:
         """`e` as stored into a variable of type `ty`: a promoted small-integer arithmetic
         result is narrowed here, as the C assignment matiec generates narrows it."""
         b = T.base_of(ty) if ty is not None else None
-        if self._ring_int(e) is not None and isinstance(b, T.ElementaryType) and b.bits < 32 \
+        if ring_type(e) is not None and isinstance(b, T.ElementaryType) and b.bits < 32 \
                 and b.kind in ("sint", "uint", "bits"):
-            return self.narrow(self.raw(e), ty)     # the low bits of the exact result
+            return self.narrow(self.raw(e), ty, self.ranges.raw(e))     # the low bits of the exact result
         code = self.expr(e)
         if isinstance(e, (A.Binary, A.Unary)):
-            code = self.narrow(code, ty)
+            code = self.narrow(code, ty, self.ranges.value(e))
         if _is_double(e) and ty is not None and T.base_of(ty) is T.REAL:
-            code = f"_f32({code})"
+            code = F32Code(code)
         return code
 
-    @staticmethod
-    def narrow(code: str, ty: Optional[T.Type]) -> str:
+    def narrow(self, code: str, ty: Optional[T.Type], rng: Optional[Range] = None) -> str:
+        """Store a C int into a smaller integer variable: keep the low bits (unless `rng`
+        shows the value fits)."""
         b = T.base_of(ty) if ty is not None else None
         if isinstance(b, T.ElementaryType) and b.kind in ("sint", "uint", "bits") and b.bits < 32:
-            mask = (1 << b.bits) - 1
+            if within(rng, type_range(b)):
+                return code
             if b.kind == "sint":
-                half = 1 << (b.bits - 1)
-                return f"(((({code}) + {half}) & {mask}) - {half})"
-            return f"(({code}) & {mask})"
+                return self._signed_wrap(code, b.min, b.max)
+            return f"(({code}) & {b.max})"
         return code
 
     def expr(self, e: A.Expr) -> str:
@@ -587,8 +688,8 @@ class Compiler:
                 return f"(~({inner}) & {(1 << b.bits) - 1})"
             if b is T.REAL and _is_double(e):
                 return f"(-({inner}))"
-            if self._ring_int(e) is not None:
-                return self.wrap(self.raw(e), _concrete(e.ty))
+            if ring_type(e) is not None:
+                return self.wrap(self.raw(e), _concrete(e.ty), self.ranges.raw(e))
             return self.wrap(f"-({inner})", e.ty)
         if isinstance(e, A.Binary):
             return self.binary(e)
@@ -603,20 +704,9 @@ class Compiler:
         fn = stdlib.lookup_operator(op, [_lib_type(t) for t in arg_types], _lib_type(result))
         return self.bind(fn, "_op")
 
-    def _ring_int(self, e: A.Expr) -> Optional[T.ElementaryType]:
-        """The integer type of a + - * or unary - node (a ring operation), else None.
-
-        Wrapping commutes with ring operations, so a chain of them is computed with Python's
-        exact integers and wrapped once, where the value leaves the chain."""
-        if (isinstance(e, A.Binary) and e.op in ("+", "-", "*")) or (isinstance(e, A.Unary) and e.op == "-"):
-            b = T.base_of(_concrete(e.ty))
-            if isinstance(b, T.ElementaryType) and b.kind in ("sint", "uint", "bits"):
-                return b
-        return None
-
     def raw(self, e: A.Expr) -> str:
         """Code of `e` without the final wrap when it is an integer ring operation."""
-        b = self._ring_int(e)
+        b = ring_type(e)
         if b is None:
             return self.expr(e)
         if isinstance(e, A.Unary):
@@ -624,11 +714,11 @@ class Compiler:
         return f"({self._ring_child(e.left, b)} {e.op} {self._ring_child(e.right, b)})"
 
     def _ring_child(self, e: A.Expr, b: T.ElementaryType) -> str:
-        return self.raw(e) if self._ring_int(e) is b else self.expr(e)
+        return self.raw(e) if ring_type(e) is b else self.expr(e)
 
     def binary(self, e: A.Binary) -> str:
-        if self._ring_int(e) is not None:
-            return self.wrap(self.raw(e), _concrete(e.ty))
+        if ring_type(e) is not None:
+            return self.wrap(self.raw(e), _concrete(e.ty), self.ranges.raw(e))
         l, r = self.expr(e.left), self.expr(e.right)
         op = e.op
         lt = _concrete(e.left.ty)
@@ -659,6 +749,9 @@ class Compiler:
             if isinstance(divisor, int) and divisor > 0:
                 # C's `%` by a positive constant, inline (a MOD in every scan is common):
                 # the result takes the dividend's sign
+                dividend = self.ranges.value(e.left)
+                if dividend is not None and dividend[0] >= 0:
+                    return f"({l} % {divisor})"
                 t = f"_m{next(self.tmp)}"
                 return f"(-(-{t} % {divisor}) if ({t} := {l}) < 0 else {t} % {divisor})"
             return f"_cmod({l}, {r})"      # |result| < |divisor|: no wrap needed
@@ -669,43 +762,40 @@ class Compiler:
     def call(self, c: A.Call) -> str:
         en = next((a for a in c.args if a.key == "EN" and not a.is_output), None)
         eno = next((a for a in c.args if a.key == "ENO" and a.is_output), None)
+        eno_ref = self.ref_to(eno.value, T.BOOL) if eno is not None else None
         if c.pou is not None:
-            code = self.user_call(c)
+            code = self.user_call(c, eno_ref)       # the function sets ENO itself
         else:
             code = self.std_call(c)
-        if en is None and eno is None:
+            if eno_ref is not None and en is None:
+                code = f"({eno_ref}.set(True), {code})[1]"
+        if en is None:
             return code
-        en_code = self.expr(en.value) if en is not None else "True"
         default = self.const(T.default_value(c.ty)) if c.ty is not None else "None"
-        call = f"({code} if _en else {default})"
-        if eno is not None:
-            target = self.ref_to(eno.value, T.BOOL)
-            return f"(lambda _en: ({target}.set(_en), {call})[1])({en_code})"
-        return f"(lambda _en: {call})({en_code})"
+        if eno_ref is not None:
+            if c.pou is None:
+                code = f"({eno_ref}.set(True), {code})[1]"
+            default = f"({eno_ref}.set(False), {default})[1]"
+        return f"({code} if {self.expr(en.value)} else {default})"
 
-    def user_call(self, c: A.Call) -> str:
+    def user_call(self, c: A.Call, eno_ref: Optional[str] = None) -> str:
+        """Every parameter positionally, in declaration order: a missing input gets its
+        initial value, a missing output None (see `function`)."""
         pou: A.PouDecl = c.pou
-        params = [d for d in pou.decls if d.section in ("VAR_INPUT", "VAR_OUTPUT", "VAR_IN_OUT")]
+        given = {id(a.param): a for a in c.args if a.key not in ("EN", "ENO") and a.param is not None}
         args = []
-        for a in c.args:
-            if a.key in ("EN", "ENO"):
-                continue
-            d = a.param
-            if d is None:
-                continue
-            if d.section == "VAR_INPUT":
-                args.append(f"{d.key}={self.expr_as(a.value, d.ty)}")
-            elif d.section == "VAR_OUTPUT":
-                target = self.ref_to(a.value, d.ty)
-                if a.negated:
-                    target = f"_NegRef({target})"
-                args.append(f"{d.key}={target}")
+        for d in _params(pou):
+            a = given.get(id(d))
+            if a is None:
+                args.append(self.init_code(d.init_value) if d.section == "VAR_INPUT" else "None")
+            elif d.section == "VAR_INPUT":
+                args.append(self.expr_as(a.value, d.ty))
+            elif d.section == "VAR_OUTPUT" and a.negated:
+                args.append(f"_NegRef({self.ref_to(a.value, d.ty)})")
             else:
-                args.append(f"{d.key}={self.ref_to(a.value, d.ty)}")
-        for d in params:
-            if d.section == "VAR_INPUT" and isinstance(d.init_value, (list, T.StructValue)) and \
-                    not any(a.param is d for a in c.args):
-                args.append(f"{d.key}={self.init_code(d.init_value)}")
+                args.append(self.ref_to(a.value, d.ty))
+        if eno_ref is not None:
+            args.append(eno_ref)
         return f"{_pyname('FC', pou.name)}({', '.join(args)})"
 
     def std_call(self, c: A.Call) -> str:
@@ -720,6 +810,8 @@ class Compiler:
         types = dict(zip(names, arg_types))
         codes = [self.expr_as(a.value, types.get(n)) for n, a in ordered]
         inline = _inline_conversion(c.std, arg_types, _concrete(c.ty), codes)
+        if inline is None and c.std in ("SHL", "SHR") and len(ordered) == 2:
+            inline = _inline_shift(c.std, arg_types[0], self.cu_const(ordered[1][1].value), codes[0])
         if inline is not None:
             return inline
         return f"{fname}({', '.join(codes)})"
@@ -741,10 +833,22 @@ def _inline_conversion(name: str, arg_types: list, result: Optional[T.Type], cod
     if src.kind in ints and dst.kind in ints and dst.min <= src.min and src.max <= dst.max:
         return codes[0]
     if src is T.BOOL and dst.kind in ints:
-        return f"int({codes[0]})"
+        return f"(1 if {codes[0]} else 0)"
     if src.kind in ints and dst.is_real and src.bits <= (16 if dst is T.REAL else 32):
         return f"float({codes[0]})"
     return None
+
+
+def _inline_shift(name: str, ty: Optional[T.Type], count: Any, code: str) -> Optional[str]:
+    """SHL / SHR of a bit string by a constant count, as the library computes it."""
+    b = T.base_of(ty) if ty is not None else None
+    if not isinstance(b, T.ElementaryType) or b.kind != "bits" or b is T.BOOL or \
+            not isinstance(count, int) or isinstance(count, bool) or count < 0:
+        return None
+    count &= 63 if b.bits == 64 else 31        # x86 masks the count (stdlib._count_mask)
+    if name == "SHR":
+        return f"({code} >> {count})"
+    return f"(({code} << {count}) & {(1 << b.bits) - 1})"
 
 
 def located_attr(d: A.VarDecl) -> str:
@@ -781,12 +885,6 @@ def _cmod(a: int, b: int) -> int:
     return r
 
 
-def _concrete(t: Optional[T.Type]) -> Optional[T.Type]:
-    if isinstance(t, _LitType):
-        return T.DINT if t.kind == "int" else T.LREAL
-    return t
-
-
 def _is_double(e: A.Expr) -> bool:
     """Whether the C that matiec generates computes REAL expression `e` as a double: an
     untyped real literal is a C double constant (`0.1`, not `0.1f`), `**` is
@@ -820,6 +918,28 @@ def _param_rank(name: str) -> tuple:
     stem = name.rstrip("0123456789")
     num = name[len(stem):]
     return (order.get(stem, 2), int(num) if num else 0)
+
+
+_LOCAL_MIN_USES = 2
+"""A PROGRAM's or FB's variable named this often in its body is kept in a Python local
+while the body runs (loaded on entry, stored back on exit)."""
+
+
+class F32Code(str):
+    """Code of a REAL result still to be rounded to single precision: it reads as
+    `_f32(inner)`, and an assignment rounds it through the `_fa` float array instead."""
+
+    inner: str
+
+    def __new__(cls, inner: str) -> "F32Code":
+        obj = super().__new__(cls, f"_f32({inner})")
+        obj.inner = inner
+        return obj
+
+
+def _params(pou: A.PouDecl) -> list[A.VarDecl]:
+    """A FUNCTION's parameters in declaration order: its positional signature."""
+    return [d for d in pou.decls if d.section in ("VAR_INPUT", "VAR_OUTPUT", "VAR_IN_OUT")]
 
 
 class _Locals:

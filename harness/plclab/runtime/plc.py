@@ -23,6 +23,7 @@ from plclab.iec import types as T
 from plclab.runtime.compiler import CompiledProgram, compile_unit, located_attr
 from plclab.runtime.faults import FaultRecord, PlcFault
 from plclab.runtime.image import ProcessImage
+from plclab.runtime.stdfb import ScanClock
 
 DEFAULT_TICK_NS = 20_000_000          # OpenPLC's default scan time when no task gives one
 DEFAULT_WATCHDOG_S = 2.0              # wall-clock limit of one scan
@@ -93,7 +94,7 @@ class PLC:
         self._last_persist_ns = 0
         self.state = STOP
         self.fault: Optional[FaultRecord] = None
-        self.now_ns = 0
+        self.scan_clock = ScanClock()       # __CURRENT_TIME, which the standard timers read
         self.ticks = 0
         self._loop_count = 0
         self._scan_started = 0.0
@@ -153,7 +154,7 @@ class PLC:
             period = 1
             if inst.interval_ns:
                 period = max(1, inst.interval_ns // self.tick_ns)
-            sched.append((period, inst.obj))
+            sched.append((period, inst.obj._run))
         return sched
 
     def _bind_located(self) -> list[LocatedBinding]:
@@ -182,11 +183,16 @@ class PLC:
         to_raw, from_raw = _converters(d.ty, _AREA_BITS[loc.size])
         return LocatedBinding(address, area, index, owner, attr, d.ty, name, to_raw, from_raw)
 
-    # ------------------------------------------------------------------ hooks used by compiled code
-    def clock(self) -> int:
+    @property
+    def now_ns(self) -> int:
         """PLC time in ns, as the standard timers read it (constant during one scan)."""
-        return self.now_ns
+        return self.scan_clock.now
 
+    @now_ns.setter
+    def now_ns(self, value: int) -> None:
+        self.scan_clock.now = value
+
+    # ------------------------------------------------------------------ hooks used by compiled code
     def loop_check(self) -> None:
         """Called on every loop iteration: a scan that runs too long is a watchdog fault."""
         self._loop_count += 1
@@ -375,11 +381,15 @@ class PLC:
         """(container, key) of a located address, a global, or a path such as
         `Main.Robot.Sequencer.Ptr` or `Positions[2]` / `Main.Cp.Frames[3].Data[1]`: the value
         is `container[key]` for an array element, else `getattr(container, key)`."""
+        return self.resolve_typed(name)[:2]
+
+    def resolve_typed(self, name: str) -> tuple[Any, Any, T.Type]:
+        """`resolve`, plus the variable's type."""
         up = name.strip().upper()
         if up.startswith("%"):
             for b in self.bindings:
                 if b.address == up:
-                    return b.owner, b.attr
+                    return b.owner, b.attr, b.ty
             raise PlcLabError(f"no variable is located at {name}")
         steps = re.findall(r"\.?\s*([A-Z_][A-Z0-9_]*)|\[([^\]]*)\]", up)
         if not steps or not steps[0][0] or "".join(
@@ -428,7 +438,7 @@ class PLC:
                 container, key, ty = value, flat, arr.elem
         if key is None:
             raise unknown
-        return container, key
+        return container, key, ty
 
     def read(self, name: str) -> Any:
         container, key = self.resolve(name)
@@ -446,8 +456,11 @@ class PLC:
                     return
             self.write_address(up, value)
             return
-        container, key = self.resolve(name)
-        _set(container, key, value)
+        container, key, ty = self.resolve_typed(name)
+        normalise = T.wrapper_for(ty)
+        # stored as C stores it (INT 40000 is -25536): a variable always holds a value of its
+        # type, which the compiled code relies on (plclab.runtime.ranges)
+        _set(container, key, normalise(value) if normalise is not None else value)
 
     def write_address(self, address: str, value: Any) -> None:
         """Write a raw value into the image at an address no variable is located at."""

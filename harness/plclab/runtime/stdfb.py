@@ -10,7 +10,7 @@ library (IN, PT, Q, ET, CLK, CU, CD, R, LD, PV, CV, QU, QD, S1, R, S, R1, Q1, EN
 the library's internal variables (M, STATE, PREV_IN, START_TIME, CU_T...). The compiled
 program sets the inputs, calls the instance with no arguments, then reads the outputs:
 
-    t = TON(clock=plc_clock)
+    t = TON(clock=scan_clock)
     t.IN = True; t.PT = 500 * NS_PER_MS
     t()
     if t.Q: ...
@@ -21,19 +21,19 @@ Time: OpenPLC's timers never read a clock themselves. Each call copies the globa
 `__CURRENT_TIME` into CURRENT_TIME; the runtime (webserver/core/main.cpp) calls
 `updateTime()` *after* every scan, adding the configured tick (`common_ticktime__`) to it. So
 __CURRENT_TIME starts at 0, is the same for every timer during a scan, and counts scans times
-the tick, not wall-clock time. Here every timer (TP, TON, TOF, RTC) is built with
-`clock: Callable[[], int]` returning that value in nanoseconds; `ScanClock` is a ready-made
-one the runtime can advance by one tick after each scan (virtual or real time alike).
+the tick, not wall-clock time. Here every timer (TP, TON, TOF, RTC) is built with a
+`ScanClock`, whose `now` holds that value in nanoseconds; the runtime advances it by one tick
+after each scan (virtual or real time alike). Timers read `now` as an attribute: a timer call
+is on the hot path of nearly every scan.
 """
 from __future__ import annotations
 
-from typing import Callable, ClassVar, Optional
+from typing import ClassVar, Optional
 
 from plclab.iec import types as T
 from plclab.iec.types import Type, to_f32
 from plclab.runtime.stdlib import ieee_div as _fdiv, time_to_seconds
 
-Clock = Callable[[], int]
 VarDecl = tuple[str, Type]
 
 
@@ -48,9 +48,6 @@ class ScanClock:
 
     def __init__(self, start: int = 0) -> None:
         self.now = start
-
-    def __call__(self) -> int:
-        return self.now
 
     def advance(self, dt_ns: int) -> None:
         self.now += dt_ns
@@ -72,7 +69,7 @@ class StandardFB:
     RETAIN: ClassVar[tuple[str, ...]] = ()
     NEEDS_CLOCK: ClassVar[bool] = False
 
-    def __init__(self, clock: Optional[Clock] = None) -> None:
+    def __init__(self, clock: Optional[ScanClock] = None) -> None:
         self.EN = True
         self.ENO = True
         for name, t in self.INPUTS + self.OUTPUTS + self.LOCALS:
@@ -172,7 +169,7 @@ class _CTUBase(StandardFB):
     __slots__ = ("CU", "R", "PV", "Q", "CV", "CU_T")
     NESTED = (("CU_T", "R_TRIG"),)
 
-    def __init__(self, clock: Optional[Clock] = None) -> None:
+    def __init__(self, clock: Optional[ScanClock] = None) -> None:
         super().__init__(clock)
         self.CU_T = R_TRIG()
 
@@ -193,7 +190,7 @@ class _CTDBase(StandardFB):
     __slots__ = ("CD", "LD", "PV", "Q", "CV", "CD_T")
     NESTED = (("CD_T", "R_TRIG"),)
 
-    def __init__(self, clock: Optional[Clock] = None) -> None:
+    def __init__(self, clock: Optional[ScanClock] = None) -> None:
         super().__init__(clock)
         self.CD_T = R_TRIG()
 
@@ -215,7 +212,7 @@ class _CTUDBase(StandardFB):
     __slots__ = ("CU", "CD", "R", "LD", "PV", "QU", "QD", "CV", "CD_T", "CU_T")
     NESTED = (("CD_T", "R_TRIG"), ("CU_T", "R_TRIG"))
 
-    def __init__(self, clock: Optional[Clock] = None) -> None:
+    def __init__(self, clock: Optional[ScanClock] = None) -> None:
         super().__init__(clock)
         self.CD_T = R_TRIG()
         self.CU_T = R_TRIG()
@@ -274,10 +271,9 @@ class _Timer(StandardFB):
     LOCALS = _io("STATE SINT", "PREV_IN BOOL", "CURRENT_TIME TIME", "START_TIME TIME")
     NEEDS_CLOCK = True
 
-    def __init__(self, clock: Optional[Clock] = None) -> None:
+    def __init__(self, clock: Optional[ScanClock] = None) -> None:
         if clock is None:
-            raise TypeError(f"{type(self).__name__} needs clock=: a callable returning the "
-                            "PLC time of the current scan in ns (see ScanClock)")
+            raise TypeError(f"{type(self).__name__} needs clock=: the PLC's ScanClock")
         super().__init__(clock)
         self._clock = clock
 
@@ -290,24 +286,26 @@ class TON(_Timer):
     __slots__ = ()
 
     def _body(self) -> None:
-        now = self._clock()
-        self.CURRENT_TIME = now
-        if self.STATE == 0 and not self.PREV_IN and self.IN:
-            self.STATE = 1
-            self.Q = False
-            self.START_TIME = now
-        elif not self.IN:
+        now = self.CURRENT_TIME = self._clock.now
+        if not self.IN:
             self.ET = 0
             self.Q = False
             self.STATE = 0
-        elif self.STATE == 1:
+            self.PREV_IN = False
+            return
+        state = self.STATE
+        if state == 0 and not self.PREV_IN:
+            self.STATE = 1
+            self.Q = False
+            self.START_TIME = now
+        elif state == 1:
             if self.START_TIME + self.PT <= now:
                 self.STATE = 2
                 self.Q = True
                 self.ET = self.PT
             else:
                 self.ET = now - self.START_TIME
-        self.PREV_IN = bool(self.IN)
+        self.PREV_IN = True
 
 
 class TOF(_Timer):
@@ -318,22 +316,25 @@ class TOF(_Timer):
     __slots__ = ()
 
     def _body(self) -> None:
-        now = self._clock()
-        self.CURRENT_TIME = now
-        if self.STATE == 0 and self.PREV_IN and not self.IN:
-            self.STATE = 1
-            self.START_TIME = now
-        elif self.IN:
+        now = self.CURRENT_TIME = self._clock.now
+        if self.IN:
             self.ET = 0
             self.STATE = 0
-        elif self.STATE == 1:
+            self.Q = True
+            self.PREV_IN = True
+            return
+        state = self.STATE
+        if state == 0 and self.PREV_IN:
+            state = self.STATE = 1
+            self.START_TIME = now
+        elif state == 1:
             if self.START_TIME + self.PT <= now:
-                self.STATE = 2
+                state = self.STATE = 2
                 self.ET = self.PT
             else:
                 self.ET = now - self.START_TIME
-        self.Q = bool(self.IN) or self.STATE == 1
-        self.PREV_IN = bool(self.IN)
+        self.Q = state == 1
+        self.PREV_IN = False
 
 
 class TP(_Timer):
@@ -343,8 +344,7 @@ class TP(_Timer):
     __slots__ = ()
 
     def _body(self) -> None:
-        now = self._clock()
-        self.CURRENT_TIME = now
+        now = self.CURRENT_TIME = self._clock.now
         if self.STATE == 0 and not self.PREV_IN and self.IN:
             self.STATE = 1
             self.Q = True
@@ -373,15 +373,14 @@ class RTC(StandardFB):
     LOCALS = _io("PREV_IN BOOL", "OFFSET TIME", "CURRENT_TIME DT")
     NEEDS_CLOCK = True
 
-    def __init__(self, clock: Optional[Clock] = None) -> None:
+    def __init__(self, clock: Optional[ScanClock] = None) -> None:
         if clock is None:
-            raise TypeError("RTC needs clock=: a callable returning the PLC time in ns")
+            raise TypeError("RTC needs clock=: the PLC's ScanClock")
         super().__init__(clock)
         self._clock = clock
 
     def _body(self) -> None:
-        now = self._clock()
-        self.CURRENT_TIME = now
+        now = self.CURRENT_TIME = self._clock.now
         if self.IN:
             if not self.PREV_IN:
                 self.OFFSET = self.PDT - now
@@ -476,7 +475,7 @@ class PID(StandardFB):
     LOCALS = _io("ERROR REAL")
     NESTED = (("ITERM", "INTEGRAL"), ("DTERM", "DERIVATIVE"))
 
-    def __init__(self, clock: Optional[Clock] = None) -> None:
+    def __init__(self, clock: Optional[ScanClock] = None) -> None:
         super().__init__(clock)
         self.ITERM = INTEGRAL()
         self.DTERM = DERIVATIVE()

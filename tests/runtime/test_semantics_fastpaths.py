@@ -1,0 +1,204 @@
+"""The compiled body keeps variables in Python locals while it runs (for speed): these cases
+check that nothing a program can observe changes. References (VAR_IN_OUT, function outputs),
+a fault in the middle of a body, EN/ENO, inputs passed by value, and the inline forms of
+shifts and REAL rounding."""
+from __future__ import annotations
+
+import sys
+from pathlib import Path
+
+sys.path.insert(0, str(Path(__file__).resolve().parent))
+
+from hypothesis import assume, given, settings, strategies as st  # noqa: E402
+
+from plclab.errors import CompileError  # noqa: E402
+from plclab.iec import types as T  # noqa: E402
+from plclab.runtime import stdlib  # noqa: E402
+from st_helpers import MS, once, program, val  # noqa: E402
+
+BUMP_FB = """
+FUNCTION_BLOCK FB_Bump
+VAR_IN_OUT v : INT; END_VAR
+VAR_OUTPUT seen : INT; END_VAR
+seen := v;
+v := v + 10;
+END_FUNCTION_BLOCK
+"""
+
+
+def test_variable_passed_by_reference_is_seen_by_callee_and_caller():
+    # x is named many times (a local candidate) and handed to a VAR_IN_OUT: the block must
+    # read the caller's latest value and the caller must see what the block wrote
+    sim = once("VAR x : INT; b : FB_Bump; before, seen, after : INT; END_VAR",
+               "x := 1; x := x + 1; before := x; b(v := x); seen := b.seen; x := x + 1; after := x;",
+               BUMP_FB)
+    assert (val(sim, "before"), val(sim, "seen"), val(sim, "after")) == (2, 2, 13)
+
+
+def test_function_output_into_a_busy_variable():
+    extra = """
+FUNCTION FC_Split : INT
+VAR_INPUT x : INT; END_VAR
+VAR_OUTPUT hi : INT; END_VAR
+hi := x / 100;
+FC_Split := x MOD 100;
+END_FUNCTION
+"""
+    sim = once("VAR h, lo, sum : INT; END_VAR",
+               "h := 1; sum := h; lo := FC_Split(x := 1234, hi => h); sum := sum + h + lo; h := h + 1;",
+               extra)
+    assert (val(sim, "h"), val(sim, "lo"), val(sim, "sum")) == (13, 34, 1 + 12 + 34)
+
+
+def test_fb_keeps_state_in_its_instance_between_calls():
+    extra = """
+FUNCTION_BLOCK FB_Count
+VAR_OUTPUT n : INT; END_VAR
+VAR inc : INT := 2; END_VAR
+n := n + inc; n := n + inc; inc := inc + 1;
+END_FUNCTION_BLOCK
+"""
+    sim = program("VAR c : FB_Count; END_VAR", "c();", extra)
+    sim.step(3)
+    assert val(sim, "c.n") == (2 + 2) + (3 + 3) + (4 + 4)
+    assert val(sim, "c.inc") == 5
+
+
+def test_values_written_before_a_fault_are_kept():
+    sim = program("VAR a, z, q : INT; END_VAR",
+                  "a := a + 1; a := a + 1; IF a > 2 THEN q := 10 / z; END_IF; a := 100;")
+    sim.step(3)
+    assert sim.plc.state == "FAULT" and sim.plc.fault.kind == "division_by_zero"
+    assert sim.plc.fault.time_ns == 20 * MS
+    assert val(sim, "a") == 102       # scan 1 ends at 100; scan 2 adds 2, then faults before `a := 100`
+
+
+ENO_FB = """
+FUNCTION_BLOCK FB_Check
+VAR_INPUT x : INT; END_VAR
+VAR_OUTPUT ok : BOOL; END_VAR
+ok := x >= 0;
+IF x < 0 THEN ENO := FALSE; END_IF;
+END_FUNCTION_BLOCK
+"""
+
+
+def test_fb_body_sets_eno_and_en_false_skips_the_body():
+    sim = once("VAR f : FB_Check; e1, e2, e3, e4 : BOOL; ok3 : BOOL; END_VAR",
+               "f(x := 5, ENO => e1); f(x := -5, ENO => e2); "
+               "f(EN := FALSE, x := 7, ENO => e3); ok3 := f.ok; f(x := 1, ENO => e4);",
+               ENO_FB)
+    assert (val(sim, "e1"), val(sim, "e2"), val(sim, "e3"), val(sim, "e4")) == (True, False, False, True)
+    assert val(sim, "ok3") is False       # the skipped call left the output of x := -5
+
+
+def test_function_body_sets_eno():
+    extra = """
+FUNCTION FC_SafeDiv : INT
+VAR_INPUT a, b : INT; END_VAR
+IF b = 0 THEN ENO := FALSE; ELSE FC_SafeDiv := a / b; END_IF;
+END_FUNCTION
+"""
+    sim = once("VAR r1, r2, r3 : INT; e1, e2, e3 : BOOL; END_VAR",
+               "r1 := FC_SafeDiv(a := 9, b := 3, ENO => e1); r2 := FC_SafeDiv(a := 9, b := 0, ENO => e2); "
+               "r3 := FC_SafeDiv(EN := FALSE, a := 9, b := 3, ENO => e3);", extra)
+    assert (val(sim, "r1"), val(sim, "e1")) == (3, True)
+    assert (val(sim, "r2"), val(sim, "e2")) == (0, False)
+    assert (val(sim, "r3"), val(sim, "e3")) == (0, False)
+
+
+def test_array_input_of_fb_is_passed_by_value():
+    extra = """
+TYPE T_Three : ARRAY[1..3] OF INT; END_TYPE
+FUNCTION_BLOCK FB_Scratch
+VAR_INPUT a : T_Three; END_VAR
+VAR_OUTPUT r : INT; END_VAR
+a[2] := 77;
+r := a[1] + a[2];
+END_FUNCTION_BLOCK
+"""
+    sim = once("VAR x : T_Three; f : FB_Scratch; x2, r : INT; END_VAR",
+               "x[1] := 1; f(a := x); r := f.r; x2 := x[2];", extra)
+    assert (val(sim, "r"), val(sim, "x2")) == (78, 0)
+
+
+def test_real_overflow_in_an_assignment_is_infinite():
+    sim = program("VAR r : REAL := 1.0; big : REAL := 1.0E30; END_VAR", "r := r * big;")
+    sim.step(2)
+    assert val(sim, "r") == float("inf") and sim.plc.state == "RUN"
+
+
+@settings(max_examples=150, deadline=None)
+@given(type_name=st.sampled_from(["BYTE", "WORD", "DWORD", "LWORD"]), value=st.integers(0, 2**64 - 1),
+       count=st.integers(0, 70), left=st.booleans())
+def test_constant_shift_inline_matches_the_library(type_name, value, count, left):
+    ty = T.ELEMENTARY[type_name]
+    value &= (1 << ty.bits) - 1
+    fn = "SHL" if left else "SHR"
+    sim = once(f"VAR x, y : {type_name}; END_VAR",
+               f"x := {type_name}#{value}; y := {fn}(x, {count});")
+    assert val(sim, "y") == stdlib.lookup(fn, [ty, T.INT], ty)(value, count)
+
+
+# --------------------------------------------------------------------------- left-out wraps
+# The compiler leaves out a wrap where the declared types prove the value cannot leave its
+# type (plclab.runtime.ranges). Checked against a reference that wraps after every operation,
+# as the C that matiec generates does.
+
+_TYPES = {"SINT": (8, True), "INT": (16, True), "DINT": (32, True), "LINT": (64, True),
+          "USINT": (8, False), "UINT": (16, False), "UDINT": (32, False)}
+
+
+def _wrap(v: int, bits: int, signed: bool) -> int:
+    v &= (1 << bits) - 1
+    return v - (1 << bits) if signed and v >> (bits - 1) else v
+
+
+def _c_eval(node, env, bits, signed):
+    """C semantics: operands promoted to int (32-bit) below 32 bits, each result wrapped."""
+    cbits, csigned = (32, True) if bits < 32 else (bits, signed)
+    if isinstance(node, str):
+        return env[node] if node in env else int(node)
+    op, left, right = node
+    a, b = _c_eval(left, env, bits, signed), _c_eval(right, env, bits, signed)
+    if op == "MOD":
+        if b == 0:
+            return 0
+        r = abs(a) % abs(b)
+        return _wrap(-r if a < 0 else r, cbits, csigned)
+    return _wrap({"+": a + b, "-": a - b, "*": a * b}[op], cbits, csigned)
+
+
+def _st(node) -> str:
+    if isinstance(node, str):
+        return node
+    op, left, right = node
+    return f"({_st(left)} {op} {_st(right)})"
+
+
+_leaf = st.sampled_from(["a", "b", "c", "0", "1", "7", "100", "127"])
+_expr = st.recursive(_leaf, lambda inner: st.tuples(st.sampled_from(["+", "-", "*", "MOD"]), inner, inner),
+                     max_leaves=6)
+
+
+@settings(max_examples=120, deadline=None)
+@given(type_name=st.sampled_from(sorted(_TYPES)), tree=_expr, values=st.lists(st.integers(), min_size=3, max_size=3))
+def test_integer_expressions_wrap_like_c(type_name, tree, values):
+    bits, signed = _TYPES[type_name]
+    env = {k: _wrap(v, bits, signed) for k, v in zip("abc", values)}
+    try:
+        sim = program(f"VAR a, b, c, r : {type_name}; END_VAR", f"r := {_st(tree)};")
+    except CompileError as e:      # a constant part that overflows or divides by 0 is refused
+        assume("does not fit" not in str(e) and "zero" not in str(e))
+        raise
+    for k, v in env.items():
+        sim.plc.write(f"main.{k}", v)
+    sim.step(1)
+    assert val(sim, "r") == _wrap(_c_eval(tree, env, bits, signed), bits, signed), _st(tree)
+
+
+def test_a_value_written_from_outside_is_stored_as_its_type():
+    sim = once("VAR x, y : INT; END_VAR", "y := x + 1;")
+    sim.plc.write("main.x", 40000)          # INT: stored as C stores it
+    sim.step(1)
+    assert (val(sim, "x"), val(sim, "y")) == (40000 - 65536, 40000 - 65536 + 1)
