@@ -70,6 +70,8 @@ class ProcessImage:
 
     def apply_pending(self) -> int:
         """Apply queued writes in arrival order; returns how many were applied."""
+        if not self._pending:      # the common case, without the lock: a write queued just now
+            return 0               # is applied at the next tick
         with self._lock:
             pending, self._pending = self._pending, []
             for area, start, values in pending:

@@ -98,6 +98,7 @@ class PLC:
         self.ticks = 0
         self._loop_count = 0
         self._scan_started = 0.0
+        self._has_loops = "_rt.loop_check()" in compiled.source
         ns = compiled.namespace
         ns["_rt"] = self
         self.G = ns["G"]
@@ -224,9 +225,16 @@ class PLC:
         lines_in = ["def _copy_in(areas, external):"]
         lines_out = ["def _copy_out(areas):"]
 
+        owners: dict[int, str] = {}
+
         def access(b: LocatedBinding, i: int) -> str:
-            ns[f"o{i}"] = b.owner
-            return f"o{i}.{b.attr}"
+            name = owners.setdefault(id(b.owner), f"o{len(owners)}")
+            ns[name] = b.owner
+            return f"{name}.{b.attr}"
+
+        def cell(b: LocatedBinding) -> str:
+            ns[f"a_{b.area}"] = self.image.areas[b.area]     # the area lists are never replaced
+            return f"a_{b.area}[{b.index}]"
 
         def from_raw(b: LocatedBinding, raw: str, i: int) -> str:
             t = T.base_of(b.ty)
@@ -250,11 +258,11 @@ class PLC:
             return f"t{i}({value})"
 
         for i, b in enumerate(self._inputs):
-            lines_in.append(f"    {access(b, i)} = {from_raw(b, f'areas[{b.area!r}][{b.index}]', i)}")
+            lines_in.append(f"    {access(b, i)} = {from_raw(b, cell(b), i)}")
         lines_in.append("    if external:")
         for j, b in enumerate(self._outputs, start=len(self._inputs)):
-            lines_in.append(f"        {access(b, j)} = {from_raw(b, f'areas[{b.area!r}][{b.index}]', j)}")
-            lines_out.append(f"    areas[{b.area!r}][{b.index}] = {to_raw(b, access(b, j), j)}")
+            lines_in.append(f"        {access(b, j)} = {from_raw(b, cell(b), j)}")
+            lines_out.append(f"    {cell(b)} = {to_raw(b, access(b, j), j)}")
         lines_in.append("        pass")
         lines_out.append("    pass")
         exec(compile("\n".join(lines_in + lines_out) + "\n", "<plc-io>", "exec"), ns)
@@ -266,8 +274,9 @@ class PLC:
             return False
         self.read_inputs()
         tick = self.ticks
-        self._scan_started = time.perf_counter()
-        self._loop_count = 0
+        if self._has_loops:       # only a loop can run past the watchdog limit
+            self._scan_started = time.perf_counter()
+            self._loop_count = 0
         try:
             for period, run in self._schedule:
                 if period == 1 or tick % period == 0:

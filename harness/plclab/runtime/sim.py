@@ -84,7 +84,8 @@ class Simulation:
         for i, (container, key, how) in enumerate(self._sources):
             ns[f"c{i}"] = container
             parts.append(f"c{i}.{key}" if how == "attr" else f"c{i}[{key}] != 0" if how == "bit" else f"c{i}[{key}]")
-        exec(compile(f"def _sample():\n    return [{', '.join(parts)}]\n", "<sim-sample>", "exec"), ns)
+        values = f"({', '.join(parts)},)" if parts else "()"
+        exec(compile(f"def _sample():\n    return {values}\n", "<sim-sample>", "exec"), ns)
         return ns["_sample"]
 
     def _type_of(self, name: str, value: Any) -> T.Type:
