@@ -15,10 +15,11 @@ from plclab.errors import PlcLabError
 PROGRAMS_DIR = Path(__file__).resolve().parents[2] / "tests" / "programs"
 
 
-def bench_program(path: Path, sim_seconds: float = 20.0, sources=None, plant_factory=None,
-                  name: str = "") -> dict:
-    """Microseconds per scan and virtual-time speed-up of one program (best of 3 runs), with
-    its plant model when it has one."""
+def bench_program(path: Path, sim_seconds: float = 10.0, sources=None, plant_factory=None,
+                  name: str = "", runs: int = 5) -> dict:
+    """Microseconds per scan and virtual-time speed-up of one program, with its plant model
+    when it has one: the best of `runs` runs, the figure least disturbed by other load on the
+    machine (shared machines here swing by up to 2x between identical runs)."""
     from plclab.frontend import check_sources, load_files
     from plclab.runtime.compiler import compile_unit
     from plclab.runtime.plc import PLC
@@ -29,7 +30,7 @@ def bench_program(path: Path, sim_seconds: float = 20.0, sources=None, plant_fac
     checked = check_sources(sources) if sources is not None else load_files([path])
     gc.collect()          # no collection of earlier benchmarks' garbage inside the timed runs
     best = None
-    for _ in range(3):
+    for _ in range(runs):
         plc = PLC(compile_unit(checked))
         sim = Simulation(plc, plants=[plant_factory()] if plant_factory else ())
         t0 = time.perf_counter()
@@ -94,7 +95,7 @@ def run_bench(report: Callable[[str], None] = print, quick: bool = False,
         report("front end: benchmark not available")
     results["programs"] = []
     for path in programs or sorted(PROGRAMS_DIR.glob("*.st")):
-        r = bench_program(path, 5.0 if quick else 20.0)
+        r = bench_program(path, 2.0 if quick else 10.0)
         results["programs"].append(r)
         goal = "  (goal >= 500x)" if path.name == "bench300.st" else ""
         report(f"scan: {r['program']}: {r['us_per_scan']:.1f} us/scan at {r['tick_ms']:g} ms tick, "
@@ -105,7 +106,7 @@ def run_bench(report: Callable[[str], None] = print, quick: bool = False,
             stand = get_stand(stand_name)
         except PlcLabError:
             continue
-        r = bench_program(Path(stand_name), 5.0 if quick else 20.0, sources=sources(stand, "full"),
+        r = bench_program(Path(stand_name), 2.0 if quick else 10.0, sources=sources(stand, "full"),
                           plant_factory=stand.make_plant, name=f"{stand_name} full (with its plant)")
         results["programs"].append(r)
         report(f"scan: {r['program']}: {r['us_per_scan']:.1f} us/scan at {r['tick_ms']:g} ms tick, "

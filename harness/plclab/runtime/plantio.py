@@ -37,15 +37,17 @@ class PlantBinding:
     def __init__(self, plant: Plant, image: ProcessImage):
         self.plant = plant
         self.image = image
-        self._outs = [(loc, *location_index(loc)) for loc in plant.outputs]
-        self._index_cache: dict[str, tuple[str, int]] = {}
+        areas = image.areas
+        self._outs = [(loc, areas[a], i) for loc in plant.outputs for a, i in [location_index(loc)]]
+        self._cells: dict[str, tuple[list[int], int, int]] = {}   # input name -> (area, index, mask)
 
     def step(self, dt: float) -> None:
-        areas = self.image.areas
-        outputs = {loc: areas[a][i] for loc, a, i in self._outs}
+        outputs = {loc: area[i] for loc, area, i in self._outs}
+        cells = self._cells
         for loc, value in self.plant.step(outputs, dt).items():
-            where = self._index_cache.get(loc)
-            if where is None:
-                where = self._index_cache[loc] = location_index(loc)
-            a, i = where
-            areas[a][i] = int(value) & (1 if a[1] == "X" else 0xFFFF)
+            cell = cells.get(loc)
+            if cell is None:
+                a, i = location_index(loc)
+                cell = cells[loc] = (self.image.areas[a], i, 1 if a[1] == "X" else 0xFFFF)
+            area, i, mask = cell
+            area[i] = int(value) & mask
