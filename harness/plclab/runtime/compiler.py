@@ -303,14 +303,7 @@ class Compiler:
                     stores.append((attr, local))
         for line in loads:
             out.emit(2, line)
-        if stores:
-            out.emit(2, "try:")
-            self.block(pou.body, 3)
-            out.emit(2, "finally:")
-            for attr, local in stores:
-                out.emit(3, f"self.{attr} = {local}")
-        else:
-            self.block(pou.body, 2)
+        self.body_then(pou.body, 2, [f"self.{attr} = {local}" for attr, local in stores])
         out.emit(2, "return")
         out.emit(1, "__call__ = _run")
         self.local = {}
@@ -361,17 +354,22 @@ class Compiler:
             outs.append(("_eno", self.local[id(eno)]))
         elif eno is not None:
             out.emit(1, "if _eno is not None: _eno.set(True)")
-        if outs:
-            out.emit(1, "try:")
-            self.block(pou.body, 2)
-            out.emit(1, "finally:")
-            for ref, store in outs:
-                out.emit(2, f"if {ref} is not None: {ref}.set({store})")
-        else:
-            self.block(pou.body, 1)
+        self.body_then(pou.body, 1, [f"if {ref} is not None: {ref}.set({store})" for ref, store in outs])
         out.emit(1, f"return {self.ret_code}")
         self.local = {}
         self.ret_code = "None"
+
+    def body_then(self, body: list[A.Stmt], ind: int, epilogue: list[str]) -> None:
+        """A POU body followed by `epilogue`, which runs also when the body returns early or
+        faults (so the variables hold what the body wrote before the fault)."""
+        if not epilogue:
+            self.block(body, ind)
+            return
+        self.out.emit(ind, "try:")
+        self.block(body, ind + 1)
+        self.out.emit(ind, "finally:")
+        for line in epilogue:
+            self.out.emit(ind + 1, line)
 
     # ------------------------------------------------------------------ statements
     def block(self, body: list[A.Stmt], ind: int) -> None:

@@ -533,12 +533,12 @@ STANDARD_FBS: dict[str, type[StandardFB]] = {
 STANDARD_FBS.update(COUNTERS)
 
 
-def create(name: str, clock: Optional[Clock] = None) -> StandardFB:
+def create(name: str, clock: Optional[ScanClock] = None) -> StandardFB:
     """A new instance of standard FB `name` (any case); clock is needed by TP/TON/TOF/RTC."""
     return STANDARD_FBS[name.upper()](clock=clock)
 
 
-__all__ = ["CTD", "CTU", "CTUD", "COUNTERS", "Clock", "DERIVATIVE", "F_TRIG", "HYSTERESIS",
+__all__ = ["CTD", "CTU", "CTUD", "COUNTERS", "DERIVATIVE", "F_TRIG", "HYSTERESIS",
            "INTEGRAL", "PID", "RAMP", "RS", "RTC", "R_TRIG", "SEMA", "SR", "STANDARD_FBS",
            "ScanClock", "StandardFB", "TOF", "TON", "TP", "create"]
 
