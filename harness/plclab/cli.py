@@ -118,19 +118,37 @@ def _cmd_serve(args: argparse.Namespace) -> int:
     return serve_forever(opts, duration=args.duration)
 
 
+def _host_port(text: str, what: str) -> tuple[str, int]:
+    """HOST:PORT on the command line (HOST may be left out: 127.0.0.1; PORT 0: any free one)."""
+    from plclab.config import _host
+
+    host, sep, port = text.rpartition(":")
+    try:
+        if not sep:
+            raise ValueError
+        return (_host(host) if host else "127.0.0.1"), _port(port)
+    except (ValueError, argparse.ArgumentTypeError):
+        raise PlcLabError(f"{what} '{text}': expected HOST:PORT, e.g. 127.0.0.1:5020") from None
+
+
+def _cmd_hmi(args: argparse.Namespace) -> int:
+    from plclab.hmi import run_hmi
+
+    if args.where:
+        host, port = _host_port(args.where, "the stand's Modbus face")
+    else:
+        modbus = _load_config(args.config).modbus
+        host, port = modbus.bind if modbus.bind not in ("0.0.0.0", "") else "127.0.0.1", modbus.port
+    return run_hmi(host, port, period=args.period, once=args.once, sets=tuple(args.set or ()),
+                   commands=None if args.once else sys.stdin)
+
+
 def _cmd_plant(args: argparse.Namespace) -> int:
     from plclab.modbus.psm import PsmServer, drive_plant
     from plclab.plants import make_plant
     from plclab.runtime.image import ProcessImage
 
-    host, port = "127.0.0.1", 2605
-    if args.psm:
-        host, _, p = args.psm.rpartition(":")
-        try:
-            port = int(p)
-        except ValueError:
-            raise PlcLabError(f"--psm {args.psm}: expected HOST:PORT, e.g. 127.0.0.1:2605") from None
-        host = host or "127.0.0.1"
+    host, port = _host_port(args.psm, "--psm")
     try:
         plant = make_plant(args.stand)
     except ModuleNotFoundError:
@@ -242,6 +260,17 @@ def build_parser() -> argparse.ArgumentParser:
     c.add_argument("--program", nargs="+", metavar="FILE.st", help="run these ST files instead of the variant")
     c.add_argument("--duration", type=_seconds, metavar="T", help="stop by itself after T (for scripts)")
     c.set_defaults(func=_cmd_serve)
+
+    c = sub.add_parser("hmi", help="the reference SCADA HMI of a stand (thermo): a Modbus TCP client")
+    c.add_argument("stand", choices=("thermo",))
+    c.add_argument("where", nargs="?", metavar="HOST:PORT",
+                   help="the stand's Modbus TCP face (default: bind and port of openplc.conf)")
+    c.add_argument("--config", metavar="FILE", help="openplc.conf for the default address")
+    c.add_argument("--period", type=_seconds, default=1.0, metavar="T", help="scan period (default 1 s)")
+    c.add_argument("--set", action="append", metavar="POINT=VALUE",
+                   help="write a point first (heater=1500, mode=manual, %%MW6=50); repeatable")
+    c.add_argument("--once", action="store_true", help="show the registers once and stop")
+    c.set_defaults(func=_cmd_hmi)
 
     c = sub.add_parser("plant", help="only the plant model, as an OpenPLC PSM I/O server")
     c.add_argument("stand", choices=stands)
