@@ -171,3 +171,43 @@ def test_command_line_without_a_stand_is_one_line():
                                   f"(is `plclab serve thermo` running?)"
     bad = subprocess.run(PLCLAB + ["hmi", "thermo", "localhost:http"], capture_output=True, text=True, timeout=60)
     assert bad.returncode == 1 and bad.stderr.count("\n") == 1 and "expected HOST:PORT" in bad.stderr
+
+
+def test_serve_with_the_hmi_in_its_terminal(tmp_path):
+    """`plclab serve thermo --hmi`: the stand and its HMI in one terminal; the operator's
+    commands reach the running program, and `quit` stops the service cleanly."""
+    conf = tmp_path / "openplc.conf"
+    conf.write_text(f"[thermo]\nretain_file = {tmp_path / 'thermo.retain'}\n")
+    proc = subprocess.Popen(PLCLAB + ["serve", "thermo", "--config", str(conf), "--port", "0", "--hmi"],
+                            stdin=subprocess.PIPE, stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True,
+                            cwd=tmp_path)
+    try:
+        assert "modbus on 127.0.0.1:" in proc.stdout.readline()
+        assert proc.stdout.readline().startswith("thermo HMI: Modbus TCP 127.0.0.1:")
+        assert "mode=manual" in proc.stdout.readline()
+        proc.stdin.write("mode auto1\n")
+        proc.stdin.flush()
+        deadline = time.monotonic() + 20
+        seen = []
+        heater = 0
+        while time.monotonic() < deadline and heater == 0:
+            line = proc.stdout.readline()       # automatic-1 at 40 C from 22 C: the PI starts heating,
+            seen.append(line)                   # and %MW2 reports the command it outputs
+            m = re.search(r"mode=auto-1 .*heater=(\d+)", line)
+            heater = int(m.group(1)) if m else 0
+        assert heater > 0, seen
+        out, err = proc.communicate("quit\n", timeout=20)
+    finally:
+        if proc.poll() is None:
+            proc.kill()
+    assert proc.returncode == 0, err
+    assert "stopped:" in out and err == ""
+
+
+def test_serve_hmi_is_refused_for_a_stand_without_one():
+    proc = subprocess.run(PLCLAB + ["serve", "mp9c", "--port", "0", "--hmi"], capture_output=True, text=True,
+                          timeout=60)
+    assert proc.returncode == 1 and proc.stdout == ""
+    assert proc.stderr.strip().splitlines() == [
+        "plclab: error: mp9c has no HMI here (the reference HMI needs the Twido map of the thermo stand "
+        "and its Modbus face)"]

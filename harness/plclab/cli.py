@@ -115,7 +115,7 @@ def _cmd_serve(args: argparse.Namespace) -> int:
         from plclab.modbus.profiles import TWIDO_PROFILES
         profile = TWIDO_PROFILES[args.stand]
     opts = ServeOptions(srcs, stand_cfg, modbus, plant, stand_cfg.profile, profile)
-    return serve_forever(opts, duration=args.duration)
+    return serve_forever(opts, duration=args.duration, hmi=args.hmi)
 
 
 def _host_port(text: str, what: str) -> tuple[str, int]:
@@ -259,6 +259,8 @@ def build_parser() -> argparse.ArgumentParser:
     c.add_argument("--bind", metavar="ADDR", help="address to listen on (default 127.0.0.1)")
     c.add_argument("--program", nargs="+", metavar="FILE.st", help="run these ST files instead of the variant")
     c.add_argument("--duration", type=_seconds, metavar="T", help="stop by itself after T (for scripts)")
+    c.add_argument("--hmi", action="store_true",
+                   help="run the stand's reference HMI in this terminal (thermo); quitting it stops")
     c.set_defaults(func=_cmd_serve)
 
     c = sub.add_parser("hmi", help="the reference SCADA HMI of a stand (thermo): a Modbus TCP client")

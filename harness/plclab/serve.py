@@ -15,6 +15,7 @@ from dataclasses import dataclass
 from typing import Any, Callable, Optional, Sequence, TextIO
 
 from plclab.config import ModbusConfig, StandConfig
+from plclab.errors import PlcLabError
 from plclab.frontend import check_sources
 from plclab.runtime.compiler import compile_unit
 from plclab.runtime.plc import PLC
@@ -114,19 +115,26 @@ class Service:
             status.write("\n")
 
 
-def serve_forever(opts: ServeOptions, duration: Optional[float] = None) -> int:
-    """The CLI's `serve`: start, print where it listens, run until Ctrl-C / SIGTERM."""
+def serve_forever(opts: ServeOptions, duration: Optional[float] = None, hmi: bool = False) -> int:
+    """The CLI's `serve`: start, print where it listens, run until Ctrl-C / SIGTERM. With
+    `hmi`, the stand's reference HMI (plclab.hmi) runs in this terminal on the Modbus face,
+    and quitting it stops the service."""
+    if hmi and (not opts.modbus.enabled or opts.register_map != "twido"):
+        raise PlcLabError(f"{opts.stand.name} has no HMI here (the reference HMI needs the Twido map of the "
+                          f"thermo stand and its Modbus face)")
     service = Service(opts)
     service.start()
     where = f"modbus on {opts.modbus.bind}:{service.server.port}" if service.server else "modbus disabled"
     print(f"serving {opts.stand.name} ({opts.sources[0][0]}{' ...' if len(opts.sources) > 1 else ''}): "
           f"tick {service.plc.tick_ns / 1e6:g} ms, {where}; Ctrl-C stops", flush=True)
+    if hmi:
+        _start_hmi(service, opts)
 
     def on_signal(signum, frame):   # noqa: ARG001 - signal handler signature
         service._stopped.set()
     old = {sig: signal.signal(sig, on_signal) for sig in (signal.SIGINT, signal.SIGTERM)}
     try:
-        service.wait(duration, sys.stderr)
+        service.wait(duration, None if hmi else sys.stderr)    # the HMI's lines are the status
     finally:
         service._stopped.clear()
         service.stop()
@@ -134,3 +142,18 @@ def serve_forever(opts: ServeOptions, duration: Optional[float] = None) -> int:
             signal.signal(sig, handler)
     print(f"stopped: {service.status()}", flush=True)
     return 0 if service.plc.fault is None else 1
+
+
+def _start_hmi(service: Service, opts: ServeOptions) -> None:
+    from plclab.hmi import run_hmi
+
+    host = opts.modbus.bind if opts.modbus.bind not in ("0.0.0.0", "::") else "127.0.0.1"
+
+    def hmi() -> None:
+        try:
+            run_hmi(host, service.server.port, commands=sys.stdin,
+                    out=lambda line: print(line, flush=True))
+        except PlcLabError as e:
+            print(f"plclab: error: {e}", file=sys.stderr, flush=True)
+        service._stopped.set()
+    threading.Thread(target=hmi, name="hmi", daemon=True).start()
