@@ -13,7 +13,6 @@ import pytest
 from plclab.iec import types as T
 from plclab.iec.types import (BOOL, BYTE, DATE, DINT, DT, DWORD, INT, LINT, LREAL, LWORD, REAL,
                               SINT, STRING, TIME, TOD, UDINT, UINT, USINT, WORD, to_f32)
-from plclab.runtime import stdlib as S
 from plclab.runtime.stdlib import NoSuchFunction, PlcRuntimeFault, lookup, lookup_operator
 
 S_ = 1_000_000_000
@@ -419,55 +418,7 @@ def test_time_multiplication_overflows_when_the_nanosecond_product_passes_2_31()
     assert lookup_operator("*", [TIME, INT], TIME)(900 * MS, 2) == 1800 * MS
 
 
-# --------------------------------------------------------------------------- table, lookup
-
-
-def test_functions_table_describes_overloads_and_typed_forms():
-    add = S.FUNCTIONS["ADD"][0]
-    assert add.extensible and add.inputs[0].type == "T:ANY_NUM" and add.result == "T:ANY_NUM"
-    assert add.input_names(3) == ["IN1", "IN2", "IN3"]
-    mux = S.FUNCTIONS["MUX"][0]
-    assert mux.input_names(3) == ["K", "IN0", "IN1"]
-    assert not S.FUNCTIONS["NE"][0].extensible
-    assert S.FUNCTIONS["ADD_INT"][0].inputs[0].type == "INT"
-    assert "TOD_TO_TIME" not in S.FUNCTIONS and "BOOL_TO_BOOL" not in S.FUNCTIONS
-    assert "MIN_BOOL" not in S.FUNCTIONS and "MAX_BOOL" in S.FUNCTIONS
-
-
-def test_match_binds_type_variables():
-    shl = S.FUNCTIONS["SHL"][0]
-    env = S.match(shl, [WORD, SINT])
-    assert env is not None and S.result_type(shl, env) is WORD
-    assert S.match(S.FUNCTIONS["ADD"][0], [INT, DINT]) is None
-    assert S.match(S.FUNCTIONS["MIN"][0], [BOOL, BOOL]) is None
-    length = S.FUNCTIONS["LEN"][0]
-    assert S.result_type(length, S.match(length, [STRING], result_hint=DINT)) is DINT
-
-
-def test_every_signature_in_the_table_has_an_implementation():
-    samples = {"ANY_NUM": INT, "ANY_REAL": REAL, "ANY_INT": INT, "ANY_BIT": WORD,
-               "ANY_NBIT": WORD, "ANY_ELEMENTARY": INT, "ANY_DATE": DATE, "ANY_STRING": STRING}
-    missing = []
-    for name, sigs in S.FUNCTIONS.items():
-        for sig in sigs:
-            env: dict = {}
-
-            def pick(spec: str):
-                var, _, cons = spec.partition(":")
-                if not cons:
-                    return T.ELEMENTARY[spec]
-                if var not in env:
-                    alt = cons.split("|")[0]
-                    env[var] = samples.get(alt) or T.ELEMENTARY[alt]
-                return env[var]
-            count = len(sig.inputs) + (1 if sig.extensible else 0)
-            specs = [p.type for p in sig.inputs] + ([sig.inputs[-1].type] if sig.extensible else [])
-            args = [pick(s) for s in specs[:count]]
-            try:
-                lookup(name, args, pick(sig.result))
-            except NoSuchFunction:
-                missing.append(name)
-    assert missing == []
+# --------------------------------------------------------------------------- lookup
 
 
 def test_unknown_or_untyped_calls_raise_no_such_function():

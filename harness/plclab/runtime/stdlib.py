@@ -34,25 +34,10 @@ lookup_operator(op, arg_types, result_type) -> callable
     The same for ST operators, which matiec compiles to C operators or to library helpers
     (`+ - * / MOD ** = <> < <= > >= AND OR XOR NOT NEG`).
 
-FUNCTIONS : dict[str, tuple[Signature, ...]]
-    The signatures of every standard function, for the type checker. A `Signature` is
-        Signature(name, inputs=(Param(name, type), ...), result=type,
-                  extensible=False, first_index=1, min_inputs=0)
-    A type string is either
-      * a concrete type name: "INT", "TIME", "TOD", "DT", "STRING" ... (keys of
-        `plclab.iec.types.ELEMENTARY`), or
-      * a type variable "VAR:CONSTRAINT", where CONSTRAINT is one or more generic names
-        (ANY_NUM, ANY_INT, ANY_SINT, ANY_UINT, ANY_REAL, ANY_BIT, ANY_NBIT, ANY_DATE,
-        ANY_STRING, ANY_ELEMENTARY...) or concrete names joined by "|". Every occurrence of
-        the same VAR in one signature (inputs and result) must be the same type, e.g.
-        ADD is ((IN, "T:ANY_NUM"),) -> "T:ANY_NUM" and SHL is ((IN, "T:ANY_BIT"),
-        (N, "N:ANY_INT")) -> "T:ANY_BIT". A variable that occurs only in the result (LEN,
-        FIND, TRUNC -> "R:ANY_INT") is fixed by the context of the call (the assignment
-        target or the parameter it is passed to), as matiec does.
-    When `extensible` is true the last input repeats: it is called IN<first_index>,
-    IN<first_index+1>, ... (IN1, IN2... for ADD; IN0, IN1... for MUX) and a call needs at
-    least `min_inputs` of them. `type_matches(t, constraint)` and `match(sig, arg_types)`
-    implement these rules for the checker.
+The signatures the type checker uses (which functions exist, their parameters and generic
+types) are in plclab.frontend.stdsigs: one table, so the checker and the runtime cannot
+disagree on what exists (tests/test_library_consistency.py checks that every function it
+accepts has an implementation here).
 
 PlcRuntimeFault(kind, message)
     kind is "division_by_zero" (integer `/` by zero), "division_overflow" (DINT/LINT
@@ -66,9 +51,8 @@ from __future__ import annotations
 
 import math
 import re
-from dataclasses import dataclass
 from functools import lru_cache
-from typing import Any, Callable, Iterable, Optional, Sequence
+from typing import Any, Callable, Optional, Sequence
 
 from plclab.iec import types as T
 from plclab.iec.types import ElementaryType, StringType, Type, base_of, to_f32, wrapper_for
@@ -1040,11 +1024,6 @@ def _less(t: Type) -> Optional[Callable[[Any, Any], bool]]:
     return None
 
 
-# Types with MIN/LIMIT/comparison functions: iec_std_functions.h defines them for ANY_NBIT,
-# ANY_NUM, TIME, ANY_DATE and STRING, but not for BOOL (only MAX has a BOOL version).
-_ORDERED_NO_BOOL = "ANY_NUM|ANY_NBIT|TIME|ANY_DATE|ANY_STRING"
-
-
 @_builder("SEL")
 def _b_sel(args: Sequence[Type], res: Type) -> Optional[Fn]:
     return lambda g, in0, in1: in1 if g else in0
@@ -1255,204 +1234,6 @@ _BUILDERS["MULTIME"] = _b_multime
 _BUILDERS["DIVTIME"] = _b_divtime
 
 
-# --------------------------------------------------------------------------- signatures
-
-
-@dataclass(frozen=True)
-class Param:
-    """One input of a standard function: its formal name and type string."""
-
-    name: str
-    type: str
-
-
-@dataclass(frozen=True)
-class Signature:
-    """One overload of a standard function (see the module docstring for the format)."""
-
-    name: str
-    inputs: tuple[Param, ...]
-    result: str
-    extensible: bool = False
-    first_index: int = 1
-    min_inputs: int = 0
-
-    def input_names(self, count: int) -> list[str]:
-        """Formal names of the inputs of a call with `count` inputs (IN1, IN2... expanded)."""
-        if not self.extensible:
-            return [p.name for p in self.inputs]
-        fixed = [p.name for p in self.inputs[:-1]]
-        rep = self.inputs[-1].name
-        return fixed + [f"{rep}{self.first_index + i}" for i in range(count - len(fixed))]
-
-
-_ELEMENTARY_NAMES = ("BOOL", "SINT", "INT", "DINT", "LINT", "USINT", "UINT", "UDINT", "ULINT",
-                     "BYTE", "WORD", "DWORD", "LWORD", "REAL", "LREAL", "TIME", "DATE", "TOD",
-                     "DT", "STRING")
-
-
-def type_matches(t: Type, constraint: str) -> bool:
-    """Does type t satisfy a constraint ("ANY_NUM", "ANY_NBIT|TIME", "INT"...)?"""
-    b = base_of(t)
-    for alt in constraint.split("|"):
-        if alt.startswith("ANY"):
-            if T.in_generic(b, alt):
-                return True
-        elif isinstance(b, (ElementaryType, StringType)) and short_name(b) == alt:
-            return True
-    return False
-
-
-def _split(spec: str) -> tuple[Optional[str], str]:
-    var, sep, constraint = spec.partition(":")
-    return (var, constraint) if sep else (None, spec)
-
-
-def match(sig: Signature, arg_types: Sequence[Type],
-          result_hint: Optional[Type] = None) -> Optional[dict[str, Type]]:
-    """Bind the signature's type variables to the argument types, or None if they do not fit.
-
-    `result_hint` binds a variable that occurs only in the result (LEN, FIND, TRUNC...).
-    Only the counting and typing rules are checked here, not literal inference.
-    """
-    n = len(arg_types)
-    if sig.extensible:
-        fixed = len(sig.inputs) - 1
-        if n < fixed + max(sig.min_inputs, 1):
-            return None
-        specs = [p.type for p in sig.inputs[:-1]] + [sig.inputs[-1].type] * (n - fixed)
-    else:
-        if n != len(sig.inputs):
-            return None
-        specs = [p.type for p in sig.inputs]
-    env: dict[str, Type] = {}
-    for spec, t in zip(specs, arg_types):
-        var, constraint = _split(spec)
-        if not type_matches(t, constraint):
-            return None
-        if var is not None:
-            if var in env:
-                if not T.same_type(env[var], t):
-                    return None
-            else:
-                env[var] = base_of(t)
-    var, constraint = _split(sig.result)
-    if var is not None and var not in env:
-        if result_hint is None or not type_matches(result_hint, constraint):
-            return None
-        env[var] = base_of(result_hint)
-    return env
-
-
-def result_type(sig: Signature, env: dict[str, Type]) -> Type:
-    """The concrete result type of a matched signature."""
-    var, constraint = _split(sig.result)
-    return env[var] if var is not None else T.ELEMENTARY[constraint]
-
-
-def _expand(constraint: str) -> list[str]:
-    return [n for n in _ELEMENTARY_NAMES if type_matches(T.ELEMENTARY[n], constraint)]
-
-
-def _sig(name: str, inputs: Iterable[tuple[str, str]], result: str, *,
-         ext: Optional[int] = None, min_inputs: int = 2) -> Signature:
-    return Signature(name, tuple(Param(n, t) for n, t in inputs), result,
-                     extensible=ext is not None, first_index=ext if ext is not None else 1,
-                     min_inputs=min_inputs if ext is not None else 0)
-
-
-def _overloads() -> list[Signature]:
-    """Overloaded (generic) signatures; typed ones are derived from these in _build_functions."""
-    o = "T:" + _ORDERED_NO_BOOL
-    sigs = [
-        _sig("ABS", [("IN", "T:ANY_NUM")], "T:ANY_NUM"),
-        *[_sig(n, [("IN", "T:ANY_REAL")], "T:ANY_REAL") for n in _UNARY_MATH],
-        _sig("ADD", [("IN", "T:ANY_NUM")], "T:ANY_NUM", ext=1),
-        _sig("MUL", [("IN", "T:ANY_NUM")], "T:ANY_NUM", ext=1),
-        _sig("MUL", [("IN1", "TIME"), ("IN2", "N:ANY_NUM")], "TIME"),
-        _sig("SUB", [("IN1", "T:ANY_NUM"), ("IN2", "T:ANY_NUM")], "T:ANY_NUM"),
-        _sig("DIV", [("IN1", "T:ANY_NUM"), ("IN2", "T:ANY_NUM")], "T:ANY_NUM"),
-        _sig("DIV", [("IN1", "TIME"), ("IN2", "N:ANY_NUM")], "TIME"),
-        _sig("MOD", [("IN1", "T:ANY_INT"), ("IN2", "T:ANY_INT")], "T:ANY_INT"),
-        _sig("EXPT", [("IN1", "T:ANY_REAL"), ("IN2", "N:ANY_NUM")], "T:ANY_REAL"),
-        _sig("MOVE", [("IN", "T:ANY_ELEMENTARY")], "T:ANY_ELEMENTARY"),
-        *[_sig(n, [("IN", "T:ANY_BIT"), ("N", "N:ANY_INT")], "T:ANY_BIT")
-          for n in ("SHL", "SHR", "ROL", "ROR")],
-        *[_sig(n, [("IN", "T:ANY_BIT")], "T:ANY_BIT", ext=1) for n in ("AND", "OR", "XOR")],
-        _sig("NOT", [("IN", "T:ANY_BIT")], "T:ANY_BIT"),
-        _sig("SEL", [("G", "BOOL"), ("IN0", "T:ANY_ELEMENTARY"), ("IN1", "T:ANY_ELEMENTARY")],
-             "T:ANY_ELEMENTARY"),
-        _sig("MAX", [("IN", "T:ANY_ELEMENTARY")], "T:ANY_ELEMENTARY", ext=1),
-        _sig("MIN", [("IN", o)], o, ext=1),
-        _sig("LIMIT", [("MN", o), ("IN", o), ("MX", o)], o),
-        _sig("MUX", [("K", "K:ANY_INT"), ("IN", "T:ANY_ELEMENTARY")], "T:ANY_ELEMENTARY", ext=0),
-        *[_sig(n, [("IN", o)], "BOOL", ext=1) for n in ("GT", "GE", "EQ", "LE", "LT")],
-        _sig("NE", [("IN1", o), ("IN2", o)], "BOOL"),
-        _sig("LEN", [("IN", "STRING")], "R:ANY_INT"),
-        _sig("LEFT", [("IN", "STRING"), ("L", "L:ANY_INT")], "STRING"),
-        _sig("RIGHT", [("IN", "STRING"), ("L", "L:ANY_INT")], "STRING"),
-        _sig("MID", [("IN", "STRING"), ("L", "L:ANY_INT"), ("P", "L:ANY_INT")], "STRING"),
-        _sig("CONCAT", [("IN", "STRING")], "STRING", ext=1),
-        _sig("INSERT", [("IN1", "STRING"), ("IN2", "STRING"), ("P", "P:ANY_INT")], "STRING"),
-        _sig("DELETE", [("IN", "STRING"), ("L", "L:ANY_INT"), ("P", "L:ANY_INT")], "STRING"),
-        _sig("REPLACE", [("IN1", "STRING"), ("IN2", "STRING"), ("L", "L:ANY_INT"),
-                         ("P", "L:ANY_INT")], "STRING"),
-        _sig("FIND", [("IN1", "STRING"), ("IN2", "STRING")], "R:ANY_INT"),
-        _sig("MULTIME", [("IN1", "TIME"), ("IN2", "N:ANY_NUM")], "TIME"),
-        _sig("DIVTIME", [("IN1", "TIME"), ("IN2", "N:ANY_NUM")], "TIME"),
-        _sig("TRUNC", [("IN", "T:ANY_REAL")], "R:ANY_INT"),
-        *[_sig(n, [("IN1", a), ("IN2", b)], r) for n, ((a, b), r, _f) in _TIME_FUNCS.items()],
-    ]
-    for u in ("USINT", "UINT", "UDINT", "ULINT"):       # overloaded BCD names (C: X_TO_BCD__Y__X)
-        sigs.append(_sig(f"{u}_TO_BCD", [("IN", u)], "R:ANY_NBIT"))
-        sigs.append(_sig(f"BCD_TO_{u}", [("IN", "B:ANY_NBIT")], u))
-    return sigs
-
-
-# Overloaded functions whose explicitly typed form (ADD_INT, GT_TIME...) the C library defines.
-_TYPED_FORMS = ("ABS", *_UNARY_MATH, "ADD", "MUL", "SUB", "DIV", "MOD", "MOVE", "AND", "OR", "XOR",
-                "NOT", "SEL", "MAX", "MIN", "LIMIT", "GT", "GE", "EQ", "LE", "LT", "NE")
-
-
-def _typed(sig: Signature, tname: str) -> Signature:
-    def sub(spec: str) -> str:
-        return tname if spec.startswith("T:") else spec
-    return Signature(f"{sig.name}_{tname}", tuple(Param(p.name, sub(p.type)) for p in sig.inputs),
-                     sub(sig.result), sig.extensible, sig.first_index, sig.min_inputs)
-
-
-def _conversion_sigs() -> list[Signature]:
-    sigs = []
-    for s in _ELEMENTARY_NAMES:
-        for d in _ELEMENTARY_NAMES:
-            if _converter(T.ELEMENTARY[s], T.ELEMENTARY[d]) is not None:
-                sigs.append(_sig(f"{s}_TO_{d}", [("IN", s)], d))
-    sigs.append(_sig("DATE_AND_TIME_TO_DATE", [("IN", "DT")], "DATE"))
-    sigs.append(_sig("DATE_AND_TIME_TO_TIME_OF_DAY", [("IN", "DT")], "TOD"))
-    for u in ("USINT", "UINT", "UDINT", "ULINT"):
-        for b in ("BYTE", "WORD", "DWORD", "LWORD"):
-            sigs.append(_sig(f"{u}_TO_BCD_{b}", [("IN", u)], b))
-            sigs.append(_sig(f"{b}_BCD_TO_{u}", [("IN", b)], u))
-    return sigs
-
-
-def _build_functions() -> dict[str, tuple[Signature, ...]]:
-    table: dict[str, list[Signature]] = {}
-    for sig in _overloads():
-        table.setdefault(sig.name, []).append(sig)
-        var_spec = next((p.type for p in sig.inputs if p.type.startswith("T:")), None)
-        if sig.name in _TYPED_FORMS and var_spec is not None:
-            for tname in _expand(_split(var_spec)[1]):
-                typed = _typed(sig, tname)
-                table.setdefault(typed.name, []).append(typed)
-    for sig in _conversion_sigs():
-        table.setdefault(sig.name, []).append(sig)
-    return {k: tuple(v) for k, v in table.items()}
-
-
-FUNCTIONS: dict[str, tuple[Signature, ...]] = _build_functions()
-
-
 # --------------------------------------------------------------------------- lookup
 
 
@@ -1650,7 +1431,6 @@ def lookup_operator(op: str, arg_types: Sequence[Type], result_type: Type) -> Fn
 
 
 __all__ = [
-    "FUNCTIONS", "NoSuchFunction", "Param", "PlcRuntimeFault", "Signature", "STR_MAX_LEN",
-    "c_double_to", "ieee_div", "lookup", "lookup_operator", "match", "result_type", "short_name",
-    "time_to_seconds", "type_matches",
+    "NoSuchFunction", "PlcRuntimeFault", "STR_MAX_LEN", "c_double_to", "ieee_div", "lookup",
+    "lookup_operator", "short_name", "time_to_seconds",
 ]
