@@ -128,3 +128,31 @@ def test_kill_9_at_random_moments_never_corrupts_the_file(tmp_path):
         assert not list(tmp_path.glob("retain.json.bad-*"))
         previous = values["INST.COUNT"]
     assert previous > 0
+
+
+def test_a_value_not_of_its_type_sets_the_whole_file_aside(tmp_path):
+    path = tmp_path / "retain.json"
+    plc = make_plc(COUNTER, path)
+    run_scans(plc, 5)
+    plc.stop()
+    saved = json.loads(path.read_text())
+    saved["values"]["INST.FRAMES"][2] = "lots"            # edited by hand
+    path.write_text(json.dumps(saved))
+    problems = []
+    plc = PLC(compile_unit(check_sources([("retain.st", COUNTER)])), retain=RetainStore(path, report=problems.append))
+    assert (plc.read("inst.count"), plc.read("inst.frames[1]")) == (0, 0)    # none restored
+    assert len(problems) == 1 and "INST.FRAMES: 'lots' is not of type INT" in problems[0] and "set aside" in problems[0]
+    run_scans(plc, 1)
+    assert plc.state == "RUN"
+
+
+def test_an_out_of_range_value_is_stored_as_its_type(tmp_path):
+    path = tmp_path / "retain.json"
+    plc = make_plc(COUNTER, path)
+    run_scans(plc, 1)
+    plc.stop()
+    saved = json.loads(path.read_text())
+    saved["values"]["INST.FRAMES"][0] = 40000             # an INT holds -25536
+    path.write_text(json.dumps(saved))
+    plc = make_plc(COUNTER, path)
+    assert plc.read("inst.frames[1]") == 40000 - 65536

@@ -367,23 +367,31 @@ class PLC:
             self.retain_store.save(self.retain_signature(), self.retain_snapshot())
 
     def restore_retain(self) -> None:
-        from plclab.runtime.retain import from_json_value
+        """Retained variables from the file, all or none: one value that is not of its
+        variable's type sets the whole file aside."""
+        from plclab.runtime.retain import RetainError, from_json_value
         items = self.retained()
         if not items:
             return
         data = self.retain_store.load(self.retain_signature())
         if data is None:
             return
+        restored: list[tuple[Any, str, Any]] = []
         for path, owner, attr, ty in items:
             if path not in data:
                 continue
             if isinstance(ty, T.FBType):
                 inst = getattr(owner, attr)
-                for k, v in (data[path] or {}).get("fb", {}).items():
-                    if hasattr(inst, k):
-                        setattr(inst, k, v)
-            else:
-                setattr(owner, attr, from_json_value(data[path], ty))
+                saved = data[path].get("fb", {}) if isinstance(data[path], dict) else {}
+                restored += [(inst, k, v) for k, v in saved.items() if hasattr(inst, k)]
+                continue
+            try:
+                restored.append((owner, attr, from_json_value(data[path], ty)))
+            except RetainError as e:
+                self.retain_store.reject(f"{path}: {e}")
+                return
+        for owner, attr, value in restored:
+            setattr(owner, attr, value)
 
     # ------------------------------------------------------------------ access by name
     def resolve(self, name: str) -> tuple[Any, Any]:

@@ -53,19 +53,39 @@ def to_json_value(v: Any) -> Any:
 
 
 def from_json_value(data: Any, ty: T.Type) -> Any:
+    """A saved value back in the runtime's representation, stored as its type stores it;
+    RetainError if it is not a value of that type (a file edited by hand, say)."""
     b = T.base_of(ty)
     if isinstance(b, T.ArrayType):
+        if not isinstance(data, list) or len(data) != len(T.default_value(b)):
+            raise RetainError(f"expected {b.name}")
         return [from_json_value(x, b.elem) for x in data]
     if isinstance(b, T.StructType):
+        if not isinstance(data, dict):
+            raise RetainError(f"expected a {b.name} structure")
         return T.StructValue(**{k: from_json_value(data[k], t) if k in data else T.default_value(t)
                                 for k, (t, _i) in b.fields.items()})
-    if isinstance(data, dict) and "float" in data:
-        return float(data["float"])
-    if b is T.BOOL:
-        return bool(data)
     if isinstance(b, T.ElementaryType) and b.is_real:
-        return float(data)
-    return data
+        if isinstance(data, dict) and isinstance(data.get("float"), str):
+            try:
+                return T.wrapper_for(b)(float(data["float"]))
+            except ValueError:
+                raise RetainError(f"{data['float']!r} is not a number") from None
+        if isinstance(data, (int, float)) and not isinstance(data, bool):
+            return T.wrapper_for(b)(float(data))
+        raise RetainError(f"{data!r} is not of type {b.name}")
+    if b is T.BOOL:
+        if data in (True, False, 0, 1):
+            return bool(data)
+        raise RetainError(f"{data!r} is not of type BOOL")
+    if isinstance(b, T.StringType) or isinstance(b, T.EnumType):
+        if isinstance(data, str):
+            return data
+        raise RetainError(f"{data!r} is not of type {b.name}")
+    if isinstance(data, int) and not isinstance(data, bool):
+        normalise = T.wrapper_for(b)
+        return normalise(data) if normalise is not None else data
+    raise RetainError(f"{data!r} is not of type {getattr(b, 'name', '?')}")
 
 
 class RetainError(Exception):
@@ -111,12 +131,15 @@ class RetainStore:
                 raise RetainError("it was written by a different program (retained variables differ)")
             return data["values"]
         except (OSError, UnicodeDecodeError, json.JSONDecodeError, RetainError) as e:
-            reason = e if isinstance(e, RetainError) else "corrupt or unreadable"
-            aside = self.path.with_name(self.path.name + f".bad-{int(time.time())}")
-            try:
-                os.replace(self.path, aside)
-            except OSError:
-                aside = self.path
-            self.last_problem = f"retain file {self.path}: {reason}; set aside as {aside.name}, starting with initial values"
-            self.report(self.last_problem)
+            self.reject(str(e) if isinstance(e, RetainError) else "corrupt or unreadable")
             return None
+
+    def reject(self, reason: str) -> None:
+        """The file cannot be used: report why and set it aside (the PLC starts with initial values)."""
+        aside = self.path.with_name(self.path.name + f".bad-{int(time.time())}")
+        try:
+            os.replace(self.path, aside)
+        except OSError:
+            aside = self.path
+        self.last_problem = f"retain file {self.path}: {reason}; set aside as {aside.name}, starting with initial values"
+        self.report(self.last_problem)
