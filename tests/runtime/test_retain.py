@@ -156,3 +156,34 @@ def test_an_out_of_range_value_is_stored_as_its_type(tmp_path):
     path.write_text(json.dumps(saved))
     plc = make_plc(COUNTER, path)
     assert plc.read("inst.frames[1]") == 40000 - 65536
+
+
+HOLD = """
+FUNCTION_BLOCK FB_Hold
+VAR_INPUT go : BOOL; END_VAR
+VAR_OUTPUT n : INT; END_VAR
+n := n + 1;
+END_FUNCTION_BLOCK
+PROGRAM main
+VAR RETAIN h : FB_Hold; END_VAR
+h(go := TRUE);
+END_PROGRAM
+CONFIGURATION Config0 RESOURCE Res0 ON PLC
+TASK t (INTERVAL := T#10ms, PRIORITY := 0);
+PROGRAM inst WITH t : main;
+END_RESOURCE END_CONFIGURATION
+"""
+
+
+def test_retained_fb_instance_is_restored_and_checked(tmp_path):
+    path = tmp_path / "retain.json"
+    plc = make_plc(HOLD, path)
+    run_scans(plc, 4)
+    plc.stop()
+    assert make_plc(HOLD, path).read("inst.h.n") == 4
+    saved = json.loads(path.read_text())
+    saved["values"]["INST.H"]["fb"]["N"] = "four"
+    path.write_text(json.dumps(saved))
+    problems = []
+    plc = PLC(compile_unit(check_sources([("retain.st", HOLD)])), retain=RetainStore(path, report=problems.append))
+    assert plc.read("inst.h.n") == 0 and len(problems) == 1 and "INST.H.N" in problems[0]

@@ -383,7 +383,14 @@ class PLC:
             if isinstance(ty, T.FBType):
                 inst = getattr(owner, attr)
                 saved = data[path].get("fb", {}) if isinstance(data[path], dict) else {}
-                restored += [(inst, k, v) for k, v in saved.items() if hasattr(inst, k)]
+                for k, v in saved.items():
+                    current = getattr(inst, k, None)
+                    if type(current) not in (bool, int, float, str):
+                        continue          # not a variable of the block (or a nested block)
+                    if type(v) is not type(current) and not (type(current) is float and type(v) is int):
+                        self.retain_store.reject(f"{path}.{k}: {v!r} is not of the variable's type")
+                        return
+                    restored.append((inst, k, float(v) if type(current) is float else v))
                 continue
             try:
                 restored.append((owner, attr, from_json_value(data[path], ty)))
