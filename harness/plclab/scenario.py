@@ -100,6 +100,7 @@ class Session:
         self.io = IO(self)
         self.trace = Trace()
         self._offset_ns = 0                       # PLC restarts keep one continuous trace time
+        self.plc_off: list[tuple[float, float]] = []   # (from, to) plant seconds the PLC was off
         self._start_plc()
 
     # ------------------------------------------------------------------ set-up
@@ -192,10 +193,17 @@ class Session:
         self.log("PLC stopped")
         self._offset_ns += self.plc.now_ns
         if off_time:
-            self.plant.step({}, off_time)
+            off_from = self.plant.time
+            self.plant.step({}, off_time)        # every output de-energised
+            self.plc_off.append((off_from, self.plant.time))
             self._offset_ns += round(off_time * 1e9)
         self._start_plc()
         self.log("PLC restarted")
+
+    def plc_was_off(self, t: float) -> bool:
+        """Whether plant time `t` falls in a power-off of the PLC (restart_plc with off_time):
+        what the plant saw then is no doing of the program."""
+        return any(lo <= t < hi for lo, hi in self.plc_off)
 
     @property
     def fault(self):

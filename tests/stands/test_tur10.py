@@ -66,3 +66,16 @@ def test_regulator_references_never_exceed_1500_and_pause_holds_zero(tmp_path):
 def test_demo_matches_its_golden_trace(variant, tmp_path):
     s = run(variant, "demo", tmp_path)
     check_golden(s.trace, f"tur10-{variant}-demo", s.tick)
+
+
+def test_a_power_off_of_the_plc_is_not_charged_to_the_program(tmp_path):
+    """With the PLC off every output is de-energised: all read enables OFF, every sensor on the
+    bus. The plant says so, but check_never only judges what the running program did."""
+    s = tur10.session("full", retain_path=tmp_path / "retain.json")
+    s.run(0.5)
+    s.restart_plc(off_time=1.0)
+    s.run(0.5)
+    off = [e for e in s.plant.events if e.kind == "bus_contention"]
+    assert off and all(s.plc_was_off(e.time) for e in off)
+    tur10.check_never(s)
+    assert s.plc_off == [(pytest.approx(0.5, abs=0.011), pytest.approx(1.5, abs=0.011))]

@@ -397,7 +397,7 @@ def sc_restart(s: Session, c: Checks) -> None:
     """The recorded program survives a PLC restart."""
     op = Tur10Op.begin(s, c)
     f1, f2 = teach_two(op)
-    if restart_flow(op, "G10", f1, f2, off_time=0.0):
+    if restart_flow(op, "G10", f1, f2, off_time=1.0):
         op.stop_playback()
 
 
