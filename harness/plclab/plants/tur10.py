@@ -205,6 +205,8 @@ class Tur10(PlantModel):
         factor = self.faults["slow_drive"]["factor"] \
             if "slow_drive" in self.faults and self.faults["slow_drive"]["axis"] == k else 1.0
         target = 0.0 if d.tripped else d.reference * self.gain * factor
+        if target == 0.0 and d.speed == 0.0:
+            return                      # at rest and told to stay: nothing moves (most links, most ticks)
         x0, v0, tau = d.position, d.speed, self.tau
         decay = math.exp(-dt / tau)
         x1 = x0 + target * dt + (v0 - target) * tau * (1.0 - decay)
