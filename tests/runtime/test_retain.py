@@ -130,16 +130,27 @@ def test_kill_9_at_random_moments_never_corrupts_the_file(tmp_path):
     assert previous > 0
 
 
-def test_a_value_not_of_its_type_sets_the_whole_file_aside(tmp_path):
-    path = tmp_path / "retain.json"
-    plc = make_plc(COUNTER, path)
-    run_scans(plc, 5)
+def edit_saved_file(src: str, path: Path, scans: int, edit) -> None:
+    """Run `scans` scans and stop (the file is written), then let `edit` change the saved
+    values as a person editing the file would."""
+    plc = make_plc(src, path)
+    run_scans(plc, scans)
     plc.stop()
     saved = json.loads(path.read_text())
-    saved["values"]["INST.FRAMES"][2] = "lots"            # edited by hand
+    edit(saved["values"])
     path.write_text(json.dumps(saved))
-    problems = []
-    plc = PLC(compile_unit(check_sources([("retain.st", COUNTER)])), retain=RetainStore(path, report=problems.append))
+
+
+def load_reporting(src: str, path: Path) -> tuple[PLC, list[str]]:
+    problems: list[str] = []
+    plc = PLC(compile_unit(check_sources([("retain.st", src)])), retain=RetainStore(path, report=problems.append))
+    return plc, problems
+
+
+def test_a_value_not_of_its_type_sets_the_whole_file_aside(tmp_path):
+    path = tmp_path / "retain.json"
+    edit_saved_file(COUNTER, path, 5, lambda v: v["INST.FRAMES"].__setitem__(2, "lots"))
+    plc, problems = load_reporting(COUNTER, path)
     assert (plc.read("inst.count"), plc.read("inst.frames[1]")) == (0, 0)    # none restored
     assert len(problems) == 1 and "INST.FRAMES: 'lots' is not of type INT" in problems[0] and "set aside" in problems[0]
     run_scans(plc, 1)
@@ -148,14 +159,8 @@ def test_a_value_not_of_its_type_sets_the_whole_file_aside(tmp_path):
 
 def test_an_out_of_range_value_is_stored_as_its_type(tmp_path):
     path = tmp_path / "retain.json"
-    plc = make_plc(COUNTER, path)
-    run_scans(plc, 1)
-    plc.stop()
-    saved = json.loads(path.read_text())
-    saved["values"]["INST.FRAMES"][0] = 40000             # an INT holds -25536
-    path.write_text(json.dumps(saved))
-    plc = make_plc(COUNTER, path)
-    assert plc.read("inst.frames[1]") == 40000 - 65536
+    edit_saved_file(COUNTER, path, 1, lambda v: v["INST.FRAMES"].__setitem__(0, 40000))   # an INT: -25536
+    assert make_plc(COUNTER, path).read("inst.frames[1]") == 40000 - 65536
 
 
 HOLD = """
@@ -177,13 +182,8 @@ END_RESOURCE END_CONFIGURATION
 
 def test_retained_fb_instance_is_restored_and_checked(tmp_path):
     path = tmp_path / "retain.json"
-    plc = make_plc(HOLD, path)
-    run_scans(plc, 4)
-    plc.stop()
+    edit_saved_file(HOLD, path, 4, lambda v: None)
     assert make_plc(HOLD, path).read("inst.h.n") == 4
-    saved = json.loads(path.read_text())
-    saved["values"]["INST.H"]["fb"]["N"] = "four"
-    path.write_text(json.dumps(saved))
-    problems = []
-    plc = PLC(compile_unit(check_sources([("retain.st", HOLD)])), retain=RetainStore(path, report=problems.append))
+    edit_saved_file(HOLD, path, 0, lambda v: v["INST.H"]["fb"].__setitem__("N", "four"))
+    plc, problems = load_reporting(HOLD, path)
     assert plc.read("inst.h.n") == 0 and len(problems) == 1 and "INST.H.N" in problems[0]
