@@ -3,6 +3,7 @@
 Goals (issues 2, 3, 4): parse + check of a 5,000-line program under 0.5 s; a 10 ms-tick
 program of about 300 statements at least 500 times faster than real time in virtual time;
 Modbus requests per second and latency for 1 and 10 clients, and scan jitter under that load.
+Also reported: each stand's memory (loaded, and trace growth per simulated hour).
 """
 from __future__ import annotations
 
@@ -40,6 +41,32 @@ def bench_program(path: Path, sim_seconds: float = 10.0, sources=None, plant_fac
     scans = round(sim_seconds * 1e9 / plc.tick_ns)
     return {"program": name or path.name, "tick_ms": plc.tick_ns / 1e6, "scans": scans,
             "us_per_scan": best / scans * 1e6, "speedup": sim_seconds / best}
+
+
+def bench_memory(stand_name: str, sim_seconds: float = 600.0) -> dict:
+    """Memory of one stand's `full` program with its plant: what loading takes, and how much
+    the trace grows per simulated hour (a long `plclab sim` or scenario must stay small)."""
+    import tracemalloc
+
+    from plclab.frontend import check_sources
+    from plclab.runtime.compiler import compile_unit
+    from plclab.runtime.plc import PLC
+    from plclab.runtime.sim import Simulation
+    from plclab.stands import get_stand, sources
+
+    stand = get_stand(stand_name)
+    checked = check_sources(sources(stand, "full"))
+    tracemalloc.start()
+    try:
+        sim = Simulation(PLC(compile_unit(checked)), plants=[stand.make_plant()])
+        loaded = tracemalloc.get_traced_memory()[0]
+        sim.run(sim_seconds)
+        grown = tracemalloc.get_traced_memory()[0] - loaded
+    finally:
+        tracemalloc.stop()
+    changes = sum(sim.trace.change_count(n) for n in sim.trace.signals())
+    return {"stand": stand_name, "loaded_mb": loaded / 1e6, "mb_per_hour": grown / 1e6 * 3600 / sim_seconds,
+            "changes_per_hour": changes * 3600 / sim_seconds}
 
 
 def bench_realtime(seconds: float = 10.0, clients: int = 10) -> dict:
@@ -111,6 +138,15 @@ def run_bench(report: Callable[[str], None] = print, quick: bool = False,
         results["programs"].append(r)
         report(f"scan: {r['program']}: {r['us_per_scan']:.1f} us/scan at {r['tick_ms']:g} ms tick, "
                f"{r['speedup']:.0f}x real time")
+    results["memory"] = []
+    for stand_name in STANDS:
+        try:
+            m = bench_memory(stand_name, 60.0 if quick else 600.0)
+        except PlcLabError:
+            continue
+        results["memory"].append(m)
+        report(f"memory: {stand_name} full (with its plant): {m['loaded_mb']:.1f} MB loaded, trace "
+               f"+{m['mb_per_hour']:.1f} MB per simulated hour ({m['changes_per_hour']:.0f} changes)")
     try:
         from plclab.modbus.bench import bench_modbus
         mb = bench_modbus(1.0 if quick else 3.0)
