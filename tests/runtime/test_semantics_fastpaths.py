@@ -84,12 +84,29 @@ END_FUNCTION_BLOCK
 
 
 def test_fb_body_sets_eno_and_en_false_skips_the_body():
-    sim = once("VAR f : FB_Check; e1, e2, e3, e4 : BOOL; ok3 : BOOL; END_VAR",
+    sim = once("VAR f : FB_Check; e1, e2, e3, e4, e5 : BOOL; ok3 : BOOL; x4 : INT; END_VAR",
                "f(x := 5, ENO => e1); f(x := -5, ENO => e2); "
-               "f(EN := FALSE, x := 7, ENO => e3); ok3 := f.ok; f(x := 1, ENO => e4);",
+               "f(EN := FALSE, x := 7, ENO => e3); ok3 := f.ok; "
+               "f(x := 1, ENO => e4); x4 := f.x; f(EN := TRUE, x := 1, ENO => e5);",
                ENO_FB)
-    assert (val(sim, "e1"), val(sim, "e2"), val(sim, "e3"), val(sim, "e4")) == (True, False, False, True)
+    assert (val(sim, "e1"), val(sim, "e2"), val(sim, "e3")) == (True, False, False)
     assert val(sim, "ok3") is False       # the skipped call left the output of x := -5
+    # matiec assigns only the parameters a call names: EN stays FALSE until a call sets it,
+    # while the inputs named are assigned even when the body does not run
+    assert (val(sim, "e4"), val(sim, "x4"), val(sim, "e5")) == (False, 1, True)
+    assert val(sim, "f.ok") is True
+
+
+def test_standard_fb_with_en():
+    sim = program("VAR t : TON; q1, q2, e1, e2 : BOOL; n : INT; END_VAR",
+                  "n := n + 1; t(EN := n <> 3, IN := TRUE, PT := T#20ms, Q => q1, ENO => e1); "
+                  "IF n = 3 THEN q2 := t.Q; e2 := e1; END_IF;", tick_ms=10)
+    sim.step(2)                           # t = 0, 10 ms: started, 10 ms elapsed
+    assert val(sim, "q1") is False and val(sim, "e1") is True
+    sim.step(1)                           # t = 20 ms: EN FALSE, the timer is not called
+    assert (val(sim, "q2"), val(sim, "e2"), val(sim, "q1")) == (False, False, False)
+    sim.step(1)                           # t = 30 ms: called again, 30 ms since the start
+    assert val(sim, "q1") is True and val(sim, "e1") is True
 
 
 def test_function_body_sets_eno():

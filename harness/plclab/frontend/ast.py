@@ -426,3 +426,19 @@ class Unit(Node):
     pous: list[PouDecl] = field(default_factory=list)
     configs: list[Configuration] = field(default_factory=list)
     gvls: list[VarBlock] = field(default_factory=list)
+
+
+def walk_statements(body: list[Stmt]):
+    """Every statement of a body, nested ones included (in source order)."""
+    for st in body:
+        yield st
+        if isinstance(st, If):
+            for _cond, inner in st.branches:
+                yield from walk_statements(inner)
+            yield from walk_statements(st.else_body or [])
+        elif isinstance(st, Case):
+            for br in st.branches:
+                yield from walk_statements(br.body)
+            yield from walk_statements(st.else_body or [])
+        elif isinstance(st, (For, While, Repeat)):
+            yield from walk_statements(st.body)

@@ -131,6 +131,7 @@ class Compiler:
         self.local: dict[int, str] = {}     # id(VarDecl) -> its storage while the body runs
         self.ret_code = "None"              # a FUNCTION's result (a local, or _L.RET_)
         self.ranges = RangeOf()
+        self.en_types: set[Any] = set()     # FB types some call gives an EN (see fb_call)
 
     # ------------------------------------------------------------------ helpers
     def const(self, value: Any) -> str:
@@ -197,6 +198,9 @@ class Compiler:
                 [p for p in cu.unit.pous if p.kind == "FUNCTION_BLOCK"] + \
                 [p for p in cu.unit.pous if p.kind == "PROGRAM"]
         result = CompiledProgram(cu, self.ns, "", {}, f"<plc-{next(_counter)}>")
+        self.en_types = {_fb_key(c.fb_type) for p in cu.unit.pous for c in A.walk_statements(p.body)
+                         if isinstance(c, A.CallStmt) and c.fb_type is not None
+                         and any(a.key == "EN" and not a.is_output for a in c.args)}
         for pou in order:
             if cu.pous.get(pou.key) is not pou:
                 continue
@@ -261,7 +265,7 @@ class Compiler:
         located = [d for d in pou.decls if d.location is not None]
         eno = getattr(pou, "eno_decl", None)
         attrs = [d.key for d in decls] + [located_attr(d) for d in located if not d.name] + \
-            (["ENO"] if eno is not None else [])
+            (["ENO"] if eno is not None else []) + (["EN"] if pou.kind == "FUNCTION_BLOCK" else [])
         out.emit(0, f"class {name}:")
         out.emit(1, f"__slots__ = {tuple(attrs)!r}")
         out.emit(1, f"_ST_NAME = {pou.name!r}")
@@ -278,6 +282,8 @@ class Compiler:
                 out.emit(2, f"self.{located_attr(d)} = {self.var_init(d)}", d)
         if eno is not None:
             out.emit(2, "self.ENO = True")
+        if pou.kind == "FUNCTION_BLOCK":
+            out.emit(2, "self.EN = True")
         out.emit(2, "pass")
         out.emit(1, "def _run(self):", pou)
         use = body_use(pou.body)
@@ -558,6 +564,9 @@ class Compiler:
 
     # ------------------------------------------------------------------ FB calls
     def fb_call(self, s: A.CallStmt, ind: int) -> None:
+        """A FB call as matiec's fb_invocation compiles it: the inputs the call names
+        (EN included) are assigned, the body runs (and checks EN itself), the outputs the
+        call names (ENO included) are copied out. So EN keeps its value between calls."""
         out = self.out
         inst = self.lvalue_get(s.target)
         fb: T.FBType = s.fb_type
@@ -567,26 +576,19 @@ class Compiler:
             iv = f"_i{next(self.tmp)}"
             out.emit(ind, f"{iv} = {inst}", s)
         outputs = []
-        en = next((a for a in s.args if a.key == "EN" and not a.is_output), None)
         eno = next((a for a in s.args if a.key == "ENO" and a.is_output), None)
-        outer = ind
-        if en is not None:
-            # EN, which matiec gives every FB: the block runs only when EN is TRUE, else its
-            # ENO goes FALSE
-            flag = f"_en{next(self.tmp)}"
-            out.emit(ind, f"{flag} = {self.expr(en.value)}", s)
-            out.emit(ind, f"if not {flag}: {iv}.ENO = False")
-            out.emit(ind, f"if {flag}:")
-            ind += 1
         for a in s.args:
             key = a.key
-            if key in ("EN", "ENO"):
-                continue
             if a.is_output:
-                outputs.append(a)
+                if key != "ENO":
+                    outputs.append(a)
+                continue
+            if key == "ENO":
                 continue
             decl = a.param if isinstance(a.param, A.VarDecl) else None
-            if decl is not None and decl.section == "VAR_IN_OUT":
+            if key == "EN":
+                out.emit(ind, f"{iv}.EN = {self.expr_as(a.value, T.BOOL)}", a)
+            elif decl is not None and decl.section == "VAR_IN_OUT":
                 out.emit(ind, f"{iv}.{key} = {self.ref_to(a.value, decl.ty)}", a)
             else:
                 ptype = decl.ty if decl is not None else a.value.ty
@@ -595,22 +597,26 @@ class Compiler:
                     out.emit(ind, f"_store_into({iv}.{key}, {self.expr(a.value)})", a)
                     continue
                 out.emit(ind, f"{iv}.{key} = {self.expr_as(a.value, ptype)}", a)
-        # a standard FB's body directly (its __call__ only handles EN, which is TRUE here)
-        if isinstance(fb.pou, FBSig):
-            if eno is not None:
-                out.emit(ind, f"{iv}.ENO = True")
-            out.emit(ind, f"{iv}._body()", s)
+        std = isinstance(fb.pou, FBSig)
+        if _fb_key(fb) in self.en_types:
+            # some call in the program sets this block type's EN: the body checks it
+            if std:
+                out.emit(ind, f"{iv}()", s)          # the library block's EN/ENO handling
+            else:
+                out.emit(ind, f"if {iv}.EN: {iv}.ENO = True; {iv}._run()", s)
+                out.emit(ind, f"else: {iv}.ENO = False")
         else:
+            # EN is TRUE throughout: straight into the body
             if eno is not None:
                 out.emit(ind, f"{iv}.ENO = True")
-            out.emit(ind, f"{iv}._run()", s)
+            out.emit(ind, f"{iv}._body()" if std else f"{iv}._run()", s)
         for a in outputs:
             code = f"{iv}.{a.key}"
             if a.negated:
                 code = f"not {code}"
             self.assign(a.value, code, ind, a)
         if eno is not None:
-            self.assign(eno.value, f"{iv}.ENO", outer, eno)
+            self.assign(eno.value, f"{iv}.ENO", ind, eno)
 
     def ref_to(self, e: A.Expr, ty: Optional[T.Type]) -> str:
         """A reference to variable `e` for a VAR_IN_OUT parameter."""
@@ -933,6 +939,11 @@ class F32Code(str):
         obj = super().__new__(cls, f"_f32({inner})")
         obj.inner = inner
         return obj
+
+
+def _fb_key(fb: T.FBType) -> Any:
+    """What identifies a FB type for fb_call: the standard block's name or the user POU."""
+    return fb.pou.name if isinstance(fb.pou, FBSig) else id(fb.pou)
 
 
 def _params(pou: A.PouDecl) -> list[A.VarDecl]:
