@@ -171,6 +171,8 @@ def test_command_line_without_a_stand_is_one_line():
                                   f"(is `plclab serve thermo` running?)"
     bad = subprocess.run(PLCLAB + ["hmi", "thermo", "localhost:http"], capture_output=True, text=True, timeout=60)
     assert bad.returncode == 1 and bad.stderr.count("\n") == 1 and "expected HOST:PORT" in bad.stderr
+    busy = subprocess.run(PLCLAB + ["hmi", "thermo", "--period", "0"], capture_output=True, text=True, timeout=60)
+    assert busy.returncode == 1 and busy.stderr.count("\n") == 1 and "--period 0 s" in busy.stderr
 
 
 def test_serve_with_the_hmi_in_its_terminal(tmp_path):

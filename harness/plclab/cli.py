@@ -134,6 +134,8 @@ def _host_port(text: str, what: str) -> tuple[str, int]:
 def _cmd_hmi(args: argparse.Namespace) -> int:
     from plclab.hmi import run_hmi
 
+    if args.period < 0.05:
+        raise PlcLabError(f"--period {args.period:g} s: the HMI polls at most 20 times a second (0.05 s)")
     if args.where:
         host, port = _host_port(args.where, "the stand's Modbus face")
     else:
