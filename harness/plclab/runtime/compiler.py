@@ -286,18 +286,33 @@ class Compiler:
             out.emit(2, "self.EN = True")
         out.emit(2, "pass")
         out.emit(1, "def _run(self):", pou)
+        stores = self.body_locals(pou, eno)
+        self.body_then(pou.body, 2, [f"self.{attr} = {local}" for attr, local in stores])
+        out.emit(2, "return")
+        out.emit(1, "__call__ = _run")
+        self.local = {}
+        return name
+
+    def body_locals(self, pou: A.PouDecl, eno: Optional[A.VarDecl]) -> list[tuple[str, str]]:
+        """The prologue of a PROGRAM / FB body: the variables worth a Python local are loaded
+        (VAR_TEMP ones initialised) and recorded in self.local; returns the (attribute, local)
+        pairs to store back when the body ends."""
+        out = self.out
         use = body_use(pou.body)
-        own = [d for d in pou.decls if d.section != "VAR_EXTERNAL"] + ([eno] if eno is not None else [])
         self.local = {}
         loads, stores = [], []
-        for d in own:
+        for d in [d for d in pou.decls if d.section != "VAR_EXTERNAL"] + ([eno] if eno is not None else []):
             i = id(d)
             attr = d.key if d.name else located_attr(d)
             temp = d.section == "VAR_TEMP"
-            if d is eno and use.count[i]:
-                self.local[i] = "v_ENO"
-                out.emit(2, "v_ENO = True")          # matiec: ENO is TRUE when the body starts
-                stores.append(("ENO", "v_ENO"))
+            if d is eno:
+                if use.count[i]:                      # matiec: ENO is TRUE when the body starts
+                    if i in use.by_ref:
+                        out.emit(2, "self.ENO = True")
+                    else:
+                        self.local[i] = "v_ENO"
+                        out.emit(2, "v_ENO = True")
+                        stores.append(("ENO", "v_ENO"))
             elif i in use.by_ref or not (temp or use.count[i] >= _LOCAL_MIN_USES):
                 if temp:
                     out.emit(2, f"self.{attr} = {self.var_init(d)}", d)
@@ -309,11 +324,7 @@ class Compiler:
                     stores.append((attr, local))
         for line in loads:
             out.emit(2, line)
-        self.body_then(pou.body, 2, [f"self.{attr} = {local}" for attr, local in stores])
-        out.emit(2, "return")
-        out.emit(1, "__call__ = _run")
-        self.local = {}
-        return name
+        return stores
 
     def function(self, pou: A.PouDecl) -> None:
         """A FUNCTION: positional parameters in declaration order (see user_call), every
