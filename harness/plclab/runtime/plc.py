@@ -369,7 +369,7 @@ class PLC:
     def restore_retain(self) -> None:
         """Retained variables from the file, all or none: one value that is not of its
         variable's type sets the whole file aside."""
-        from plclab.runtime.retain import RetainError, from_json_value
+        from plclab.runtime.retain import RetainError, fb_values_from_json, from_json_value
         items = self.retained()
         if not items:
             return
@@ -380,22 +380,14 @@ class PLC:
         for path, owner, attr, ty in items:
             if path not in data:
                 continue
-            if isinstance(ty, T.FBType):
-                inst = getattr(owner, attr)
-                saved = data[path].get("fb", {}) if isinstance(data[path], dict) else {}
-                for k, v in saved.items():
-                    current = getattr(inst, k, None)
-                    if type(current) not in (bool, int, float, str):
-                        continue          # not a variable of the block (or a nested block)
-                    if type(v) is not type(current) and not (type(current) is float and type(v) is int):
-                        self.retain_store.reject(f"{path}.{k}: {v!r} is not of the variable's type")
-                        return
-                    restored.append((inst, k, float(v) if type(current) is float else v))
-                continue
             try:
-                restored.append((owner, attr, from_json_value(data[path], ty)))
+                if isinstance(ty, T.FBType):
+                    inst = getattr(owner, attr)
+                    restored += [(inst, k, v) for k, v in fb_values_from_json(data[path], inst)]
+                else:
+                    restored.append((owner, attr, from_json_value(data[path], ty)))
             except RetainError as e:
-                self.retain_store.reject(f"{path}: {e}")
+                self.retain_store.reject(f"{path}{'.' + e.field if e.field else ''}: {e}")
                 return
         for owner, attr, value in restored:
             setattr(owner, attr, value)

@@ -88,8 +88,29 @@ def from_json_value(data: Any, ty: T.Type) -> Any:
     raise RetainError(f"{data!r} is not of type {getattr(b, 'name', '?')}")
 
 
+def fb_values_from_json(data: Any, inst: Any) -> list[tuple[str, Any]]:
+    """(variable, value) pairs of a saved FB instance, each of the type the variable holds
+    now; RetainError (naming the variable) if one is not. Nested blocks are not saved (to_json_value
+    leaves out what is callable), so they start afresh."""
+    saved = data.get("fb", {}) if isinstance(data, dict) else {}
+    values = []
+    for k, v in saved.items():
+        current = getattr(inst, k, None)
+        if type(current) not in (bool, int, float, str):
+            continue                          # not a variable of the block
+        if type(v) is not type(current) and not (type(current) is float and type(v) is int):
+            raise RetainError(f"{v!r} is not of the variable's type", field=k)
+        values.append((k, float(v) if type(current) is float else v))
+    return values
+
+
 class RetainError(Exception):
-    pass
+    """A retain file, or a value in it, that cannot be used; `field` names the variable of a
+    FB instance it is about."""
+
+    def __init__(self, message: str, field: str = ""):
+        super().__init__(message)
+        self.field = field
 
 
 class RetainStore:
