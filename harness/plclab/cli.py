@@ -140,7 +140,7 @@ def _cmd_hmi(args: argparse.Namespace) -> int:
         host, port = _host_port(args.where, "the stand's Modbus face")
     else:
         modbus = _load_config(args.config).modbus
-        host, port = modbus.bind if modbus.bind not in ("0.0.0.0", "") else "127.0.0.1", modbus.port
+        host, port = modbus.client_host, modbus.port
     return run_hmi(host, port, period=args.period, once=args.once, sets=tuple(args.set or ()),
                    commands=None if args.once else sys.stdin)
 

@@ -51,6 +51,12 @@ class ModbusConfig:
     idle_timeout_s: float | None         # None: never close idle clients
     max_clients: int
 
+    @property
+    def client_host(self) -> str:
+        """Where a client on this machine reaches the server: the bind address, or
+        loopback when the server listens on every interface."""
+        return "127.0.0.1" if self.bind in ("0.0.0.0", "::", "") else self.bind
+
 
 @dataclass(frozen=True)
 class HostPort:

@@ -147,11 +147,9 @@ def serve_forever(opts: ServeOptions, duration: Optional[float] = None, hmi: boo
 def _start_hmi(service: Service, opts: ServeOptions) -> None:
     from plclab.hmi import run_hmi
 
-    host = opts.modbus.bind if opts.modbus.bind not in ("0.0.0.0", "::") else "127.0.0.1"
-
     def hmi() -> None:
         try:
-            run_hmi(host, service.server.port, commands=sys.stdin,
+            run_hmi(opts.modbus.client_host, service.server.port, commands=sys.stdin,
                     out=lambda line: print(line, flush=True))
         except PlcLabError as e:
             print(f"plclab: error: {e}", file=sys.stderr, flush=True)

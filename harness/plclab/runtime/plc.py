@@ -213,7 +213,7 @@ class PLC:
         """Queued Modbus writes in, then the input image into the located variables (and the
         output / memory image too when a client wrote to it)."""
         external = self.image.apply_pending()
-        self._copy_in(self.image.areas, external)
+        self._copy_in(external)
 
     def write_outputs(self) -> None:
         self.image.publish(self._copy_out)
@@ -222,7 +222,7 @@ class PLC:
         """Generate the image <-> variable copies of this program's located variables: one
         straight-line function each way instead of a loop of conversions every scan."""
         ns: dict[str, Any] = {}
-        lines_in = ["def _copy_in(areas, external):"]
+        lines_in = ["def _copy_in(external):"]
         lines_out = ["def _copy_out(areas):"]
 
         owners: dict[int, str] = {}
