@@ -10,14 +10,13 @@ so a failed build never leaves a half-written or unchecked program behind:
 """
 from __future__ import annotations
 
-import os
-import tempfile
 from dataclasses import dataclass
 from pathlib import Path
 from typing import Optional
 
 from plclab import plcopen
 from plclab.errors import PlcLabError
+from plclab.fileio import check_output, write_bytes
 from plclab.frontend import check_sources
 from plclab.frontend.checker import CheckedUnit
 from plclab.stands import bundle, get_stand, sources
@@ -75,26 +74,7 @@ def write_build(stand: str, variant: str, st_path: str | None, xml_path: str | N
     if xml_path is not None:
         targets.append((Path(xml_path), out.xml_bytes))
     for path, _data in targets:
-        if path.is_dir():
-            raise PlcLabError(f"{path}: is a directory")
-        if not path.parent.is_dir():
-            raise PlcLabError(f"{path}: cannot write: no such directory '{path.parent}'")
+        check_output(path, parents=False)      # refuse a bad target before writing either file
     for path, data in targets:
-        _write_atomic(path, data)
+        write_bytes(path, data, parents=False)  # atomic: OpenPLC's upload never sees half a file
     return [path for path, _data in targets]
-
-
-def _write_atomic(path: Path, data: bytes) -> None:
-    """Write through a temporary file in the same directory and rename it into place: a
-    reader (OpenPLC's upload, an editor) never sees a half-written file."""
-    try:
-        fd, tmp = tempfile.mkstemp(prefix=f".{path.name}.", dir=path.parent)
-        try:
-            with os.fdopen(fd, "wb") as f:
-                f.write(data)
-            os.replace(tmp, path)
-        except BaseException:
-            Path(tmp).unlink(missing_ok=True)
-            raise
-    except OSError as e:
-        raise PlcLabError(f"{path}: cannot write: {e.strerror}") from None

@@ -7,6 +7,7 @@ from pathlib import Path
 from typing import Optional
 
 from plclab.errors import PlcLabError
+from plclab.fileio import check_output
 from plclab.scenario import ScenarioFailure, Session
 from plclab.trace import plot_trace, write_csv, write_vcd
 
@@ -29,6 +30,9 @@ def run_scenario(stand: str, variant: Optional[str] = None, scenario: Optional[s
                  csv: Optional[str] = None, vcd: Optional[str] = None, plot: Optional[str] = None,
                  out_dir: str = "out", retain_dir: Optional[Path] = None) -> RunResult:
     mod = stand_module(stand)
+    for out in (csv, vcd, plot):
+        if out:
+            check_output(out)                # plclab.fileio: a bad output path is refused up front
     name = scenario or "demo"
     if name not in mod.SCENARIOS:
         raise PlcLabError(f"{stand}: unknown scenario '{name}' (one of {', '.join(mod.SCENARIOS)})")
@@ -50,11 +54,9 @@ def run_scenario(stand: str, variant: Optional[str] = None, scenario: Optional[s
     files = []
     for path, write in ((csv, write_csv), (vcd, write_vcd)):
         if path:
-            Path(path).parent.mkdir(parents=True, exist_ok=True)
             write(s.trace, path)
             files.append(Path(path))
     if plot:
-        Path(plot).parent.mkdir(parents=True, exist_ok=True)
         signals: list = []                   # a name, or a group sharing one subplot
         for entry in mod.PLOT_SIGNALS:
             group = [entry] if isinstance(entry, str) else list(entry)

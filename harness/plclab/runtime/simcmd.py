@@ -9,6 +9,7 @@ from pathlib import Path
 from typing import Optional, Sequence
 
 from plclab.errors import PlcLabError
+from plclab.fileio import check_output
 from plclab.frontend import load_files
 from plclab.runtime.faults import FaultRecord
 from plclab.runtime.plc import PLC
@@ -44,6 +45,9 @@ def read_input_script(path: str) -> list[InputEvent]:
 def run_sim(files: Sequence[str], duration_s: float, inputs: Optional[str] = None, csv: Optional[str] = None,
             vcd: Optional[str] = None, plot: Optional[str] = None, watch: Sequence[str] = (),
             tick_s: Optional[float] = None) -> SimResult:
+    for out in (csv, vcd, plot):
+        if out:
+            check_output(out)                # a bad output path is refused before the run
     checked = load_files(files)
     plc = PLC(compile_unit(checked), tick_ns=round(tick_s * 1e9) if tick_s else None)
     events = read_input_script(inputs) if inputs else []
@@ -57,10 +61,8 @@ def run_sim(files: Sequence[str], duration_s: float, inputs: Optional[str] = Non
     trace = sim.trace
     for path, writer in ((csv, write_csv), (vcd, write_vcd)):
         if path:
-            Path(path).parent.mkdir(parents=True, exist_ok=True)
             writer(trace, path)
     if plot:
-        Path(plot).parent.mkdir(parents=True, exist_ok=True)
         plot_trace(trace, plot, title=", ".join(Path(f).name for f in files))
     changes = sum(len(trace.changes(n)) - 1 for n in trace.signals())
     summary = (f"simulated {duration_s:g} s in {plc.ticks} scans of {plc.tick_ns / 1e6:g} ms: "

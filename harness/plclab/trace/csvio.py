@@ -22,6 +22,7 @@ from dataclasses import dataclass
 from typing import Any, Iterator, Mapping, Optional, Sequence, TextIO, Union
 
 from plclab.errors import PlcLabError
+from plclab.fileio import open_atomic
 
 from .times import format_seconds, parse_seconds
 from .trace import KINDS, Trace
@@ -77,7 +78,7 @@ def iter_rows(trace: Trace, names: Optional[Sequence[str]] = None) -> list[tuple
 def write_csv(trace: Trace, dest: Source, names: Optional[Sequence[str]] = None) -> None:
     """Write `trace` (or only `names`) to a path or an open text file."""
     if isinstance(dest, (str, os.PathLike)):
-        with open(dest, "w", encoding="utf-8", newline="") as f:
+        with open_atomic(dest, newline="") as f:      # plclab.fileio: refuses links and devices
             _write(trace, f, names)
     else:
         _write(trace, dest, names)

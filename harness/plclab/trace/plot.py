@@ -15,6 +15,8 @@ from matplotlib.backends.backend_agg import FigureCanvasAgg
 from matplotlib.figure import Figure
 from matplotlib.ticker import MaxNLocator
 
+from plclab.fileio import open_atomic
+
 from .times import ns_to_s, s_to_ns
 from .trace import Trace
 
@@ -79,4 +81,5 @@ def plot_trace(trace: Trace, dest: Union[str, "os.PathLike[str]"],
     axes[-1].set_xlabel("time (s)")
     if title:
         fig.suptitle(title)
-    fig.savefig(os.fspath(dest), format="png")
+    with open_atomic(dest, binary=True) as f:     # plclab.fileio: refuses links and devices
+        fig.savefig(f, format="png")

@@ -23,6 +23,8 @@ from typing import Any, Optional, Sequence, TextIO, Union
 
 from vcd import VCDWriter
 
+from plclab.fileio import open_atomic
+
 from .trace import Trace
 
 TOP_SCOPE = "plc"
@@ -77,7 +79,7 @@ def write_vcd(trace: Trace, dest: Dest, names: Optional[Sequence[str]] = None,
     if timescale not in _TIMESCALES:
         raise ValueError(f"timescale must be one of {', '.join(_TIMESCALES)}, not {timescale!r}")
     if isinstance(dest, (str, os.PathLike)):
-        with open(dest, "w", encoding="utf-8") as f:
+        with open_atomic(dest) as f:                  # plclab.fileio: refuses links and devices
             return _write(trace, f, names, timescale)
     return _write(trace, dest, names, timescale)
 

@@ -1,0 +1,246 @@
+"""Every file the project writes goes through here: one set of rules for all outputs.
+
+Why one helper: an output path is something a user typed (`-o`, `--csv`, `retain_file`, a
+hand-out directory). A careless `open(path, "w")` follows a symlink, fills a device such as
+`/dev/full`, or leaves a half-written file when the disk fills up; a careless "set aside"
+renames a directory the user never named. The rules, for every writer:
+
+1. The target is exactly what the user named. If it exists it must be a regular file; a
+   symbolic link, a directory, a device (`/dev/full`), a FIFO or a socket is refused with one
+   line, and nothing is written.
+2. The data goes to a temporary file next to the target (`.NAME.<pid>-<random>.tmp`, same
+   directory, so the rename cannot cross file systems), then is renamed over the target: a
+   reader sees the old file or the new one, never half of one. `durable=True` also fsyncs the
+   data and the directory (retain files: a power loss keeps the old or the new file).
+3. Nothing else is renamed or removed. On failure the only file removed is our own temporary
+   one; the old target is left as it was. Missing parent directories are created (only
+   directories, and never over an existing file) unless `parents=False`.
+4. Every failure is an `OutputError` (a PlcLabError) whose message is one line:
+   `PATH: cannot write: REASON` or `PATH: exists and is not a regular file (...)`.
+
+How to use it:
+- bytes or text already in memory: `write_bytes(path, data)` / `write_text(path, text)`;
+- a writer that streams to a file object: `with open_atomic(path) as f: ...`
+  (text mode by default, `binary=True` for bytes); the file appears only if the block ends
+  without an exception;
+- before a long computation whose result goes to a file (a simulation, a grading run):
+  `check_output(path)` refuses a bad target up front, so the user is not told after the work;
+- a process killed between creating its temporary file and the rename leaves that temporary
+  behind: `remove_stale_temporaries(path)` removes the ones whose process is gone (call it
+  at start-up of whatever owns the file, e.g. the retain store).
+"""
+from __future__ import annotations
+
+import contextlib
+import errno
+import os
+import re
+import secrets
+import stat
+from pathlib import Path
+from typing import IO, Iterator, Union
+
+from plclab.errors import PlcLabError
+
+PathLike = Union[str, "os.PathLike[str]"]
+
+_TEMP_RE = re.compile(r"^\.(?P<name>.+)\.(?P<pid>\d+)-[0-9a-f]{8}\.tmp$")
+
+
+class OutputError(PlcLabError):
+    """An output that cannot or must not be written; str() is the one line shown."""
+
+
+def _kind(mode: int) -> str:
+    if stat.S_ISLNK(mode):
+        return "a symbolic link"
+    if stat.S_ISDIR(mode):
+        return "a directory"
+    if stat.S_ISCHR(mode):
+        return "a character device"
+    if stat.S_ISBLK(mode):
+        return "a block device"
+    if stat.S_ISFIFO(mode):
+        return "a FIFO"
+    if stat.S_ISSOCK(mode):
+        return "a socket"
+    return "not a regular file"
+
+
+def _reason(exc: OSError) -> str:
+    if exc.errno in (errno.ENOTDIR, errno.EEXIST):
+        return "a part of the path is a file, not a directory"
+    return exc.strerror or str(exc)
+
+
+def existing_kind(path: PathLike) -> str | None:
+    """None if `path` does not exist or is a regular file; else what it is ("a directory",
+    "a symbolic link", "a character device"...). The link itself is looked at, not its target."""
+    try:
+        mode = os.lstat(path).st_mode
+    except FileNotFoundError:
+        return None
+    except NotADirectoryError:
+        return None          # a parent is a file: reported when the directory is made
+    except OSError as exc:
+        raise OutputError(f"{os.fspath(path)}: cannot write: {_reason(exc)}") from None
+    return None if stat.S_ISREG(mode) else _kind(mode)
+
+
+def check_output(path: PathLike, parents: bool = True) -> Path:
+    """Refuse a target that must not be written, before any work is done; returns the Path.
+
+    Checks rule 1 and that the directory exists or can be made (no file in the way); it
+    creates nothing. A target that passes may still fail when written (disk full,
+    permissions): the writers report that.
+    """
+    p = Path(path)
+    if not os.fspath(p):
+        raise OutputError("an empty output path")
+    kind = existing_kind(p)
+    if kind is not None:
+        raise OutputError(f"{p}: exists and is {kind}; refusing to replace it (name a regular file)")
+    parent = p.parent
+    while True:
+        try:
+            mode = os.stat(parent).st_mode
+        except FileNotFoundError:
+            if not parents:
+                raise OutputError(f"{p}: cannot write: no such directory '{p.parent}'") from None
+            if parent == parent.parent:
+                break
+            parent = parent.parent
+            continue
+        except NotADirectoryError:
+            raise OutputError(f"{p}: cannot write: a part of the path is a file, not a directory") from None
+        except OSError as exc:
+            raise OutputError(f"{p}: cannot write: {_reason(exc)}") from None
+        if not stat.S_ISDIR(mode):
+            raise OutputError(f"{p}: cannot write: '{parent}' is a file, not a directory")
+        break
+    return p
+
+
+def temporary_name(path: PathLike) -> Path:
+    """A fresh name for the temporary file of `path` (same directory, hidden, tagged with
+    this process's id so a later start can tell a stale one from a live one)."""
+    p = Path(path)
+    return p.with_name(f".{p.name}.{os.getpid()}-{secrets.token_hex(4)}.tmp")
+
+
+@contextlib.contextmanager
+def open_atomic(path: PathLike, binary: bool = False, durable: bool = False,
+                parents: bool = True, encoding: str = "utf-8", newline: str | None = None) -> Iterator[IO]:
+    """A file object for writing `path` by the rules above; the target is replaced when the
+    block ends normally, and untouched (no temporary left) when it raises."""
+    p = check_output(path, parents)
+    try:
+        if parents:
+            p.parent.mkdir(parents=True, exist_ok=True)
+        old_mode = None
+        with contextlib.suppress(FileNotFoundError):
+            old_mode = stat.S_IMODE(os.lstat(p).st_mode)
+        tmp = temporary_name(p)
+        fd = os.open(tmp, os.O_WRONLY | os.O_CREAT | os.O_EXCL | getattr(os, "O_CLOEXEC", 0), 0o666)
+    except OutputError:
+        raise
+    except OSError as exc:
+        raise OutputError(f"{p}: cannot write: {_reason(exc)}") from None
+    try:
+        if old_mode is not None:
+            os.fchmod(fd, old_mode)          # replacing a file keeps its permissions
+        mode = "wb" if binary else "w"
+        kwargs = {} if binary else {"encoding": encoding, "newline": newline}
+        with os.fdopen(fd, mode, **kwargs) as f:
+            fd = -1
+            yield f
+            f.flush()
+            if durable:
+                os.fsync(f.fileno())
+        kind = existing_kind(p)              # someone may have put something there meanwhile
+        if kind is not None:
+            raise OutputError(f"{p}: exists and is {kind}; refusing to replace it (name a regular file)")
+        os.replace(tmp, p)
+        tmp = None
+        if durable:
+            _fsync_directory(p.parent)
+    except OSError as exc:
+        raise OutputError(f"{p}: cannot write: {_reason(exc)}") from None
+    finally:
+        if fd >= 0:
+            os.close(fd)
+        if tmp is not None:
+            with contextlib.suppress(OSError):
+                os.unlink(tmp)
+
+
+def write_bytes(path: PathLike, data: bytes, durable: bool = False, parents: bool = True) -> Path:
+    """Write `data` to `path` by the rules above; returns the Path written."""
+    with open_atomic(path, binary=True, durable=durable, parents=parents) as f:
+        f.write(data)
+    return Path(path)
+
+
+def write_text(path: PathLike, text: str, durable: bool = False, parents: bool = True,
+               encoding: str = "utf-8") -> Path:
+    """Write `text` to `path` (UTF-8, newlines as given) by the rules above."""
+    return write_bytes(path, text.encode(encoding), durable=durable, parents=parents)
+
+
+def _fsync_directory(directory: Path) -> None:
+    """Make the rename itself durable (POSIX); a file system that cannot is left as it is."""
+    try:
+        dfd = os.open(directory, os.O_RDONLY)
+    except OSError:
+        return
+    try:
+        os.fsync(dfd)
+    except OSError:
+        pass
+    finally:
+        os.close(dfd)
+
+
+def _process_alive(pid: int) -> bool:
+    if pid == os.getpid():
+        return True
+    try:
+        os.kill(pid, 0)
+    except (ProcessLookupError, OverflowError, ValueError):
+        return False                         # gone, or a number no process can have
+    except PermissionError:
+        return True                          # someone else's live process
+    return True
+
+
+def stale_temporaries(path: PathLike) -> list[Path]:
+    """Temporary files of `path` left by processes that no longer run (killed between
+    writing and renaming). Only regular files named by this module's pattern are listed."""
+    p = Path(path)
+    try:
+        entries = list(os.scandir(p.parent if os.fspath(p.parent) else "."))
+    except OSError:
+        return []
+    stale = []
+    for entry in entries:
+        m = _TEMP_RE.match(entry.name)
+        if m is None or m.group("name") != p.name:
+            continue
+        try:
+            if not entry.is_file(follow_symlinks=False):
+                continue
+        except OSError:
+            continue
+        if not _process_alive(int(m.group("pid"))):
+            stale.append(p.parent / entry.name)
+    return sorted(stale)
+
+
+def remove_stale_temporaries(path: PathLike) -> list[Path]:
+    """Remove the stale temporaries of `path` (see stale_temporaries); returns those removed."""
+    removed = []
+    for tmp in stale_temporaries(path):
+        with contextlib.suppress(OSError):
+            os.unlink(tmp)
+            removed.append(tmp)
+    return removed
