@@ -13,7 +13,7 @@ from typing import Callable, Optional
 
 from plclab.errors import PlcLabError
 
-PROGRAMS_DIR = Path(__file__).resolve().parents[2] / "tests" / "programs"
+PROGRAMS_DIR = Path(__file__).resolve().parent / "benchprograms"   # package data: `plclab bench` runs installed
 
 
 def bench_program(path: Path, sim_seconds: float = 10.0, sources=None, plant_factory=None,
@@ -44,8 +44,8 @@ def bench_program(path: Path, sim_seconds: float = 10.0, sources=None, plant_fac
 
 
 def bench_memory(stand_name: str, sim_seconds: float = 600.0) -> dict:
-    """Memory of one stand's `full` program with its plant: what loading takes, and how much
-    the trace grows per simulated hour (a long `plclab sim` or scenario must stay small)."""
+    """Memory of one stand's richest available program (`full` in a checkout) with its plant:
+    what loading takes, and how much the trace grows per simulated hour (a long `plclab sim` or scenario must stay small)."""
     import tracemalloc
 
     from plclab.frontend import check_sources
@@ -55,7 +55,7 @@ def bench_memory(stand_name: str, sim_seconds: float = 600.0) -> dict:
     from plclab.stands import get_stand, sources
 
     stand = get_stand(stand_name)
-    checked = check_sources(sources(stand, "full"))
+    checked = check_sources(sources(stand, stand.richest_variant))
     tracemalloc.start()
     try:
         sim = Simulation(PLC(compile_unit(checked)), plants=[stand.make_plant()])
@@ -133,8 +133,9 @@ def run_bench(report: Callable[[str], None] = print, quick: bool = False,
             stand = get_stand(stand_name)
         except PlcLabError:
             continue
-        r = bench_program(Path(stand_name), 2.0 if quick else 10.0, sources=sources(stand, "full"),
-                          plant_factory=stand.make_plant, name=f"{stand_name} full (with its plant)")
+        variant = stand.richest_variant
+        r = bench_program(Path(stand_name), 2.0 if quick else 10.0, sources=sources(stand, variant),
+                          plant_factory=stand.make_plant, name=f"{stand_name} {variant} (with its plant)")
         results["programs"].append(r)
         report(f"scan: {r['program']}: {r['us_per_scan']:.1f} us/scan at {r['tick_ms']:g} ms tick, "
                f"{r['speedup']:.0f}x real time")
@@ -145,7 +146,8 @@ def run_bench(report: Callable[[str], None] = print, quick: bool = False,
         except PlcLabError:
             continue
         results["memory"].append(m)
-        report(f"memory: {stand_name} full (with its plant): {m['loaded_mb']:.1f} MB loaded, trace "
+        report(f"memory: {stand_name} {get_stand(stand_name).richest_variant} (with its plant): "
+               f"{m['loaded_mb']:.1f} MB loaded, trace "
                f"+{m['mb_per_hour']:.1f} MB per simulated hour ({m['changes_per_hour']:.0f} changes)")
     try:
         from plclab.modbus.bench import bench_modbus

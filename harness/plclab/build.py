@@ -2,7 +2,7 @@
 
 Everything is made and checked in memory first; files are written only when all checks pass,
 so a failed build never leaves a half-written or unchecked program behind:
-1. the variant's plc/ sources check (diagnostics name the plc/ files a user edits);
+1. the variant's ST sources check (diagnostics name the files as they are on disk);
 2. the bundle text, exactly what goes into the .st file, checks too;
 3. the XML project (if asked for) validates against the TC6 schema when the schema is on this
    machine (see plclab.plcopen.schema), and reads back, through ST and the front end, to the

@@ -36,7 +36,7 @@ def run_scenario(stand: str, variant: Optional[str] = None, scenario: Optional[s
     name = scenario or "demo"
     if name not in mod.SCENARIOS:
         raise PlcLabError(f"{stand}: unknown scenario '{name}' (one of {', '.join(mod.SCENARIOS)})")
-    variant = variant or "full"
+    variant = variant or mod.STAND.richest_variant   # installed: no reference solution to run
     mod.STAND.variant(variant)
     retain_path = (retain_dir or Path(out_dir) / "retain") / f"{stand}-{variant}-{name}.json"
     if retain_path.exists():

@@ -17,8 +17,8 @@ SHARED = ("FC_PackBits7", "FC_BitOf", "FB_Sb1Button", "FB_FrameStore", "FB_Pause
           "FB_FrameWatchdog", "FB_Blink", "FB_ResetIndicator", "FB_FrameSequencer", "FB_Mp9cRobot")
 
 
-def _variant(name: str, prg: str, doc: str) -> Variant:
-    return Variant(name, SHARED + (prg,), (Task("MainTask", "T#10ms", 1, (("Main", prg),)),), doc)
+def _variant(name: str, prg: str, doc: str, reference: bool = True) -> Variant:
+    return Variant(name, SHARED + (prg,), (Task("MainTask", "T#10ms", 1, (("Main", prg),)),), doc, reference)
 
 
 STAND = Stand(
@@ -27,7 +27,8 @@ STAND = Stand(
     gvl=("GVL_MP9C",),
     types=("T_ControlProgram",),
     variants={
-        "baseline": _variant("baseline", "PRG_Mp9cBaseline", "Appendix 1: only the lift in manual mode."),
+        "baseline": _variant("baseline", "PRG_Mp9cBaseline", "Appendix 1: only the lift in manual mode.",
+                             reference=False),
         "task1": _variant("task1", "PRG_Mp9cTask1", "Task 1: all four mechanisms in manual mode."),
         "task2": _variant("task2", "PRG_Mp9cTask2", "Task 2: I0.7 selects the recorded pause."),
         "task3": _variant("task3", "PRG_Mp9cTask3", "Task 3: I0.7 enables automatic execution."),

@@ -19,11 +19,11 @@ SHARED = ("FC_PackBits7", "FC_BitOf", "FC_JogReference", "FB_Sb1Button", "FB_Fra
           "FB_Tur10Sensors", "FB_PositionRegulator", "FB_Tur10Robot", "PRG_Tur10Regulators")
 
 
-def _variant(name: str, prg: str, doc: str) -> Variant:
+def _variant(name: str, prg: str, doc: str, reference: bool = True) -> Variant:
     return Variant(name, SHARED + (prg,), (
         Task("MainTask", "T#20ms", 1, (("Main", prg),)),
         Task("RegTask", "T#10ms", 0, (("Regulators", "PRG_Tur10Regulators"),)),
-    ), doc)
+    ), doc, reference)
 
 
 STAND = Stand(
@@ -32,7 +32,7 @@ STAND = Stand(
     gvl=("GVL_TUR10",),
     types=("T_ControlProgram",),
     variants={
-        "baseline": _variant("baseline", "PRG_Tur10Baseline", "Appendix 2: drive 1 only."),
+        "baseline": _variant("baseline", "PRG_Tur10Baseline", "Appendix 2: drive 1 only.", reference=False),
         "task1": _variant("task1", "PRG_Tur10Task1", "Task 1: manual control of all five drives."),
         "task2": _variant("task2", "PRG_Tur10Task2", "Task 2: I1.5 selects the recorded pause."),
         "task3": _variant("task3", "PRG_Tur10Task3", "Task 3: I1.5 enables automatic execution."),
