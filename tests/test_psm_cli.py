@@ -1,6 +1,6 @@
 """The plant as an OpenPLC PSM I/O server, from the command line, driven by our own PSM client
 (what `plclab serve` does with io = psm) and stopped the way OpenPLC stops it (127 in
-holding register 50); and the PSM script OpenPLC runs."""
+holding register 50). The PSM script OpenPLC runs: tests/modbus/test_psm_script.py."""
 from __future__ import annotations
 
 import re
@@ -8,7 +8,6 @@ import socket
 import subprocess
 import sys
 import time
-from pathlib import Path
 
 from plclab.modbus.psm import PsmClient
 from plclab.modbus.rawclient import RawModbusClient
@@ -25,7 +24,8 @@ def free_port() -> int:
 
 def start_plant(stand: str) -> tuple[subprocess.Popen, int]:
     port = free_port()
-    proc = subprocess.Popen(PLCLAB + ["plant", stand, "--psm", f"127.0.0.1:{port}"], stdout=subprocess.PIPE,
+    proc = subprocess.Popen(PLCLAB + ["plant", stand, "--psm", f"127.0.0.1:{port}", "--console", "none"],
+                            stdout=subprocess.PIPE,
                             stderr=subprocess.PIPE, text=True)
     line = proc.stdout.readline()
     assert re.search(rf"PSM I/O on 127\.0\.0\.1:{port}", line), (line, proc.stderr.read() if proc.poll() else "")
@@ -76,12 +76,3 @@ def test_serve_as_psm_client_runs_the_program_against_a_plant_in_another_process
     finally:
         proc.kill()
         proc.wait(timeout=10)
-
-
-def test_psm_script_is_python_that_starts_the_stand_plant():
-    out = subprocess.run(PLCLAB + ["psm-script", "tur10"], capture_output=True, text=True, timeout=30)
-    assert out.returncode == 0
-    code = compile(out.stdout, "main.py", "exec")           # valid Python as OpenPLC will run it
-    assert "psm.start()" in out.stdout and "tur10" in out.stdout
-    assert str(Path(__file__).resolve().parents[1] / "harness") in out.stdout
-    assert code.co_filename == "main.py"

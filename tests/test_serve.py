@@ -35,7 +35,7 @@ def start(tmp_path: Path) -> tuple[subprocess.Popen, int]:
     prog = tmp_path / "prog.st"
     prog.write_text(PROGRAM)
     proc = subprocess.Popen(PLCLAB + ["serve", "mp9c", "--program", str(prog), "--config", str(conf),
-                                      "--port", "0"], stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True,
+                                      "--port", "0", "--console", "127.0.0.1:0"], stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True,
                             cwd=tmp_path)
     line = proc.stdout.readline()
     m = re.search(r"modbus on 127\.0\.0\.1:(\d+)", line)

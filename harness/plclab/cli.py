@@ -114,7 +114,8 @@ def _cmd_serve(args: argparse.Namespace) -> int:
     if stand_cfg.profile == "twido":
         from plclab.modbus.profiles import TWIDO_PROFILES
         profile = TWIDO_PROFILES[args.stand]
-    opts = ServeOptions(srcs, stand_cfg, modbus, plant, stand_cfg.profile, profile)
+    console = None if args.console == "none" else _host_port(args.console, "--console")
+    opts = ServeOptions(srcs, stand_cfg, modbus, plant, stand_cfg.profile, profile, console)
     return serve_forever(opts, duration=args.duration, hmi=args.hmi)
 
 
@@ -146,32 +147,27 @@ def _cmd_hmi(args: argparse.Namespace) -> int:
 
 
 def _cmd_plant(args: argparse.Namespace) -> int:
-    from plclab.modbus.psm import PsmServer, drive_plant
-    from plclab.plants import make_plant
-    from plclab.runtime.image import ProcessImage
+    from plclab.modbus.psm import run_plant
 
-    host, port = _host_port(args.psm, "--psm")
-    try:
-        plant = make_plant(args.stand)
-    except ModuleNotFoundError:
-        raise PlcLabError(f"stand '{args.stand}' has no plant model yet") from None
-    server = PsmServer(ProcessImage(), host, port).start()
-    print(f"{args.stand} plant serving OpenPLC PSM I/O on {host}:{server.port}; "
-          f"stops on 127 in holding register 50 or Ctrl-C", flush=True)
-    try:
-        drive_plant(plant, server)
-    except KeyboardInterrupt:
-        pass
-    finally:
-        server.stop()
-    print("plant stopped", flush=True)
-    return 0
+    psm = _host_port(args.psm, "--psm")
+    console = None if args.console == "none" else _host_port(args.console, "--console")
+    return run_plant(args.stand, psm, console, traceback=bool(os.environ.get("PLCLAB_DEBUG")),
+                     out=lambda line: print(line, flush=True))
 
 
 def _cmd_psm_script(args: argparse.Namespace) -> int:
     from plclab.modbus.psm import psm_script
 
-    sys.stdout.write(psm_script(args.stand))
+    sys.stdout.write(psm_script(args.stand, console=_host_port(args.console, "--console")))
+    return 0
+
+
+def _cmd_console(args: argparse.Namespace) -> int:
+    from plclab.modbus.console import CONSOLE_PORT, run_console
+
+    where = _host_port(args.where, "the console face") if args.where else ("127.0.0.1", CONSOLE_PORT)
+    for line in run_console(args.stand, where, sets=args.set or (), presses=args.press or ()):
+        print(line)
     return 0
 
 
@@ -263,6 +259,8 @@ def build_parser() -> argparse.ArgumentParser:
     c.add_argument("--duration", type=_seconds, metavar="T", help="stop by itself after T (for scripts)")
     c.add_argument("--hmi", action="store_true",
                    help="run the stand's reference HMI in this terminal (thermo); quitting it stops")
+    c.add_argument("--console", default="127.0.0.1:2606", metavar="HOST:PORT",
+                   help="the console face of an in-process plant (default 127.0.0.1:2606; none = off)")
     c.set_defaults(func=_cmd_serve)
 
     c = sub.add_parser("hmi", help="the reference SCADA HMI of a stand (thermo): a Modbus TCP client")
@@ -279,11 +277,23 @@ def build_parser() -> argparse.ArgumentParser:
     c = sub.add_parser("plant", help="only the plant model, as an OpenPLC PSM I/O server")
     c.add_argument("stand", choices=stands)
     c.add_argument("--psm", nargs="?", const="127.0.0.1:2605", default="127.0.0.1:2605", metavar="HOST:PORT")
+    c.add_argument("--console", default="127.0.0.1:2606", metavar="HOST:PORT",
+                   help="the console face (default 127.0.0.1:2606; none = no console face)")
     c.set_defaults(func=_cmd_plant)
 
     c = sub.add_parser("psm-script", help="print an OpenPLC PSM script (core/psm/main.py) running the plant")
     c.add_argument("stand", choices=stands)
+    c.add_argument("--console", default="127.0.0.1:2606", metavar="HOST:PORT",
+                   help="where the script serves the console face (default 127.0.0.1:2606)")
     c.set_defaults(func=_cmd_psm_script)
+
+    c = sub.add_parser("console", help="operate a stand's console face (switches, SB1) and show it")
+    c.add_argument("stand", choices=stands)
+    c.add_argument("where", nargs="?", metavar="HOST:PORT", help="the console face (default 127.0.0.1:2606)")
+    c.add_argument("--set", nargs="+", metavar="NAME=V", help="set switches, e.g. SA5=1 SA6=0")
+    c.add_argument("--press", nargs="+", metavar="NAME[=SECONDS]",
+                   help="press and release, e.g. SB1 (0.3 s) or SA1_FWD=1.5")
+    c.set_defaults(func=_cmd_console)
 
     c = sub.add_parser("bench", help="performance figures: front end, scan cost, virtual-time speed-up, Modbus")
     c.add_argument("--quick", action="store_true", help="shorter runs")

@@ -2,8 +2,10 @@
 
 The pieces are the library's own: a PLC (runtime.plc) scanned on the wall clock
 (runtime.realtime), the plant model stepped in-process before each scan or reached over
-OpenPLC's PSM protocol, and a Modbus TCP server face on the process image. Stopping (Ctrl-C,
-SIGTERM) ends the scan loop, closes the server and flushes retained variables.
+OpenPLC's PSM protocol, a Modbus TCP server face on the process image and, with an
+in-process plant, the stand's console face (plclab.modbus.console; with io = psm the plant
+process serves it). Stopping (Ctrl-C, SIGTERM) ends the scan loop, closes the servers and
+flushes retained variables.
 """
 from __future__ import annotations
 
@@ -31,6 +33,7 @@ class ServeOptions:
     plant: Any = None                # in-process plant model, or None (io = psm or no plant)
     register_map: str = "openplc"    # "openplc" | "twido"
     twido_profile: Any = None
+    console: Optional[tuple[str, int]] = None   # the console face's address (in-process plant)
 
 
 class Service:
@@ -46,18 +49,23 @@ class Service:
                        watchdog_s=st.watchdog_ms / 1000 if st.watchdog_ms else 1e9, retain=store,
                        retain_period_ns=st.retain_period_ms * 1_000_000)
         self.psm = None
+        self.plant_host = None
         plants = []
         if st.io == "psm":
             from plclab.modbus.psm import PsmClient
             self.psm = PsmClient(st.psm.host, st.psm.port).connect()
         elif opts.plant is not None:
-            plants.append(opts.plant)
+            from plclab.plants.host import PlantHost
+
+            self.plant_host = PlantHost(opts.plant, report=lambda line: print(line, file=sys.stderr, flush=True))
+            plants.append(self.plant_host)
         self.runner = RealTimeRunner(self.plc, plants, on_scan=self._after_scan if self.psm else None)
         if self.psm is not None:
             self.runner.before_scan = self._before_scan   # type: ignore[attr-defined]
         self.server = None
         if opts.modbus.enabled:
             self.server = self._make_server()
+        self.console = None
         self._stopped = threading.Event()
 
     def _make_server(self):
@@ -81,6 +89,10 @@ class Service:
     def start(self) -> None:
         if self.server is not None:
             self.server.start()
+        if self.plant_host is not None and self.opts.console is not None:
+            from plclab.modbus.console import start_console_face
+            self.console = start_console_face(self.plant_host, self.opts.console,
+                                              lambda line: print(line, file=sys.stderr, flush=True))
         self.runner.start()
 
     def status(self) -> str:
@@ -97,6 +109,8 @@ class Service:
         self.runner.stop()            # also stops the PLC, which flushes retain
         if self.server is not None:
             self.server.stop()
+        if self.console is not None:
+            self.console.stop()
         if self.psm is not None:
             self.psm.close()
 
@@ -125,6 +139,8 @@ def serve_forever(opts: ServeOptions, duration: Optional[float] = None, hmi: boo
     service = Service(opts)
     service.start()
     where = f"modbus on {opts.modbus.bind}:{service.server.port}" if service.server else "modbus disabled"
+    if service.console is not None:
+        where += f", console face on {service.console.host}:{service.console.port}"
     print(f"serving {opts.stand.name} ({opts.sources[0][0]}{' ...' if len(opts.sources) > 1 else ''}): "
           f"tick {service.plc.tick_ns / 1e6:g} ms, {where}; Ctrl-C stops", flush=True)
     if hmi:

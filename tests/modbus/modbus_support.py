@@ -2,6 +2,7 @@
 independent client implementations (pymodbus's and plclab.modbus.rawclient)."""
 from __future__ import annotations
 
+import socket
 import threading
 import time
 from typing import Callable
@@ -141,3 +142,66 @@ def exception_code(fn: Callable[[], object]) -> int | None:
     except ExceptionReply as exc:
         return exc.code
     return None
+
+
+class OpenPlcPsm:
+    """webserver/core/hardware_layers/psm.cpp, request arrays copied from it: tid 1, unit 0,
+    one send and ONE read(1024) per request, checks on the bytes it checks."""
+
+    def __init__(self, port: int):
+        self.sock = socket.create_connection(("127.0.0.1", port), timeout=TIMEOUT)
+
+    def _send_read(self, request: bytes) -> bytes:
+        self.sock.send(request)
+        return self.sock.recv(1024)                      # psm.cpp: read(psm, buffer, 1024)
+
+    def read_dig_inp(self) -> list[int]:
+        request = bytes([0, 1, 0, 0, 0, 6, 0, 2, 0, 0, 0x01, 0x90])
+        buffer = self._send_read(request)
+        assert len(buffer) == 59 and buffer[8] >= 50     # whole response in the one read
+        return [(buffer[i] >> j) & 1 for i in range(9, 59) for j in range(8)]
+
+    def read_ana_inp(self) -> list[int]:
+        request = bytearray([0, 1, 0, 0, 0, 6, 0, 4, 0, 0, 0, 25])
+        words = []
+        for start in (0, 25):
+            request[9] = start                           # "request the next 25 items"
+            buffer = self._send_read(bytes(request))
+            assert len(buffer) == 59 and buffer[8] >= 50
+            words += [buffer[k + 1] | buffer[k] << 8 for k in range(9, 59, 2)]
+        return words
+
+    def write_dig_out(self, bits: list[int]) -> None:
+        request = bytearray([0, 1, 0, 0, 0, 57, 0, 15, 0, 0, 0x01, 0x90, 50] + [0] * 50)
+        for a, bit in enumerate(bits):
+            if bit:
+                request[13 + a // 8] |= 1 << (a % 8)
+        buffer = self._send_read(bytes(request))
+        assert len(buffer) == 12 and (buffer[10], buffer[11]) == (0x01, 0x90)
+
+    def write_ana_out(self, words: list[int]) -> None:
+        request = bytearray([0, 1, 0, 0, 0, 57, 0, 16, 0, 0, 0, 25, 50] + [0] * 50)
+        for start in (0, 25):
+            request[9] = start
+            k = 13
+            for w in words[start:start + 25]:
+                request[k], request[k + 1] = w >> 8, w & 0xFF
+                k += 2
+            buffer = self._send_read(bytes(request))
+            assert len(buffer) == 12 and buffer[11] >= 25
+
+    def stop_psm(self) -> None:
+        self.sock.send(bytes([0, 1, 0, 0, 0, 6, 0, 6, 0, 50, 0, 127]))   # reply not read
+
+    def close(self) -> None:
+        self.sock.close()
+
+    # OpenPLC's main loop around them (webserver/core/main.cpp): updateBuffersIn(), the
+    # program, updateBuffersOut(); a PLC of this project plays the program.
+    def update_buffers_in(self, image: ProcessImage) -> None:
+        image.areas["IX"][0:400] = self.read_dig_inp()
+        image.areas["IW"][0:50] = self.read_ana_inp()
+
+    def update_buffers_out(self, image: ProcessImage) -> None:
+        self.write_dig_out(image.areas["QX"][0:400])
+        self.write_ana_out(image.areas["QW"][0:50])

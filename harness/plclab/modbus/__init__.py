@@ -4,7 +4,8 @@ protocol  MBAP framing and PDU codec (exception codes 01/02/03 exactly)
 profiles  Twido register tables as data (THERMO)
 maps      register maps over the process image: OpenPlcMap, TwidoMap
 server    ModbusTcpServer: asyncio in its own thread, never blocking the scan
-psm       PSM plant-side server, PLC-side client, psm_script()
+psm       PSM plant-side server (lockstep), PLC-side client, PlantService, psm_script()
+console   the console face: a stand's switches, lamps and readouts on Modbus TCP (and its client)
 rawclient a small independent client (tests, bench)
 bench     bench_modbus() for `plclab bench`
 

@@ -12,27 +12,34 @@ of up to 1024 bytes. OpenPLC packs %QW without gaps (an unlocated %QW shifts the
 ones), so stands must use contiguous %QW from %QW0. After 10 errors it disables PSM until
 the runtime restarts.
 
-The plant side is `PsmServer`: it serves a ProcessImage with that layout and offers the same
-get_var / set_var / should_quit calls as OpenPLC's `core/psm/psm.py`, so one plant loop
-(`drive_plant`) runs against either. The plant side has no scan thread, so writes from the
-PLC land in the image at once, under its lock (like the datastore writes of OpenPLC's psm.py).
+The plant side is `PsmServer`: it serves a ProcessImage with that layout. With a PlantHost
+it steps the plant in lockstep with the PLC: the first request of each of psm.cpp's polls
+(FC 2 from 0) steps the plant once with the outputs the previous scan wrote, before the
+inputs are read back, so the one scan of sensor latency holds whatever the scan time.
+Writes from the PLC land in the image at once, under its lock. `PlantService` is the whole
+plant process: the PSM server and the console face (plclab.modbus.console) on one plant.
 
 The PLC side is `PsmClient`, sending the same frames as psm.cpp for this project's real-time
 runtime, but reading each response whole and checking it.
 
-`psm_script(stand)` is the text of an OpenPLC `core/psm/main.py` that runs a stand's plant.
+`psm_script(stand)` is the text of an OpenPLC `core/psm/main.py` that runs a stand's plant:
+the modules it needs are embedded in it, so it runs with nothing but OpenPLC's own Python.
 """
 from __future__ import annotations
 
+import base64
+import importlib
+import importlib.util
 import re
 import socket
 import struct
-import time
-from pathlib import Path
-from typing import Callable, Protocol
+import textwrap
+import zlib
+from typing import Any, Callable, Protocol
 
 from plclab.errors import PlcLabError
 
+from .console import CONSOLE_PORT, FAULT_LAMP, start_console_face
 from .maps import RegisterMap
 from .protocol import (MBAP, MBAP_SIZE, ExceptionCode, ModbusException, Table, pack_bits,
                        unpack_bits)
@@ -87,14 +94,20 @@ def parse_location(location: str) -> tuple[str, int]:
 # --------------------------------------------------------------------------- plant side
 
 class PsmMap(RegisterMap):
-    """OpenPLC's PSM layout over a process image; holding register 50 is the stop request."""
+    """OpenPLC's PSM layout over a process image; holding register 50 is the stop request.
+    `on_poll` runs before each read of the discrete inputs from 0: psm.cpp's first request
+    of every poll, sent once per scan."""
 
-    def __init__(self, image: PsmImage, on_stop: Callable[[], None] = lambda: None):
+    def __init__(self, image: PsmImage, on_stop: Callable[[], None] = lambda: None,
+                 on_poll: Callable[[], None] = lambda: None):
         self.image = image
         self.on_stop = on_stop
+        self.on_poll = on_poll
         self.stop_register = 0
 
     def read(self, table: Table, start: int, count: int) -> list[int]:
+        if table is Table.DISCRETE_INPUTS and start == 0:
+            self.on_poll()
         area, size = {Table.DISCRETE_INPUTS: ("IX", PSM_BITS), Table.COILS: ("QX", PSM_BITS),
                       Table.INPUT_REGISTERS: ("IW", PSM_WORDS),
                       Table.HOLDING_REGISTERS: ("QW", PSM_WORDS + 1)}[table]
@@ -133,20 +146,42 @@ class PsmMap(RegisterMap):
 
 
 class PsmServer(ModbusTcpServer):
-    """The plant side of PSM: OpenPLC's PSM layout on 127.0.0.1:2605, serving `image`.
+    """The plant side of PSM: OpenPLC's PSM layout on 127.0.0.1:2605, serving `image`, and
+    with `plant` (a PlantHost) stepping it once per poll of the PLC.
 
     No idle timeout by default: OpenPLC's client connects once and never reconnects, and a
-    stopped PLC leaves its connection idle. Writing 127 to holding register 50 stops the
-    server (after the reply is sent); `should_quit()` then turns True.
+    stopped PLC leaves its connection idle (closing it would kill OpenPLC with SIGPIPE).
+    Writing 127 to holding register 50 stops the server (after the reply is sent);
+    `should_quit()` then turns True.
     """
 
     def __init__(self, image: PsmImage, host: str = DEFAULT_HOST, port: int = PSM_PORT, *,
-                 idle_timeout: float | None = None, max_clients: int = 16):
+                 plant: Any = None, idle_timeout: float | None = None, max_clients: int = 16):
         self.image = image
-        self.psm_map = PsmMap(image, on_stop=self._on_stop)
+        self.plant = plant
+        self._outs = [(loc, *parse_location(loc)) for loc in plant.outputs] if plant is not None else []
+        self._where: dict[str, tuple[str, int]] = {}      # input location -> (area, index)
+        self.psm_map = PsmMap(image, on_stop=self._on_stop,
+                              on_poll=self._step_plant if plant is not None else lambda: None)
         self._quit = False
         super().__init__(self.psm_map, host, port, idle_timeout=idle_timeout,
                          max_clients=max_clients, name="psm")
+
+    def _step_plant(self) -> None:
+        """Outputs of the last scan -> one plant step -> inputs for the next scan."""
+        image = self.image
+        outputs = {loc: image.snapshot(area, index, 1)[0] for loc, area, index in self._outs}
+        where = self._where
+        inputs = []
+        for loc, value in self.plant.exchange(outputs).items():
+            if loc not in where:
+                where[loc] = parse_location(loc)
+            inputs.append((*where[loc], value))
+
+        def put(areas: dict[str, list[int]]) -> None:
+            for area, index, value in inputs:
+                areas[area][index] = (1 if value else 0) if area == "IX" else int(value) & 0xFFFF
+        image.publish(put)
 
     def _on_stop(self) -> None:
         self._quit = True
@@ -167,49 +202,6 @@ class PsmServer(ModbusTcpServer):
         def put(areas: dict[str, list[int]]) -> None:
             areas[area][index] = word
         self.image.publish(put)
-
-
-class PsmPlant(Protocol):
-    """What `plclab.plants.psm_plant(stand)` returns (implemented with the plant models).
-
-    `outputs`: the PSM locations the plant reads each step (e.g. "QX0.0", "QW1");
-    `step(outputs, dt)`: advance the model by dt seconds given those values, return the
-    locations to set (e.g. {"IX0.0": 1, "IW0": 220}); `period`: seconds between steps.
-    """
-
-    period: float
-    outputs: list[str]
-
-    def step(self, outputs: dict[str, int], dt: float) -> dict[str, int]: ...
-
-
-class PsmIo(Protocol):
-    """OpenPLC's `psm` module, or a PsmServer."""
-
-    def get_var(self, location: str) -> int: ...
-
-    def set_var(self, location: str, value: int) -> None: ...
-
-    def should_quit(self) -> bool: ...
-
-
-def drive_plant(plant: PsmPlant, io: PsmIo, *, clock: Callable[[], float] = time.monotonic,
-                sleep: Callable[[float], None] = time.sleep) -> int:
-    """Step `plant` in real time against `io` until io.should_quit(); returns steps done.
-
-    The same loop as the one psm_script() writes into OpenPLC's main.py.
-    """
-    steps = 0
-    last = clock()
-    while not io.should_quit():
-        now = clock()
-        outputs = {loc: int(io.get_var(loc)) for loc in plant.outputs}
-        for loc, value in plant.step(outputs, now - last).items():
-            io.set_var(loc, value)
-        last = now
-        steps += 1
-        sleep(plant.period)
-    return steps
 
 
 # --------------------------------------------------------------------------- PLC side
@@ -359,68 +351,182 @@ class PsmClient:
         return bytes(buf)
 
 
+
+
+# --------------------------------------------------------------------------- plant process
+
+class PlantService:
+    """The plant side as a whole: the lockstep PSM server and the console face, one plant.
+
+    `plant` is a PlantHost (plclab.plants.host). `console=None` serves no console face; a
+    console port that cannot be had costs a warning (through `report`), not the plant.
+    """
+
+    def __init__(self, plant: Any, psm: tuple[str, int] = (DEFAULT_HOST, PSM_PORT),
+                 console: tuple[str, int] | None = (DEFAULT_HOST, CONSOLE_PORT),
+                 report: Callable[[str], None] = print):
+        from plclab.runtime.image import ProcessImage
+
+        self.plant = plant
+        self.psm = PsmServer(ProcessImage(), psm[0], psm[1], plant=plant)
+        self.console_address = console
+        self.console = None
+        self.report = report
+
+    def start(self) -> "PlantService":
+        self.psm.start()
+        if self.console_address is not None:
+            self.console = start_console_face(self.plant, self.console_address, self.report)
+        return self
+
+    def where(self) -> str:
+        console = (f"console face on {self.console.host}:{self.console.port}" if self.console is not None
+                   else "no console face")
+        return f"PSM I/O on {self.psm.host}:{self.psm.port}, {console}"
+
+    def wait(self, timeout: float | None = None) -> bool:
+        """Until OpenPLC's stop request (or timeout); True once stopped."""
+        return self.psm.wait(timeout)
+
+    def stop(self) -> None:
+        self.psm.stop()
+        if self.console is not None:
+            self.console.stop()
+
+    def __enter__(self) -> "PlantService":
+        return self.start()
+
+    def __exit__(self, *exc: object) -> None:
+        self.stop()
+
+
+def run_plant(stand: str, psm: tuple[str, int] = (DEFAULT_HOST, PSM_PORT),
+              console: tuple[str, int] | None = (DEFAULT_HOST, CONSOLE_PORT), *,
+              traceback: bool = False, out: Callable[[str], None] = print) -> int:
+    """Run `stand`'s plant as a PSM server with its console face until OpenPLC's stop request
+    (the PSM script's and `plclab plant --psm`'s main loop); Ctrl-C also stops it."""
+    import sys
+
+    from plclab.plants import make_plant
+    from plclab.plants.host import PlantHost
+
+    def report(text: str) -> None:
+        sys.stderr.write(text + "\n")
+        sys.stderr.flush()
+
+    host = PlantHost(make_plant(stand), report=report, traceback=traceback)
+    service = PlantService(host, psm, console, report=report).start()
+    out(f"{stand} plant: {service.where()}; stops on 127 in holding register 50")
+    try:
+        while not service.wait(0.5):
+            pass
+    except KeyboardInterrupt:
+        pass
+    finally:
+        service.stop()
+    out(f"{stand} plant stopped after {host.steps} steps")
+    return 0
+
+
 # --------------------------------------------------------------------------- PSM script
+
+# What the script embeds: the modules run_plant needs, standard library only. Packages whose
+# __init__ imports more than these are embedded empty.
+_EMBEDDED = ("plclab.errors", "plclab.runtime.image", "plclab.modbus.protocol", "plclab.modbus.profiles",
+             "plclab.modbus.maps", "plclab.modbus.rawclient", "plclab.modbus.server",
+             "plclab.modbus.console", "plclab.modbus.psm", "plclab.plants", "plclab.plants.base",
+             "plclab.plants.host")
+_EMPTY_PACKAGES = ("plclab", "plclab.runtime", "plclab.modbus")
 
 _SCRIPT = '''\
 #                  - OpenPLC Python SubModule (PSM) -
 #
-# PLC Lab: runs the {stand} stand's plant model as OpenPLC's PSM I/O.
-# Generated by `plclab psm-script {stand}`; paste it into OpenPLC's PSM editor (the file
-# core/psm/main.py). OpenPLC starts this script and connects to it 2 s later, so the PSM
-# server is started first and the plant model imported afterwards.
+# PLC Lab: the {stand} stand's plant model as OpenPLC's I/O, and its console face.
+# Generated by `plclab psm-script {stand}`; paste it into OpenPLC's PSM editor (Hardware page,
+# hardware layer "Python on Linux (PSM)"; it is saved as core/psm/main.py). See docs/openplc.md.
 #
-# Once per plant period the plant reads PLC outputs ({outputs})
-# with psm.get_var() and sets PLC inputs with psm.set_var(), until OpenPLC sends its stop
-# request (psm.should_quit()). The plant code is plain Python (no pymodbus needed) found in:
-#     {harness}
-# Use contiguous %QW from %QW0: OpenPLC packs analog outputs without gaps.
+# - It serves OpenPLC's PSM client itself on {psm_host}:{psm_port} (OpenPLC's own `psm` module
+#   and pymodbus are not used): each poll of the PLC, once per scan, steps the plant once with
+#   the outputs of the last scan over the real time elapsed, then the PLC reads its inputs.
+# - Console face: Modbus TCP on {console_host}:{console_port}:
+{face}
+#   Set CONSOLE below to ("0.0.0.0", {console_port}) to reach it from another machine.
+# - A plant error never stops the PLC: the inputs freeze, the error and its traceback go to
+#   OpenPLC's log once, the PLANT_FAULT lamp lights. Only OpenPLC's stop request ends it.
+# - Nothing to install: the PLC Lab modules it needs (standard library only) are embedded
+#   below, zlib-compressed and base64-encoded:
+{modules}
 
+import base64
+import importlib.abc
+import importlib.util
 import sys
-import time
+import zlib
 
-import psm
-
-HARNESS = {harness!r}
 STAND = {stand!r}
+PSM = ({psm_host!r}, {psm_port})            # OpenPLC's PSM client connects to 127.0.0.1:2605
+CONSOLE = ({console_host!r}, {console_port})
+
+PACKAGES = {packages!r}
+EMBEDDED = {{
+{embedded}
+}}
 
 
-def hardware_init():
-    psm.start()
+class EmbeddedModules(importlib.abc.MetaPathFinder, importlib.abc.Loader):
+    """Imports the embedded modules (first, so no other copy of them is used)."""
+
+    def find_spec(self, name, path=None, target=None):
+        if name in EMBEDDED:
+            return importlib.util.spec_from_loader(name, self, is_package=name in PACKAGES)
+        return None
+
+    def create_module(self, spec):
+        return None
+
+    def exec_module(self, module):
+        source = zlib.decompress(base64.b64decode(EMBEDDED[module.__name__])).decode("utf-8")
+        exec(compile(source, "<plclab: " + module.__name__ + ">", "exec"), module.__dict__)
 
 
 if __name__ == "__main__":
-    hardware_init()
-    try:
-        if HARNESS not in sys.path:
-            sys.path.insert(0, HARNESS)
-        import plclab.plants.{stand}  # noqa: F401  (the stand's plant model)
-        from plclab.plants import psm_plant
+    sys.meta_path.insert(0, EmbeddedModules())
+    from plclab.modbus.psm import run_plant
 
-        plant = psm_plant(STAND)
-        last = time.monotonic()
-        while not psm.should_quit():
-            now = time.monotonic()
-            outputs = {{loc: int(psm.get_var(loc)) for loc in plant.outputs}}
-            for loc, value in plant.step(outputs, now - last).items():
-                psm.set_var(loc, value)
-            last = now
-            time.sleep(plant.period)
-    finally:
-        psm.stop()
+    sys.exit(run_plant(STAND, PSM, CONSOLE, traceback=True, out=lambda line: print(line, flush=True)))
 '''
 
 
-def psm_script(stand: str, *, harness_dir: str | Path | None = None) -> str:
-    """The text of an OpenPLC PSM script (core/psm/main.py) that runs `stand`'s plant model.
+def _module_source(name: str) -> str:
+    if name in _EMPTY_PACKAGES:
+        return ""
+    spec = importlib.util.find_spec(name)
+    if spec is None or spec.origin is None:
+        raise PlcLabError(f"psm-script: cannot find the source of {name}")
+    with open(spec.origin, encoding="utf-8") as f:
+        return f.read()
 
-    It imports `plclab.plants.<stand>` and gets the plant from the entry point
-    `plclab.plants.psm_plant(stand) -> PsmPlant` (see PsmPlant). `harness_dir` is the
-    directory holding the `plclab` package (default: this installation's), put on sys.path
-    because OpenPLC runs the script with its own virtualenv, where plclab is not installed.
-    """
+
+def psm_script(stand: str, *, psm: tuple[str, int] = (DEFAULT_HOST, PSM_PORT),
+               console: tuple[str, int] = (DEFAULT_HOST, CONSOLE_PORT)) -> str:
+    """The text of an OpenPLC PSM script (core/psm/main.py) that runs `stand`'s plant with
+    run_plant(): the PLC Lab modules it needs are embedded, so it depends on no path of this
+    installation and needs nothing but a Python 3 (OpenPLC's own)."""
     if stand not in STANDS:
         raise PlcLabError(f"psm-script: unknown stand {stand!r} (one of {', '.join(STANDS)})")
-    if harness_dir is None:
-        harness_dir = Path(__file__).resolve().parents[2]
-    return _SCRIPT.format(stand=stand, harness=str(harness_dir),
-                          outputs="%QX0.0..%QX49.7, %QW0..%QW49")
+    modules = _EMBEDDED + (f"plclab.plants.{stand}",) + _EMPTY_PACKAGES
+    packages = tuple(sorted(set(_EMPTY_PACKAGES) | {"plclab.plants"}))
+    lines = []
+    for name in sorted(modules):
+        blob = base64.b64encode(zlib.compress(_module_source(name).encode("utf-8"), 9)).decode("ascii")
+        chunks = [blob[i:i + 76] for i in range(0, len(blob), 76)] or [""]
+        lines.append(f"    {name!r}: (\n" + "\n".join(f"        {c!r}" for c in chunks) + "),")
+    face = importlib.import_module(f"plclab.plants.{stand}").FACE
+    tables = (("coils", face.switches), ("discrete inputs", [label for label, _ in face.lamps] + [FAULT_LAMP]),
+              ("input registers", [f"{name} ({unit})" for name, unit in face.readouts]))
+    face_lines = [textwrap.fill(f"{table} 0..: " + ", ".join(names), 92, initial_indent="#   ",
+                                subsequent_indent="#       ") for table, names in tables]
+    return _SCRIPT.format(
+        stand=stand, psm_host=psm[0], psm_port=psm[1], console_host=console[0], console_port=console[1],
+        face="\n".join(face_lines), packages=packages, embedded="\n".join(lines),
+        modules=textwrap.fill(", ".join(sorted(modules)), 92, initial_indent="#   ", subsequent_indent="#   "))

@@ -5,6 +5,9 @@ Contract (plclab.runtime.plantio uses it in-process, plclab.modbus.psm over PSM)
   inputs   PLC inputs the plant drives ("IX0.0", "IW0")
   period   seconds between steps when it runs on its own in real time (PSM)
   step(outputs, dt) -> inputs   values are raw: bits 0/1, words unsigned 16-bit; dt seconds
+  FACE     the console face (ConsoleFace): which switches an operator sets, which PLC
+           outputs are lamps, which plant readouts are shown; set_switch(name, value) and
+           readouts() serve it (plclab.modbus.console puts it on Modbus TCP)
 Standard library only (see the package docstring).
 """
 from __future__ import annotations
@@ -26,6 +29,22 @@ class PlantError(ValueError):
     """A bad request to a plant (unknown fault, bad parameter): one line for the user."""
 
 
+@dataclass(frozen=True)
+class ConsoleFace:
+    """What an operator reaches of a stand without the PLC: the one table of its console face.
+
+    Why a table: OpenPLC's PSM layer overwrites every %IX each scan, so the console inputs of
+    a stand running inside OpenPLC can only be set through the plant; this table says, once,
+    which coil is which switch (coil n = switches[n]), which discrete input is which lamp
+    (discrete input n = lamps[n], a PLC output location), and which input register is which
+    plant readout (input register n = readouts[n], in the unit named).
+    """
+
+    switches: tuple[str, ...]                  # console input names, in coil order
+    lamps: tuple[tuple[str, str], ...]         # (lamp label, PLC output location)
+    readouts: tuple[tuple[str, str], ...]      # (readout name, unit)
+
+
 class PlantModel:
     """Base class: keeps plant time, the event log and the injected faults."""
 
@@ -33,6 +52,7 @@ class PlantModel:
     inputs: list[str] = []
     period: float = 0.01
     FAULTS: dict[str, str] = {}          # fault name -> what it does (for help texts)
+    FACE = ConsoleFace((), (), ())       # the console face (switches, lamps, readouts)
 
     def __init__(self) -> None:
         self.time = 0.0
@@ -41,6 +61,14 @@ class PlantModel:
 
     def step(self, outputs: dict[str, int], dt: float) -> dict[str, int]:
         raise NotImplementedError
+
+    def set_switch(self, name: str, value: int) -> None:
+        """Set one console input (a name of FACE.switches) to 0/1."""
+        raise PlantError(f"this plant has no console switch {name!r}")
+
+    def readouts(self) -> list[int]:
+        """The FACE.readouts values now, as raw 16-bit register contents."""
+        return []
 
     def event(self, kind: str, detail: str) -> None:
         self.events.append(PlantEvent(self.time, kind, detail))

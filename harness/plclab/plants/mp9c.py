@@ -17,7 +17,7 @@ import inspect
 import random
 from typing import Any, Mapping
 
-from plclab.plants.base import PlantError, PlantModel
+from plclab.plants.base import ConsoleFace, PlantError, PlantModel, unsigned16
 
 # I/O map (mp9c.md): console names -> OpenPLC locations.
 SENSORS = {"SQ1": "IX0.0", "SQ2": "IX0.1", "SQ3": "IX0.2", "SQ4": "IX0.3",
@@ -28,6 +28,11 @@ COILS = {"L1": "QX0.0", "L2": "QX0.1", "L3": "QX0.2", "L4": "QX0.3",
          "L5": "QX0.4", "L6": "QX0.5", "L7": "QX0.6"}
 HL1 = "QX1.0"
 MECHANISMS = ("lift", "rotation", "extension", "gripper")
+# The console face (docs/openplc.md): coils SA1..SA6, SB1, I0.7; lamp HL1; link positions.
+FACE = ConsoleFace(
+    switches=("SA1", "SA2", "SA3", "SA4", "SA5", "SA6", "SB1", "I07"),
+    lamps=(("HL1", HL1),),
+    readouts=tuple((name, "thousandths of travel from the power-up end") for name in MECHANISMS))
 
 _EPS = 1e-9     # float sums of dt never hit 1.0 exactly; closer than this is "at the stop"
 
@@ -207,6 +212,7 @@ class MP9C(PlantModel):
 
     outputs = [*COILS.values(), HL1]
     inputs = [*SENSORS.values(), *CONSOLE.values()]
+    FACE = FACE
     FAULTS = {
         "stuck_switch": "switch=SQ1..SQ7 reads state=1/0 (on/off) whatever the link does",
         "jammed": "mechanism=lift|rotation|extension|gripper stops where it is",
@@ -273,6 +279,10 @@ class MP9C(PlantModel):
             self.time += dt
             self.console.advance(self.time)
         return self.read()
+
+    def readouts(self) -> list[int]:
+        """Lift, rotation, extension and gripper positions in thousandths of their travel."""
+        return [unsigned16(round(self.links[name].position * 1000)) for name in MECHANISMS]
 
     def switches(self) -> dict[str, int]:
         """SQ1..SQ7 as the reed switches report them (a stuck switch wins)."""

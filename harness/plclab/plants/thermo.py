@@ -34,7 +34,7 @@ import math
 from dataclasses import asdict, dataclass, fields
 from typing import Any
 
-from plclab.plants.base import PlantError, PlantModel, signed16
+from plclab.plants.base import ConsoleFace, PlantError, PlantModel, signed16, unsigned16
 
 
 @dataclass(frozen=True)
@@ -79,11 +79,17 @@ def _phi(x: float) -> float:
     return -math.expm1(-x) / x
 
 
+# The console face (docs/openplc.md): the disturbance switch; no lamp; the true temperature.
+FACE = ConsoleFace(switches=("DISTURBANCE",), lamps=(),
+                   readouts=(("temperature", "tenths of a degree Celsius"),))
+
+
 class ThermoPlant(PlantModel):
     """The thermostabilization stand's radiator, heater and fan; see the module docstring."""
 
     outputs = ["QW0", "QW1"]
     inputs = ["IX0.0", "IX0.1", "IW0", "IW1"]
+    FACE = FACE
     FAULTS = {
         "sensor_open": "temperature sensor open circuit: the ADC %IW0 reads full scale",
         "fan_stalled": "fan rotor jammed: speed 0 whatever the command, no pulses, no airflow",
@@ -116,6 +122,10 @@ class ThermoPlant(PlantModel):
         if name.strip().lstrip("%").upper() not in ("DISTURBANCE", "IX0.0"):
             raise PlantError(f"unknown console switch {name!r} (the thermo stand has DISTURBANCE)")
         self.set_disturbance(bool(int(value)))
+
+    def readouts(self) -> list[int]:
+        """The radiator's true temperature in tenths of a degree (the ADC may read otherwise)."""
+        return [unsigned16(math.floor(self.temperature * 10 + 0.5))]
 
     # --- derived quantities --------------------------------------------------------------
 

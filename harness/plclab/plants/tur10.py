@@ -27,7 +27,7 @@ import math
 from dataclasses import dataclass
 from typing import Any, Iterable
 
-from plclab.plants.base import PlantError, PlantModel, signed16
+from plclab.plants.base import ConsoleFace, PlantError, PlantModel, signed16
 
 AXES = (1, 2, 3, 4, 5)
 LINKS = {1: "shoulder", 2: "raceme rotation", 3: "raceme inclination",
@@ -48,6 +48,11 @@ CONSOLE = {
     "SA7": "IX1.4",      # mode: 0 manual, 1 automatic
     "I15": "IX1.5",      # spare input of Tasks 2 and 3
 }
+# The console face (docs/openplc.md): coils in CONSOLE's order; lamp HL1 (the reset
+# indicator Q1.0); the true link positions in sensor codes.
+FACE = ConsoleFace(switches=tuple(CONSOLE), lamps=(("HL1", RESET_LAMP),),
+                   readouts=tuple((f"link{k}", f"{LINKS[k]} position, codes 0..{FULL_SCALE}")
+                                  for k in AXES))
 
 
 @dataclass
@@ -67,6 +72,7 @@ class Tur10(PlantModel):
 
     outputs = [ENABLE[k] for k in AXES] + [RESET_LAMP] + [DAC[k] for k in AXES]
     inputs = list(CONSOLE.values()) + list(BUS_BITS)
+    FACE = FACE
     FAULTS = {
         "dead_sensor": "axis=k [value=code]: sensor k reads a constant (default: its code now)",
         "stuck_drive": "axis=k: link k does not move whatever its reference",
@@ -141,6 +147,10 @@ class Tur10(PlantModel):
         k = _axis(axis)
         self.set_switch(f"SA{k}_FWD", direction > 0)
         self.set_switch(f"SA{k}_BWD", direction < 0)
+
+    def readouts(self) -> list[int]:
+        """The five true link positions in codes (what a sensor would read, fault or not)."""
+        return [min(max(math.floor(self.drives[k].position), 0), FULL_SCALE) for k in AXES]
 
     @property
     def console(self) -> dict[str, int]:

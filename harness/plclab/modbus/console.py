@@ -1,0 +1,188 @@
+"""The console face: a stand's operator console on Modbus TCP, the same in every real-time mode.
+
+Why: inside OpenPLC the PSM layer overwrites every %IX from the plant each scan, and OpenPLC's
+own Modbus server cannot write %IX, so a switch or SB1 can only be operated through the plant.
+This face serves a PlantHost (plclab.plants.host) with the stand's FACE table
+(plclab.plants.<stand>.FACE, documented in docs/openplc.md):
+
+  coils             0..  the console switches, in FACE.switches order (read and write)
+  discrete inputs   0..  the lamps (PLC outputs) in FACE.lamps order, then PLANT_FAULT
+  input registers   0..  the plant readouts in FACE.readouts order (raw 16-bit)
+  holding registers none (exception 01)
+
+It is served by the PSM script inside OpenPLC, by `plclab plant --psm` and by `plclab serve`
+(default 127.0.0.1:2606). `ConsoleClient` is the project's client (`plclab console`); any
+Modbus client works too. Standard library only (it runs inside OpenPLC's Python).
+"""
+from __future__ import annotations
+
+import time
+import importlib
+from typing import Any, Callable, Iterable
+
+from plclab.errors import PlcLabError
+
+from .maps import RegisterMap
+from .protocol import (READ_COILS, READ_DISCRETE_INPUTS, READ_INPUT_REGISTERS, WRITE_MULTIPLE_COILS,
+                       WRITE_SINGLE_COIL, ExceptionCode, ModbusException, Table)
+from .rawclient import RawModbusClient, RawModbusError
+from .server import DEFAULT_HOST, ModbusTcpServer, ServerError
+
+CONSOLE_PORT = 2606
+FAULT_LAMP = "PLANT_FAULT"
+DEFAULT_PRESS_S = 0.3          # long enough for any scan, short of TUR-10's 3 s reset hold
+
+
+class ConsoleMap(RegisterMap):
+    """The console face of one PlantHost; what the operator set is remembered per coil."""
+
+    functions = frozenset({READ_COILS, READ_DISCRETE_INPUTS, READ_INPUT_REGISTERS,
+                           WRITE_SINGLE_COIL, WRITE_MULTIPLE_COILS})
+
+    def __init__(self, host: Any):
+        self.host = host
+        self.switches = tuple(host.face.switches)
+        self.coils = [0] * len(self.switches)
+
+    def read(self, table: Table, start: int, count: int) -> list[int]:
+        if table is Table.COILS:
+            values = list(self.coils)
+        elif table is Table.DISCRETE_INPUTS:
+            values = self.host.lamps()
+        elif table is Table.INPUT_REGISTERS:
+            values = self.host.readouts()
+        else:
+            raise ModbusException(ExceptionCode.ILLEGAL_FUNCTION, f"the console face has no {table.value}")
+        _check(table, start, count, len(values))
+        return values[start:start + count]
+
+    def write(self, table: Table, start: int, values: tuple[int, ...]) -> None:
+        if table is not Table.COILS:
+            raise ModbusException(ExceptionCode.ILLEGAL_FUNCTION, f"writing {table.value}")
+        _check(table, start, len(values), len(self.switches))
+        for i, value in enumerate(values, start):
+            self.coils[i] = 1 if value else 0
+            self.host.set_switch(self.switches[i], self.coils[i])
+
+
+def _check(table: Table, start: int, count: int, size: int) -> None:
+    if start + count > size:
+        raise ModbusException(ExceptionCode.ILLEGAL_DATA_ADDRESS,
+                              f"console face {table.value} {start}..{start + count - 1} outside 0..{size - 1}")
+
+
+def start_console_face(host: Any, address: tuple[str, int],
+                       warn: Callable[[str], None]) -> ModbusTcpServer | None:
+    """Serve the console face of `host` at (HOST, PORT), or warn once and return None: the
+    PLC's I/O matters more than the console, so a busy port does not stop the plant."""
+    try:
+        return ModbusTcpServer(ConsoleMap(host), address[0], address[1], idle_timeout=None,
+                               max_clients=16, name="console").start()
+    except ServerError as exc:
+        warn(f"warning: no console face: {exc}")
+        return None
+
+
+def console_lines(face: Any, coils: list[int], lamps: list[int], readouts: list[int]) -> list[str]:
+    """What `plclab console` prints: one line per table, NAME=value in address order."""
+    lamp_names = [label for label, _loc in face.lamps] + [FAULT_LAMP]
+    return ["switches: " + " ".join(f"{n}={v}" for n, v in zip(face.switches, coils)),
+            "lamps:    " + " ".join(f"{n}={v}" for n, v in zip(lamp_names, lamps)),
+            "readouts: " + " ".join(f"{n}={v}" for (n, _unit), v in zip(face.readouts, readouts))]
+
+
+class ConsoleError(PlcLabError):
+    """A console name or value the stand does not have: one line for the user."""
+
+
+class ConsoleClient:
+    """The project's client of a console face: switches by name, presses, the whole state."""
+
+    def __init__(self, face: Any, host: str = DEFAULT_HOST, port: int = CONSOLE_PORT,
+                 timeout: float = 2.0, sleep: Callable[[float], None] = time.sleep):
+        self.face = face
+        try:
+            self.client = RawModbusClient(host, port, timeout=timeout)
+        except OSError as exc:
+            raise ConsoleError(f"cannot reach the console face at {host}:{port}: "
+                               f"{exc.strerror or exc}") from None
+        self.sleep = sleep
+
+    def __enter__(self) -> "ConsoleClient":
+        self.client.__enter__()
+        return self
+
+    def __exit__(self, *exc: object) -> None:
+        self.client.__exit__(*exc)
+
+    def coil(self, name: str) -> int:
+        """The coil address of a console switch (case-insensitive)."""
+        names = [n.upper() for n in self.face.switches]
+        key = name.strip().upper()
+        if key not in names:
+            raise ConsoleError(f"no console switch {name!r}; this stand has {', '.join(self.face.switches)}")
+        return names.index(key)
+
+    def set(self, name: str, value: int) -> None:
+        self.client.write_coil(self.coil(name), bool(value))
+
+    def press(self, name: str, seconds: float = DEFAULT_PRESS_S) -> None:
+        """Switch on, hold `seconds`, switch off (a push button, or a held jog switch)."""
+        address = self.coil(name)
+        self.client.write_coil(address, True)
+        self.sleep(seconds)
+        self.client.write_coil(address, False)
+
+    def state(self) -> tuple[list[int], list[int], list[int]]:
+        """(coils, lamps, readouts) as the face serves them now."""
+        face = self.face
+        coils = self.client.read_coils(0, len(face.switches))
+        lamps = self.client.read_discrete_inputs(0, len(face.lamps) + 1)
+        readouts = self.client.read_input_registers(0, len(face.readouts)) if face.readouts else []
+        return coils, lamps, readouts
+
+
+def parse_value(text: str, what: str) -> int:
+    """0/1/on/off for a switch."""
+    key = text.strip().lower()
+    if key in ("1", "on", "true"):
+        return 1
+    if key in ("0", "off", "false"):
+        return 0
+    raise ConsoleError(f"{what}: {text!r} is not a switch value (0/1, on/off)")
+
+
+def _press(text: str) -> tuple[str, float]:
+    name, sep, seconds = text.partition("=")
+    if not sep:
+        return name, DEFAULT_PRESS_S
+    try:
+        value = float(seconds)
+    except ValueError:
+        value = -1.0
+    if not 0 < value <= 60:
+        raise ConsoleError(f"--press {text}: the hold time must be 0..60 seconds")
+    return name, value
+
+
+def run_console(stand: str, where: tuple[str, int], sets: Iterable[str] = (),
+                presses: Iterable[str] = ()) -> list[str]:
+    """`plclab console`: set switches (NAME=V), then press buttons (NAME[=SECONDS]) one after
+    the other, then read the face; the lines to print. Bad names fail before anything is sent."""
+    face = importlib.import_module(f"plclab.plants.{stand}").FACE
+    with ConsoleClient(face, where[0], where[1]) as client:
+        writes = []
+        for text in sets:
+            name, sep, value = text.partition("=")
+            if not sep:
+                raise ConsoleError(f"--set {text}: expected NAME=VALUE, e.g. SA5=1")
+            writes.append((client.coil(name), parse_value(value, f"--set {text}")))
+        holds = [(client.coil(name), name, seconds) for name, seconds in map(_press, presses)]
+        try:
+            for address, value in writes:
+                client.client.write_coil(address, bool(value))
+            for _address, name, seconds in holds:
+                client.press(name, seconds)
+            return console_lines(face, *client.state())
+        except (OSError, RawModbusError) as exc:
+            raise ConsoleError(f"console face at {where[0]}:{where[1]}: {exc}") from None

@@ -1,0 +1,116 @@
+"""The generated OpenPLC PSM script (`plclab psm-script STAND`, OpenPLC's core/psm/main.py) run
+as OpenPLC runs it: a separate process, from a folder of its own, with a Python that has no
+PLC Lab on its path (-I -S: no site-packages, no script folder, no environment), driven by
+a byte-for-byte mimic of OpenPLC's psm.cpp client and by the console face."""
+from __future__ import annotations
+
+import re
+import subprocess
+import sys
+import time
+from pathlib import Path
+
+import pytest
+
+from modbus_support import TIMEOUT, OpenPlcPsm
+from plclab.errors import PlcLabError
+from plclab.modbus.psm import psm_script
+from plclab.modbus.rawclient import RawModbusClient
+from plclab.plants import STANDS, make_plant
+
+REPO = Path(__file__).resolve().parents[2]
+FRESH_PYTHON = [sys.executable, "-I", "-S"]
+
+
+def start_script(tmp_path: Path, stand: str) -> tuple[subprocess.Popen, int, int]:
+    script = psm_script(stand, psm=("127.0.0.1", 0), console=("127.0.0.1", 0))
+    assert str(REPO) not in script and "/harness" not in script
+    (tmp_path / "main.py").write_text(script)
+    proc = subprocess.Popen(FRESH_PYTHON + ["-u", "main.py"], cwd=tmp_path, stdout=subprocess.PIPE,
+                            stderr=subprocess.PIPE, text=True)
+    line = proc.stdout.readline()
+    m = re.search(r"PSM I/O on 127\.0\.0\.1:(\d+), console face on 127\.0\.0\.1:(\d+)", line)
+    assert m, (line, proc.stderr.read() if proc.poll() is not None else "")
+    return proc, int(m.group(1)), int(m.group(2))
+
+
+def stop_script(proc: subprocess.Popen, openplc: OpenPlcPsm) -> str:
+    openplc.stop_psm()                                    # OpenPLC's finalizeHardware()
+    assert proc.wait(timeout=TIMEOUT) == 0
+    openplc.close()
+    return proc.stdout.read() + proc.stderr.read()
+
+
+def test_the_fresh_python_has_no_plclab():
+    r = subprocess.run(FRESH_PYTHON + ["-c", "import plclab"], capture_output=True, text=True, timeout=TIMEOUT)
+    assert r.returncode == 1 and "No module named 'plclab'" in r.stderr
+
+
+def poll(openplc: OpenPlcPsm, bits: list[int], words: list[int]) -> tuple[list[int], list[int]]:
+    """One OpenPLC scan's PSM exchange: inputs read, (no program), outputs written."""
+    inputs = openplc.read_dig_inp(), openplc.read_ana_inp()
+    openplc.write_dig_out(bits)
+    openplc.write_ana_out(words)
+    return inputs
+
+
+def test_mp9c_script_runs_alone_steps_per_poll_and_serves_the_console(tmp_path):
+    proc, psm_port, console_port = start_script(tmp_path, "mp9c")
+    try:
+        openplc = OpenPlcPsm(psm_port)
+        with RawModbusClient("127.0.0.1", console_port, unit=0, timeout=TIMEOUT) as console:
+            console.write_coil(6, True)                       # SB1 (mbpoll -t 0 -r 7 ... 1)
+            bits, _ = poll(openplc, [0] * 400, [0] * 50)
+            # power-up: arm up (SQ1), released (SQ3), left (SQ4), backward (SQ7); SB1 = %IX1.6
+            assert [i for i, b in enumerate(bits) if b] == [0, 2, 3, 6, 14]
+            console.write_coil(6, False)
+            outputs = [0] * 400
+            outputs[2] = outputs[8] = 1                       # L3 (arm down), HL1
+            deadline = time.monotonic() + TIMEOUT
+            while not bits[1] and time.monotonic() < deadline:   # SQ2: arm down
+                bits, _ = poll(openplc, outputs, [0] * 50)
+                time.sleep(0.01)
+            assert bits[1] == 1 and bits[0] == 0 and bits[14] == 0
+            assert console.read_input_registers(0, 4) == [1000, 0, 0, 0]     # lift all the way
+            assert console.read_discrete_inputs(0, 2) == [1, 0]             # HL1 on, no fault
+        out = stop_script(proc, openplc)
+        assert "mp9c plant stopped after" in out and "Traceback" not in out
+    finally:
+        if proc.poll() is None:
+            proc.kill()
+            proc.wait(TIMEOUT)
+
+
+@pytest.mark.parametrize("stand, switch, location, readout", [
+    ("tur10", "SB1", 11, 16000),            # %IX1.3; link 1 at 16000 codes
+    ("thermo", "DISTURBANCE", 0, 220),      # %IX0.0; 22.0 C
+])
+def test_tur10_and_thermo_scripts_run_alone(tmp_path, stand, switch, location, readout):
+    face = make_plant(stand).FACE
+    proc, psm_port, console_port = start_script(tmp_path, stand)
+    try:
+        openplc = OpenPlcPsm(psm_port)
+        with RawModbusClient("127.0.0.1", console_port, unit=0, timeout=TIMEOUT) as console:
+            assert console.read_input_registers(0, 1) == [readout]
+            console.write_coil(face.switches.index(switch), True)
+            bits, _ = poll(openplc, [0] * 400, [0] * 50)
+            assert bits[location] == 1
+            assert console.read_coils(0, len(face.switches))[face.switches.index(switch)] == 1
+        out = stop_script(proc, openplc)
+        assert f"{stand} plant stopped after" in out
+    finally:
+        if proc.poll() is None:
+            proc.kill()
+            proc.wait(TIMEOUT)
+
+
+def test_psm_script_cli_prints_the_script_for_openplc_s_fixed_port():
+    r = subprocess.run([sys.executable, "-m", "plclab.cli", "psm-script", "tur10"], capture_output=True,
+                       text=True, timeout=60)
+    assert r.returncode == 0
+    compile(r.stdout, "main.py", "exec")
+    assert "PSM = ('127.0.0.1', 2605)" in r.stdout and "CONSOLE = ('127.0.0.1', 2606)" in r.stdout
+    assert str(REPO) not in r.stdout
+    assert set(STANDS) == {"mp9c", "tur10", "thermo"}
+    with pytest.raises(PlcLabError, match="unknown stand 'kuka'"):
+        psm_script("kuka")
