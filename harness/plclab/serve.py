@@ -9,6 +9,7 @@ flushes retained variables.
 """
 from __future__ import annotations
 
+import os
 import signal
 import sys
 import threading
@@ -57,7 +58,8 @@ class Service:
         elif opts.plant is not None:
             from plclab.plants.host import PlantHost
 
-            self.plant_host = PlantHost(opts.plant, report=lambda line: print(line, file=sys.stderr, flush=True))
+            self.plant_host = PlantHost(opts.plant, report=lambda line: print(line, file=sys.stderr, flush=True),
+                                        traceback=bool(os.environ.get("PLCLAB_DEBUG")))
             plants.append(self.plant_host)
         self.runner = RealTimeRunner(self.plc, plants, on_scan=self._after_scan if self.psm else None)
         if self.psm is not None:

@@ -22,9 +22,10 @@ REPO = Path(__file__).resolve().parents[2]
 FRESH_PYTHON = [sys.executable, "-I", "-S"]
 
 
-def start_script(tmp_path: Path, stand: str) -> tuple[subprocess.Popen, int, int]:
+def start_script(tmp_path: Path, stand: str, edit=lambda script: script) -> tuple[subprocess.Popen, int, int]:
     script = psm_script(stand, psm=("127.0.0.1", 0), console=("127.0.0.1", 0))
     assert str(REPO) not in script and "/harness" not in script
+    script = edit(script)
     (tmp_path / "main.py").write_text(script)
     proc = subprocess.Popen(FRESH_PYTHON + ["-u", "main.py"], cwd=tmp_path, stdout=subprocess.PIPE,
                             stderr=subprocess.PIPE, text=True)
@@ -75,6 +76,45 @@ def test_mp9c_script_runs_alone_steps_per_poll_and_serves_the_console(tmp_path):
             assert console.read_discrete_inputs(0, 2) == [1, 0]             # HL1 on, no fault
         out = stop_script(proc, openplc)
         assert "mp9c plant stopped after" in out and "Traceback" not in out
+    finally:
+        if proc.poll() is None:
+            proc.kill()
+            proc.wait(TIMEOUT)
+
+
+SABOTAGE = """    from plclab.modbus.psm import run_plant
+    import plclab.plants.mp9c as mp9c
+    healthy_step = mp9c.MP9C.step
+
+    def step(self, outputs, dt, calls=[0]):
+        calls[0] += 1
+        if calls[0] == 3:
+            raise RuntimeError("a bug in the plant model")
+        return healthy_step(self, outputs, dt)
+    mp9c.MP9C.step = step
+"""
+
+
+def test_a_failing_plant_in_the_script_freezes_inputs_and_keeps_answering_openplc(tmp_path):
+    def sabotage(script: str) -> str:
+        assert "    from plclab.modbus.psm import run_plant\n" in script
+        return script.replace("    from plclab.modbus.psm import run_plant\n", SABOTAGE)
+    proc, psm_port, console_port = start_script(tmp_path, "mp9c", sabotage)
+    try:
+        openplc = OpenPlcPsm(psm_port)
+        outputs = [0] * 400
+        outputs[2] = 1                                        # L3: arm down
+        with RawModbusClient("127.0.0.1", console_port, unit=0, timeout=TIMEOUT) as console:
+            seen = [poll(openplc, outputs, [0] * 50)[0][:2] for _scan in range(20)]
+            # poll 1 reports the power-up state, poll 2 the arm leaving SQ1; then frozen
+            assert seen == [[1, 0]] + [[0, 0]] * 19
+            console.write_coil(6, True)                       # the console face still answers
+            assert poll(openplc, outputs, [0] * 50)[0][14] == 0     # SB1 not seen: plant frozen
+            assert console.read_discrete_inputs(0, 2) == [0, 1]     # PLANT_FAULT
+        out = stop_script(proc, openplc)
+        assert out.count("the MP9C model raised RuntimeError: a bug in the plant model") == 1   # once
+        assert "Traceback (most recent call last)" in out
+        assert "self._inputs = dict(self.plant.step(outputs, dt))" in out    # embedded source shown
     finally:
         if proc.poll() is None:
             proc.kill()

@@ -460,6 +460,7 @@ _SCRIPT = '''\
 import base64
 import importlib.abc
 import importlib.util
+import linecache
 import sys
 import zlib
 
@@ -486,7 +487,9 @@ class EmbeddedModules(importlib.abc.MetaPathFinder, importlib.abc.Loader):
 
     def exec_module(self, module):
         source = zlib.decompress(base64.b64decode(EMBEDDED[module.__name__])).decode("utf-8")
-        exec(compile(source, "<plclab: " + module.__name__ + ">", "exec"), module.__dict__)
+        filename = "<plclab: " + module.__name__ + ">"
+        linecache.cache[filename] = (len(source), None, source.splitlines(True), filename)  # tracebacks
+        exec(compile(source, filename, "exec"), module.__dict__)
 
 
 if __name__ == "__main__":
