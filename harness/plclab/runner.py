@@ -1,14 +1,13 @@
 """`plclab run`: one scenario of a stand in virtual time, its timeline and its trace files."""
 from __future__ import annotations
 
-import importlib
 from dataclasses import dataclass
 from pathlib import Path
 from typing import Optional
 
-from plclab.errors import PlcLabError
 from plclab.fileio import check_output
 from plclab.scenario import ScenarioFailure, Session
+from plclab.stands.base import stand_spec
 from plclab.trace import plot_trace, write_csv, write_vcd
 
 
@@ -20,32 +19,25 @@ class RunResult:
     files: list[Path]
 
 
-def stand_module(stand: str):
-    from plclab.stands import get_stand
-    get_stand(stand)                       # one clear error for unknown / not yet shipped stands
-    return importlib.import_module(f"plclab.stands.{stand}")
-
-
 def run_scenario(stand: str, variant: Optional[str] = None, scenario: Optional[str] = None,
                  csv: Optional[str] = None, vcd: Optional[str] = None, plot: Optional[str] = None,
                  out_dir: str = "out", retain_dir: Optional[Path] = None) -> RunResult:
-    mod = stand_module(stand)
+    spec = stand_spec(stand)
     for out in (csv, vcd, plot):
         if out:
             check_output(out)                # plclab.fileio: a bad output path is refused up front
-    name = scenario or "demo"
-    if name not in mod.SCENARIOS:
-        raise PlcLabError(f"{stand}: unknown scenario '{name}' (one of {', '.join(mod.SCENARIOS)})")
-    variant = variant or mod.STAND.richest_variant   # installed: no reference solution to run
-    mod.STAND.variant(variant)
+    name = scenario or spec.default_scenario
+    play = spec.scenario(name)
+    variant = variant or spec.stand.richest_variant   # installed: no reference solution to run
+    spec.stand.variant(variant)
     retain_path = (retain_dir or Path(out_dir) / "retain") / f"{stand}-{variant}-{name}.json"
     if retain_path.exists():
         retain_path.unlink()               # a scenario starts from a fresh controller
-    s = mod.session(variant, retain_path=retain_path)
+    s = spec.session(variant, retain_path=retain_path)
     failure = None
     try:
-        mod.SCENARIOS[name](s)
-        mod.check_never(s)
+        play(s)
+        spec.check_never(s)
     except ScenarioFailure as e:
         failure = str(e)
     if scenario is None and not (csv or vcd or plot):
@@ -58,11 +50,11 @@ def run_scenario(stand: str, variant: Optional[str] = None, scenario: Optional[s
             files.append(Path(path))
     if plot:
         signals: list = []                   # a name, or a group sharing one subplot
-        for entry in mod.PLOT_SIGNALS:
+        for entry in spec.plot_signals:
             group = [entry] if isinstance(entry, str) else list(entry)
             present = [n for n in group if n in s.trace]
             if present:
                 signals.append(present[0] if isinstance(entry, str) else tuple(present))
-        plot_trace(s.trace, plot, names=signals, title=f"{mod.STAND.title}: {variant}, scenario {name}")
+        plot_trace(s.trace, plot, names=signals, title=f"{spec.stand.title}: {variant}, scenario {name}")
         files.append(Path(plot))
-    return RunResult(s, mod.timeline(s), failure, files)
+    return RunResult(s, spec.timeline(s), failure, files)

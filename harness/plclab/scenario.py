@@ -11,6 +11,8 @@ Modelled on cocotb and pytest (style.md):
 Names are the console and wiring labels of the stand's GVL (`SB1`, `SQ2`, `L3`, `HL1`); times
 are plant seconds. A session records a trace of every located I/O point (with the labels as
 aliases) plus chosen internal variables, and a log of the console actions for the timeline.
+A stand's observables (named values of the program's inside, `plclab.stands.base`) are read
+with `s.value("FramePtr")` and recorded under their names, not their ST paths.
 """
 from __future__ import annotations
 
@@ -86,12 +88,16 @@ class Session:
 
     def __init__(self, sources: Sequence[tuple[str, str]], plant: Any, labels: dict[str, str],
                  watch: Iterable[str] = (), retain_path: Optional[Path] = None, tick_s: Optional[float] = None,
-                 name: str = "stand", checked: Any = None):
+                 name: str = "stand", checked: Any = None, observables: Optional[dict[str, str]] = None,
+                 strict_watch: bool = True):
         self.name = name
         self.sources = list(sources)
         self.plant = plant
         self.labels = dict(labels)                    # label -> address ('SQ2' -> '%IX0.1')
-        self.watch = list(watch)
+        self.observables = dict(observables or {})    # observable name -> ST path
+        self.watch = list(watch)                      # observable names or ST paths to record
+        self.strict_watch = strict_watch              # False: skip what the program does not have
+        self._trace_names = {path: name for name, path in self.observables.items()}
         self.retain_path = retain_path
         self.tick_ns = round(tick_s * 1e9) if tick_s else None
         self.checked = checked if checked is not None else check_sources(self.sources)
@@ -108,9 +114,12 @@ class Session:
         store = RetainStore(self.retain_path) if self.retain_path else None
         self.plc = PLC(compile_unit(self.checked), tick_ns=self.tick_ns, retain=store)
         self.plc.now_ns = self.plc.ticks = 0
+        paths = [self.observables.get(n, n) for n in self.watch]
+        if not self.strict_watch:             # a student's program need not have the shipped FBs
+            paths = [p for p in paths if self._has(p)]
         # every labelled I/O point is traced, also one the program does not declare: a
         # student may drop an unused global, the trace still shows the console
-        self.sim = Simulation(self.plc, plants=[self.plant], watch=self.watch,
+        self.sim = Simulation(self.plc, plants=[self.plant], watch=paths,
                               extra_addresses=list(self.labels.values()))
         self._merge_pending = True
 
@@ -150,9 +159,10 @@ class Session:
         if self._merge_pending:
             self._merge_pending = False
             for name in src.signals():
-                if name not in self.trace:
+                out = self._trace_names.get(name, name)
+                if out not in self.trace:
                     info = src.info(name)
-                    self.trace.declare(name, info.kind, src.changes(name)[0][1], self._offset_ns,
+                    self.trace.declare(out, info.kind, src.changes(name)[0][1], self._offset_ns,
                                        width=info.width)
             for label, address in self.labels.items():
                 if address in self.trace and label not in self.trace:
@@ -160,23 +170,40 @@ class Session:
             self._copied = {}
         # only what was recorded since the last copy (a change at the same instant may have
         # replaced the last entry, so that one is taken again)
-        offset, copied = self._offset_ns, self._copied
+        offset, copied, renamed = self._offset_ns, self._copied, self._trace_names
         for name in src.signals():
             start = max(0, copied.get(name, 0) - 1)
+            out = renamed.get(name, name)
             for t, v in src.changes_from(name, start):
-                self.trace.change(offset + t, name, v)
+                self.trace.change(offset + t, out, v)
             copied[name] = src.change_count(name)
         self.trace.advance(self._offset_ns + self.plc.now_ns - self.plc.tick_ns)
 
     # ------------------------------------------------------------------ state
     def value(self, name: str) -> Any:
+        """A label's I/O point (`SQ2`), an observable (`FramePtr`) or an ST path, now."""
         address = self.labels.get(name, name)
         if address.startswith("%"):
             from plclab.runtime.plc import parse_address
             area, index = parse_address(address)
             raw = self.plc.image.areas[area][index]
             return bool(raw) if area[1] == "X" else raw
+        if name in self.observables:
+            path = self.observables[name]
+            if not self._has(path):
+                raise ScenarioFailure(f"t={self.now:.2f} s: this scenario reads {name} ({path}), which "
+                                      "the program does not have")
+            return self.plc.read(path)
         return self.plc.read(name)
+
+    def _has(self, path: str) -> bool:
+        """Whether the running program has the variable `path`."""
+        from plclab.errors import PlcLabError
+        try:
+            self.plc.resolve(path)
+        except PlcLabError:
+            return False
+        return True
 
     def inject(self, fault: str, **params: Any) -> None:
         self.plant.inject(fault, **params)

@@ -12,8 +12,10 @@ installed package never does, and asking for one there is one clear error.
 from __future__ import annotations
 
 import importlib
+import re
 from dataclasses import dataclass, field
 from pathlib import Path
+from types import ModuleType
 
 from plclab.errors import PlcLabError
 
@@ -48,6 +50,7 @@ class Variant:
     tasks: tuple[Task, ...]
     doc: str = ""
     reference: bool = False                 # a task's reference solution: checkout only
+    observables: dict[str, str] = field(default_factory=dict)   # where this variant's paths differ
 
 
 @dataclass(frozen=True)
@@ -93,14 +96,39 @@ class Stand:
         return make_plant(self.name, **params)
 
 
-def get_stand(name: str) -> Stand:
+def stand_module(name: str) -> ModuleType:
+    """The module `plclab.stands.<name>` (one clear error for an unknown stand)."""
     if name not in STANDS:
         raise PlcLabError(f"unknown stand '{name}' (one of {', '.join(STANDS)})")
     try:
-        module = importlib.import_module(f"plclab.stands.{name}")
-    except ModuleNotFoundError:
+        return importlib.import_module(f"plclab.stands.{name}")
+    except ModuleNotFoundError as e:
+        if e.name != f"plclab.stands.{name}":
+            raise
         raise PlcLabError(f"stand '{name}' has no programs yet; run your own with --program FILE.st") from None
-    return module.STAND
+
+
+def get_stand(name: str) -> Stand:
+    return stand_module(name).STAND
+
+
+# `NAME AT %IX0.1 : BOOL;` in a GVL: the label and its located address
+_LOCATED = re.compile(r"\b([A-Za-z_]\w*)\s+AT\s+(%[IQM][XBWDL]?\d+(?:\.\d+)?)", re.IGNORECASE)
+
+
+def gvl_labels(stand: Stand) -> dict[str, str]:
+    """The stand's located globals, label -> address (`'SQ2': '%IX0.1'`), read from its GVL
+    files: the one source of each stand's I/O map (plants and Modbus profiles are tested
+    against it, scenarios and the grader name I/O by these labels)."""
+    out: dict[str, str] = {}
+    for stem in stand.gvl:
+        text = _strip_comments(_read(PLC_DIR / "GVL" / f"{stem}.st"))
+        out.update({m.group(1): m.group(2).upper() for m in _LOCATED.finditer(text)})
+    return out
+
+
+def _strip_comments(text: str) -> str:
+    return re.sub(r"\(\*.*?\*\)", " ", text, flags=re.DOTALL)
 
 
 def pou_path(stem: str) -> Path:

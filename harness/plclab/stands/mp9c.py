@@ -6,12 +6,11 @@ the reason. None may ever show a valve conflict (both coils of one valve energiz
 """
 from __future__ import annotations
 
-import re
-from pathlib import Path
 from typing import Callable, Optional
 
 from plclab.scenario import ScenarioFailure, Session
-from plclab.stands import PLC_DIR, Stand, Task, Variant, sources
+from plclab.stands import Stand, Task, Variant, gvl_labels
+from plclab.stands.base import Fault, FaultParam, StandSpec
 
 SHARED = ("FC_PackBits7", "FC_BitOf", "FB_Sb1Button", "FB_FrameStore", "FB_PauseTimer",
           "FB_FrameWatchdog", "FB_Blink", "FB_ResetIndicator", "FB_FrameSequencer", "FB_Mp9cRobot")
@@ -38,24 +37,37 @@ STAND = Stand(
 
 VALVES = [f"L{i}" for i in range(1, 8)]
 SENSORS = [f"SQ{i}" for i in range(1, 8)]
-FRAME_PTR = "Main.Robot.Sequencer.Ptr"
-FRAME_START = "Main.Robot.Sequencer.StartFrame"
-FRAME_COUNT = "Main.Cp.Count"
+CONSOLE = ("SA1", "SA2", "SA3", "SA4", "SA5", "SA6", "I07", "SB1")
+FRAME_PTR = "FramePtr"
+FRAME_COUNT = "FrameCount"
+RUNNING = "Running"
+FAULT = "FrameFault"
+
+# What scenarios, timelines and traces may read of the program's inside: the one place
+# that knows the shipped programs' instance paths.
+OBSERVABLES = {
+    FRAME_PTR: "Main.Robot.Sequencer.Ptr",        # the frame being played (automatic mode)
+    FRAME_COUNT: "Main.Cp.Count",                 # frames recorded
+    RUNNING: "Main.Robot.Sequencer.Running",      # automatic execution running
+    FAULT: "Main.Robot.Sequencer.Fault",          # stopped by the frame watchdog
+}
+
+FAULTS = (
+    Fault("jammed", "a cylinder stops where it is",
+          (FaultParam("mechanism", "lift | rotation | extension | gripper"),)),
+    Fault("stuck_switch", "a limit switch reads a constant whatever the link does",
+          (FaultParam("switch", "SQ1..SQ7"), FaultParam("state", "1 on / 0 off", 1))),
+    Fault("dead_coil", "energizing a valve coil does nothing", (FaultParam("coil", "L1..L7"),)),
+    Fault("low_pressure", "every travel time multiplied by factor",
+          (FaultParam("factor", "> 0 (default: the plant's, 3)", None),)),
+    Fault("bounce", "each console input change chatters for up to duration s",
+          (FaultParam("duration", "s", 0.02), FaultParam("seed", "of the reproducible chatter", 0))),
+)
 
 
 def labels() -> dict[str, str]:
     """Console and wiring labels -> addresses, read from the GVL (the single source)."""
-    text = (PLC_DIR / "GVL" / "GVL_MP9C.st").read_text(encoding="utf-8")
-    return {m.group(1): m.group(2).upper() for m in re.finditer(r"(\w+)\s+AT\s+(%\w+(?:\.\d+)?)", text)}
-
-
-def session(variant: str = "full", program: Optional[list[tuple[str, str]]] = None,
-            retain_path: Optional[Path] = None, watch_internals: bool = True, **plant_params) -> Session:
-    """A fresh MP-9C: the shipped `variant` (or a student's `program` sources) and a plant."""
-    srcs = program if program is not None else sources(STAND, variant)
-    watch = [FRAME_PTR, FRAME_COUNT] if watch_internals else []
-    return Session(srcs, STAND.make_plant(**plant_params), labels(), watch=watch, retain_path=retain_path,
-                   name=f"mp9c {variant if program is None else 'program'}")
+    return gvl_labels(STAND)
 
 
 # --------------------------------------------------------------------------- timeline
@@ -133,10 +145,10 @@ def record(s: Session, pause_select: Optional[int] = None) -> None:
     """A short SB1 press records a frame (optionally choosing the pause with I0.7 first)."""
     if pause_select is not None:
         s.console.set(I07=pause_select)
-    before = s.plc.read(FRAME_COUNT)
+    before = s.value(FRAME_COUNT)
     s.console.press("SB1", hold=0.2)
     s.run(0.05)
-    after = s.plc.read(FRAME_COUNT)
+    after = s.value(FRAME_COUNT)
     if after != before + 1:
         raise ScenarioFailure(f"t={s.now:.2f} s: a short SB1 press did not record a frame "
                               f"(frames {before} -> {after})")
@@ -181,12 +193,12 @@ def demo(s: Session) -> None:
     start_automatic(s)
     cycles = 0
     while cycles < 3:
-        s.wait_until(lambda io: s.plc.read(FRAME_PTR) == 4, 30, "frame 4")
-        s.wait_until(lambda io: s.plc.read(FRAME_PTR) == 1, 30, "back to frame 1")
+        s.wait_until(lambda io: s.value(FRAME_PTR) == 4, 30, "frame 4")
+        s.wait_until(lambda io: s.value(FRAME_PTR) == 1, 30, "back to frame 1")
         cycles += 1
     s.console.press("SB1", hold=0.2)
     s.run(3.0)
-    if s.plc.read("Main.Robot.Sequencer.Running"):
+    if s.value(RUNNING):
         raise ScenarioFailure(f"t={s.now:.2f} s: SB1 did not stop continuous execution")
 
 
@@ -215,7 +227,7 @@ def long_press_reset(s: Session) -> None:
     s.run(0.5)
     s.console.release("SB1")
     s.run(0.5)
-    if s.plc.read(FRAME_COUNT) != 0:
+    if s.value(FRAME_COUNT) != 0:
         raise ScenarioFailure(f"t={s.now:.2f} s: program not empty after the reset")
 
 
@@ -234,8 +246,8 @@ def retain(s: Session) -> None:
     teach_down_up(s)
     s.restart_plc(off_time=1.0)
     s.run(0.2)
-    if s.plc.read(FRAME_COUNT) != 2:
-        raise ScenarioFailure(f"t={s.now:.2f} s: {s.plc.read(FRAME_COUNT)} frames after the restart, expected 2")
+    if s.value(FRAME_COUNT) != 2:
+        raise ScenarioFailure(f"t={s.now:.2f} s: {s.value(FRAME_COUNT)} frames after the restart, expected 2")
     start_automatic(s)
     s.wait_until(lambda io: io.SQ2, 3, "frame 1 played after the restart")
 
@@ -247,7 +259,7 @@ def jammed(s: Session) -> None:
     s.inject("jammed", mechanism="lift")
     start_automatic(s)
     started = s.now
-    s.wait_until(lambda io: s.plc.read("Main.Robot.Sequencer.Fault"), 12, "the frame timeout")
+    s.wait_until(lambda io: s.value(FAULT), 12, "the frame timeout")
     if abs(s.now - started - 10.0) > 0.5:
         raise ScenarioFailure(f"t={s.now:.2f} s: timeout after {s.now - started:.2f} s, expected about 10 s")
     s.run(2.0)
@@ -297,3 +309,9 @@ SCENARIOS: dict[str, Callable[[Session], None]] = {
     "retain": retain, "jammed": jammed, "empty": empty_program,
 }
 PLOT_SIGNALS = ["SB1", "SA1", "I07"] + VALVES + SENSORS + ["HL1", FRAME_PTR]
+
+SPEC = StandSpec(
+    stand=STAND, console=CONSOLE, lamps=("HL1",), sensors=tuple(SENSORS), actuators=tuple(VALVES),
+    faults=FAULTS, observables=OBSERVABLES, scenarios=SCENARIOS, timeline=timeline,
+    check_never=check_never, plot_signals=tuple(PLOT_SIGNALS))
+session = SPEC.session

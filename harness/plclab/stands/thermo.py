@@ -11,9 +11,7 @@ what is output (check_never).
 """
 from __future__ import annotations
 
-import re
 from dataclasses import dataclass
-from pathlib import Path
 from typing import Callable, Iterable, Optional
 
 from plclab.modbus.maps import TwidoMap
@@ -21,7 +19,8 @@ from plclab.modbus.profiles import THERMO
 from plclab.modbus.protocol import ModbusException, Table
 from plclab.plants.base import signed16
 from plclab.scenario import ScenarioFailure, Session
-from plclab.stands import PLC_DIR, Stand, Task, Variant, sources
+from plclab.stands import Stand, Task, Variant, gvl_labels
+from plclab.stands.base import Fault, StandSpec
 
 POUS = ("FC_ScaleAdc", "FB_TemperatureSensor", "FB_FrequencyMeter", "FB_PIRegulator", "PRG_Thermo")
 
@@ -44,7 +43,7 @@ MANUAL, AUTO1, AUTO2 = 0, 1, 2
 MODE_NAMES = {MANUAL: "manual", AUTO1: "automatic-1", AUTO2: "automatic-2"}
 FAN_MAX, HEATER_MAX = 1000, 2000
 ADC_FULL = 1000                    # counts at 100.0 C; also what an open sensor reads
-CELSIUS = "Main.Sensor.Celsius"    # the regulators' measurement, 0.1 C
+CELSIUS = "Celsius"                # the regulators' measurement, 0.1 C (an observable)
 BAND = 1.0                         # C: "within +/-1 C"
 FINE_BAND = 0.2                    # C: steady (two ADC steps), the integral action's work done
 
@@ -62,23 +61,21 @@ BUMP_FRACTION = 10
 
 def labels() -> dict[str, str]:
     """Wiring labels and register names -> addresses, read from the GVL (the single source)."""
-    text = (PLC_DIR / "GVL" / "GVL_THERMO.st").read_text(encoding="utf-8")
-    return {m.group(1): m.group(2).upper() for m in re.finditer(r"(\w+)\s+AT\s+(%\w+(?:\.\d+)?)", text)}
+    return gvl_labels(STAND)
 
 
 REGISTERS = {name: int(addr[3:]) for name, addr in labels().items() if addr.startswith("%MW")}
+OBSERVABLES = {CELSIUS: "Main.Sensor.Celsius"}
+FAULTS = (
+    Fault("sensor_open", "temperature sensor open circuit: the ADC %IW0 reads full scale"),
+    Fault("fan_stalled", "fan rotor jammed: speed 0 whatever the command, no pulses, no airflow"),
+    Fault("heater_dead", "heater burnt out: no heat whatever the command"),
+)
 
 
-def session(variant: str = "full", program: Optional[list[tuple[str, str]]] = None,
-            retain_path: Optional[Path] = None, watch_internals: bool = True, **plant_params) -> Session:
-    """A fresh stand: the shipped program (or a student's `program` sources) and a plant at
-    power-up (22 C, everything off). `s.scada` is the SCADA client of the session."""
-    srcs = program if program is not None else sources(STAND, variant)
-    watch = [CELSIUS] if watch_internals and program is None else []
-    s = Session(srcs, STAND.make_plant(**plant_params), labels(), watch=watch, retain_path=retain_path,
-                name=f"thermo {variant if program is None else 'program'}")
+def attach_scada(s: Session) -> None:
+    """`s.scada`: the SCADA client of a fresh session."""
     s.scada = Scada(s)          # type: ignore[attr-defined]
-    return s
 
 
 # --------------------------------------------------------------------------- SCADA and console
@@ -487,3 +484,10 @@ def timeline(s: Session) -> list[str]:
     if results:
         rows += ["", "measured:"] + [f"  {r}" for r in results]
     return rows
+
+
+SPEC = StandSpec(
+    stand=STAND, console=("DISTURBANCE",), lamps=(), sensors=("TEMP_ADC", "FAN_COUNT"), actuators=("HEATER", "FAN"),
+    faults=FAULTS, observables=OBSERVABLES, scenarios=SCENARIOS, timeline=timeline, check_never=check_never,
+    plot_signals=tuple(PLOT_SIGNALS), setup=attach_scada)
+session = SPEC.session

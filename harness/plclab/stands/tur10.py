@@ -6,13 +6,12 @@ contention or a collision (check_never).
 """
 from __future__ import annotations
 
-import re
-from pathlib import Path
 from typing import Callable, Optional
 
 from plclab.plants.base import signed16
 from plclab.scenario import ScenarioFailure, Session
-from plclab.stands import PLC_DIR, Stand, Task, Variant, sources
+from plclab.stands import Stand, Task, Variant, gvl_labels
+from plclab.stands.base import Fault, FaultParam, StandSpec
 
 SHARED = ("FC_PackBits7", "FC_BitOf", "FC_JogReference", "FB_Sb1Button", "FB_FrameStore", "FB_PauseTimer",
           "FB_FrameWatchdog", "FB_Blink", "FB_ResetIndicator", "FB_FrameSequencer", "FB_SensorBus",
@@ -42,26 +41,42 @@ STAND = Stand(
 
 AXES = (1, 2, 3, 4, 5)
 DRIVES = [f"DRIVE{k}" for k in AXES]
-FRAME_PTR = "Main.Robot.Sequencer.Ptr"
-FRAME_COUNT = "Main.Cp.Count"
-IN_FRAME = "Main.Robot.Sequencer.InFrame"
-POSITIONS = [f"Positions[{k}]" for k in AXES]
-TARGETS = [f"Targets[{k}]" for k in AXES]
+CONSOLE = tuple(f"SA{k}_{d}" for k in AXES for d in ("FWD", "BWD")) + ("SA6", "SA7", "I15", "SB1")
+SENSOR_BUS = tuple(f"BUS{n}" for n in range(1, 16))
+READ_ENABLES = tuple(f"RE{k}" for k in AXES)
+FRAME_PTR = "FramePtr"
+FRAME_COUNT = "FrameCount"
+IN_FRAME = "InFrame"
+FAULT = "FrameFault"
+REG_AXES = "RegAxes"
+POSITIONS = [f"Position{k}" for k in AXES]
+TARGETS = [f"Target{k}" for k in AXES]
 NEVER = ("overvoltage", "bus_contention", "collision")
+
+# What scenarios, timelines and traces may read of the program's inside: the one place
+# that knows the shipped programs' instance paths.
+OBSERVABLES = {
+    FRAME_PTR: "Main.Robot.Sequencer.Ptr",        # the frame being played (automatic mode)
+    FRAME_COUNT: "Main.Cp.Count",                 # frames recorded
+    IN_FRAME: "Main.Robot.Sequencer.InFrame",     # moving to a frame (not yet in its pause)
+    FAULT: "Main.Robot.Sequencer.Fault",          # stopped by the frame watchdog
+    REG_AXES: "RegAxes",                          # how many links the regulators control
+    **{POSITIONS[k - 1]: f"Positions[{k}]" for k in AXES},   # link positions as the PLC read them
+    **{TARGETS[k - 1]: f"Targets[{k}]" for k in AXES},       # the frame being executed
+}
+
+FAULTS = (
+    Fault("dead_sensor", "a position sensor reads a constant code",
+          (FaultParam("axis", "1..5"), FaultParam("value", "0..32767 (default: its code now)", None))),
+    Fault("stuck_drive", "a link does not move whatever its reference", (FaultParam("axis", "1..5"),)),
+    Fault("slow_drive", "a link runs at factor times the normal speed",
+          (FaultParam("axis", "1..5"), FaultParam("factor", ">= 0"))),
+)
 
 
 def labels() -> dict[str, str]:
-    text = (PLC_DIR / "GVL" / "GVL_TUR10.st").read_text(encoding="utf-8")
-    return {m.group(1): m.group(2).upper() for m in re.finditer(r"(\w+)\s+AT\s+(%\w+(?:\.\d+)?)", text)}
-
-
-def session(variant: str = "full", program: Optional[list[tuple[str, str]]] = None,
-            retain_path: Optional[Path] = None, watch_internals: bool = True, **plant_params) -> Session:
-    srcs = program if program is not None else sources(STAND, variant)
-    watch = [FRAME_PTR, FRAME_COUNT, IN_FRAME] + POSITIONS + TARGETS if watch_internals else []
-    s = Session(srcs, STAND.make_plant(**plant_params), labels(), watch=watch, retain_path=retain_path,
-                name=f"tur10 {variant if program is None else 'program'}")
-    return s
+    """Console and wiring labels -> addresses, read from the GVL (the single source)."""
+    return gvl_labels(STAND)
 
 
 def position(s: Session, axis: int) -> float:
@@ -94,10 +109,10 @@ def jog(s: Session, axis: int, direction: int, seconds: float, low: bool = False
 def record(s: Session, pause_select: Optional[int] = None) -> None:
     if pause_select is not None:
         s.console.set(I15=pause_select)
-    before = s.plc.read(FRAME_COUNT)
+    before = s.value(FRAME_COUNT)
     s.console.press("SB1", hold=0.2)
     s.run(0.1)
-    if s.plc.read(FRAME_COUNT) != before + 1:
+    if s.value(FRAME_COUNT) != before + 1:
         raise ScenarioFailure(f"t={s.now:.2f} s: a short SB1 press did not record a frame")
 
 
@@ -116,7 +131,7 @@ def frame_results(s: Session, axes: tuple[int, ...] = AXES) -> list[str]:
         return []
     rows = [f"{'frame':>5} {'start s':>8} {'reached after s':>16}  final error / overshoot per axis (codes)"]
     spans = tr.pulses(IN_FRAME)
-    regulated = axes[:max(1, min(len(axes), s.plc.read("RegAxes")))]
+    regulated = axes[:max(1, min(len(axes), s.value(REG_AXES)))]
     for i, (start, end) in enumerate(spans):
         frame = tr.value_at(FRAME_PTR, start)
         until = spans[i + 1][0] if i + 1 < len(spans) else tr.end_s     # the frame and its pause
@@ -160,8 +175,8 @@ def demo(s: Session) -> None:
     teach_four_frames(s)
     start_automatic(s)
     for _cycle in range(2):
-        s.wait_until(lambda io: s.plc.read(FRAME_PTR) == 4, 60, "frame 4")
-        s.wait_until(lambda io: s.plc.read(FRAME_PTR) == 1, 60, "back to frame 1")
+        s.wait_until(lambda io: s.value(FRAME_PTR) == 4, 60, "frame 4")
+        s.wait_until(lambda io: s.value(FRAME_PTR) == 1, 60, "back to frame 1")
     s.console.press("SB1", hold=0.2)
     s.run(1.0)
     if any(s.value(d) for d in DRIVES):
@@ -196,7 +211,7 @@ def reset(s: Session) -> None:
     s.wait_until(lambda io: io.HL1, 4, "reset indicator after holding SB1")
     s.console.release("SB1")
     s.run(0.3)
-    if s.plc.read(FRAME_COUNT) != 0:
+    if s.value(FRAME_COUNT) != 0:
         raise ScenarioFailure(f"t={s.now:.2f} s: program not empty after the reset")
 
 
@@ -209,10 +224,10 @@ def retain(s: Session) -> None:
     record(s)
     s.restart_plc(off_time=1.0)             # a power cycle: the controller off for a second
     s.run(0.2)
-    if s.plc.read(FRAME_COUNT) != 2:
-        raise ScenarioFailure(f"t={s.now:.2f} s: {s.plc.read(FRAME_COUNT)} frames after the restart")
+    if s.value(FRAME_COUNT) != 2:
+        raise ScenarioFailure(f"t={s.now:.2f} s: {s.value(FRAME_COUNT)} frames after the restart")
     start_automatic(s)
-    s.wait_until(lambda io: s.plc.read(FRAME_PTR) == 2, 20, "frame 2 after the restart")
+    s.wait_until(lambda io: s.value(FRAME_PTR) == 2, 20, "frame 2 after the restart")
 
 
 def dead_sensor(s: Session) -> None:
@@ -221,12 +236,12 @@ def dead_sensor(s: Session) -> None:
     s.console.set(SA7=0)
     s.run(0.2)
     record(s)
-    target = s.plc.read("Main.Cp.Frames[1].Data[1]")
+    target = s.value(POSITIONS[0])          # what frame 1 recorded: the link is at rest
     jog(s, 1, +1, 0.8)
     record(s)
     s.inject("dead_sensor", axis=1, value=target + 30)
     start_automatic(s)
-    s.wait_until(lambda io: s.plc.read("Main.Robot.Sequencer.Fault"), 45, "the frame timeout")
+    s.wait_until(lambda io: s.value(FAULT), 45, "the frame timeout")
     s.run(0.5)
     if any(s.value(d) for d in DRIVES):
         raise ScenarioFailure(f"t={s.now:.2f} s: references not 0 after the frame timeout")
@@ -256,3 +271,10 @@ def timeline(s: Session) -> list[str]:
     if len(results) > 1:
         rows += ["", "positioning result of each played frame:"] + results
     return rows
+
+
+SPEC = StandSpec(
+    stand=STAND, console=CONSOLE, lamps=("HL1",), sensors=SENSOR_BUS, actuators=tuple(DRIVES) + READ_ENABLES,
+    faults=FAULTS, observables=OBSERVABLES, scenarios=SCENARIOS, timeline=timeline,
+    check_never=check_never, plot_signals=tuple(PLOT_SIGNALS))
+session = SPEC.session
