@@ -22,7 +22,10 @@ from plclab.plants.tur10 import FACE
 from plclab.runtime.compiler import compile_unit
 from plclab.runtime.plc import PLC
 from plclab.stands import get_stand, sources
-from plclab.stands.tur10 import FRAME_COUNT, FRAME_PTR, IN_FRAME
+from plclab.stands.tur10 import OBSERVABLES
+
+# the ST paths of the stand's observables (the PLC here is read directly, not through a Session)
+FRAME_COUNT, FRAME_PTR, IN_FRAME = (OBSERVABLES[n] for n in ("FrameCount", "FramePtr", "InFrame"))
 
 LOOPBACK = ("127.0.0.1", 0)
 
