@@ -9,19 +9,14 @@ of wall time for some 100 s of plant time).
 from __future__ import annotations
 
 import functools
-import sys
-from pathlib import Path
 
 import pytest
 
-sys.path.insert(0, str(Path(__file__).resolve().parent))
-pytest.register_assert_rewrite("grader_helpers")      # its asserts report like the tests' own
-
-from plclab.grader import GradeReport, grade, grade_sources, requirement_table, tasks  # noqa: E402
-from plclab.grader.tur10 import POS, make_session  # noqa: E402
-from plclab.stands import bundle, sources  # noqa: E402
-from plclab.stands.tur10 import STAND  # noqa: E402
-from grader_helpers import (FIXTURES_DIR, TASKS, assert_fails_exactly, assert_fails_with,  # noqa: E402
+from plclab.grader import GradeReport, grade, grade_sources, requirement_table, tasks
+from plclab.grader.tur10 import POS, make_session
+from plclab.stands import bundle, sources
+from plclab.stands.tur10 import STAND
+from grader_helpers import (FIXTURES_DIR, TASKS, assert_fails_exactly, assert_fails_with,
                             assert_traces_written, fixtures, fixtures_per_task)
 
 FIXTURES = FIXTURES_DIR / "tur10"

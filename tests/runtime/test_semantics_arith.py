@@ -10,13 +10,8 @@ call `EQ_TIME`... (`iec_std_lib.h`).
 """
 from __future__ import annotations
 
-import sys
-from pathlib import Path
-
-sys.path.insert(0, str(Path(__file__).resolve().parent))
-
-from plclab.iec.types import to_f32  # noqa: E402
-from st_helpers import MS, S, once, program, val  # noqa: E402
+from plclab.iec.types import to_f32
+from st_helpers import MS, S, once, program, val
 
 
 # --------------------------------------------------------------------------- integer wrap

@@ -9,13 +9,9 @@ or after t.
 from __future__ import annotations
 
 import struct
-import sys
-from pathlib import Path
 
-sys.path.insert(0, str(Path(__file__).resolve().parent))
-
-from plclab.runtime.sim import InputEvent  # noqa: E402
-from st_helpers import MS, load  # noqa: E402
+from plclab.runtime.sim import InputEvent
+from st_helpers import MS, load
 
 
 def config(programs: str, resource: str, globals_: str = "") -> str:

@@ -4,17 +4,12 @@ a fault in the middle of a body, EN/ENO, inputs passed by value, and the inline 
 shifts and REAL rounding."""
 from __future__ import annotations
 
-import sys
-from pathlib import Path
+from hypothesis import assume, given, settings, strategies as st
 
-sys.path.insert(0, str(Path(__file__).resolve().parent))
-
-from hypothesis import assume, given, settings, strategies as st  # noqa: E402
-
-from plclab.errors import CompileError  # noqa: E402
-from plclab.iec import types as T  # noqa: E402
-from plclab.runtime import stdlib  # noqa: E402
-from st_helpers import MS, once, program, val  # noqa: E402
+from plclab.errors import CompileError
+from plclab.iec import types as T
+from plclab.runtime import stdlib
+from st_helpers import MS, once, program, val
 
 BUMP_FB = """
 FUNCTION_BLOCK FB_Bump

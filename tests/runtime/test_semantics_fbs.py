@@ -8,12 +8,7 @@ The facts are collected in docs/openplc-stdlib-notes.md.
 """
 from __future__ import annotations
 
-import sys
-from pathlib import Path
-
-sys.path.insert(0, str(Path(__file__).resolve().parent))
-
-from st_helpers import MS, program, scan_until, val  # noqa: E402
+from st_helpers import MS, program, scan_until, val
 
 
 # --------------------------------------------------------------------------- bistables

@@ -7,14 +7,10 @@ The facts are collected in docs/openplc-stdlib-notes.md.
 from __future__ import annotations
 
 import math
-import sys
-from pathlib import Path
 
 import pytest
 
-sys.path.insert(0, str(Path(__file__).resolve().parent))
-
-from st_helpers import MS, S, once, val  # noqa: E402
+from st_helpers import MS, S, once, val
 
 
 # --------------------------------------------------------------------------- conversions

@@ -2,16 +2,11 @@
 R_EDGE / F_EDGE inputs."""
 from __future__ import annotations
 
-import sys
-from pathlib import Path
+import pytest
 
-sys.path.insert(0, str(Path(__file__).resolve().parent))
-
-import pytest  # noqa: E402
-
-from plclab.errors import CompileError  # noqa: E402
-from plclab.iec.types import to_f32  # noqa: E402
-from st_helpers import MS, S, once, program, val  # noqa: E402
+from plclab.errors import CompileError
+from plclab.iec.types import to_f32
+from st_helpers import MS, S, once, program, val
 
 COUNTER_FB = """
 FUNCTION_BLOCK Acc

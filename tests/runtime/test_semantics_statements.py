@@ -8,14 +8,9 @@ end of the POU.
 """
 from __future__ import annotations
 
-import sys
-from pathlib import Path
-
 import pytest
 
-sys.path.insert(0, str(Path(__file__).resolve().parent))
-
-from st_helpers import once, program, val  # noqa: E402
+from st_helpers import once, program, val
 
 
 # --------------------------------------------------------------------------- IF
