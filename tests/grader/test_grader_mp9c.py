@@ -8,19 +8,15 @@ a runtime fault is a failing row.
 from __future__ import annotations
 
 import re
-import sys
 from pathlib import Path
 
 import pytest
 
-sys.path.insert(0, str(Path(__file__).resolve().parent))
-pytest.register_assert_rewrite("grader_helpers")      # its asserts report like the tests' own
-
-from plclab.errors import PlcLabError  # noqa: E402
-from plclab.grader import GradeReport, Row, grade, grade_sources, requirement_table, tasks  # noqa: E402
-from plclab.stands import bundle, sources  # noqa: E402
-from plclab.stands.mp9c import STAND  # noqa: E402
-from grader_helpers import (FIXTURES_DIR, TASKS, assert_fails_exactly, assert_fails_with,  # noqa: E402
+from plclab.errors import PlcLabError
+from plclab.grader import GradeReport, Row, grade, grade_sources, requirement_table, tasks
+from plclab.stands import bundle, sources
+from plclab.stands.mp9c import STAND
+from grader_helpers import (FIXTURES_DIR, TASKS, assert_fails_exactly, assert_fails_with,
                             assert_traces_written, fixtures, fixtures_per_task)
 
 FIXTURES = FIXTURES_DIR / "mp9c"
@@ -100,7 +96,7 @@ def test_wrong_solution_fails_with_the_row_that_says_why(name, task, rid):
 
 def test_program_that_does_not_compile_gives_checker_lines(tmp_path):
     path = write_bundle(tmp_path, "baseline",
-                        lambda t: t.replace("    L3 := SA5;\n", "    L3 := SA5 + 1;\n    L9 := 1;\n"))
+                        lambda t: t.replace("\nL3 := SA5;\n", "\nL3 := SA5 + 1;\nL9 := 1;\n"))
     report = grade("mp9c", "task1", [path])
     assert not report.passed and report.exit_code == 1
     assert report.rows == []

@@ -20,8 +20,13 @@ def test_the_checkout_has_the_solutions_tree():
     assert SOLUTIONS_DIR is not None and (SOLUTIONS_DIR / "POUs").is_dir()
 
 
-def test_no_pou_is_both_shipped_and_a_solution():
-    assert _stems(PLC_DIR / "POUs") & _stems(SOLUTIONS_DIR / "POUs") == set()
+def test_a_reference_reads_its_own_version_of_a_starting_block():
+    """T_ControlProgram: the student's has no pause per frame, Task 2's model answer has."""
+    stand = get_stand("mp9c")
+    [starting] = [f for f in stand.files("baseline") if f.stem == "T_ControlProgram"]
+    [answer] = [f for f in stand.files("task2") if f.stem == "T_ControlProgram"]
+    assert PLC_DIR in starting.parents and SOLUTIONS_DIR in answer.parents
+    assert "Pause" not in starting.read_text(encoding="utf-8") and "Pause" in answer.read_text(encoding="utf-8")
 
 
 @pytest.mark.parametrize("name", STANDS)

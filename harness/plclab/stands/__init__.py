@@ -74,7 +74,8 @@ class Stand:
             raise PlcLabError(f"{self.name} {variant} is a reference solution: it is only in a checkout of the "
                               f"PLC Lab repository (solutions/), not in the installed package; "
                               f"students start from '{self.name} {self.starting_variant}'")
-        return [pou_path(s) for s in self.types + v.pous] + [PLC_DIR / "GVL" / f"{s}.st" for s in self.gvl]
+        return [pou_path(s, v.reference) for s in self.types + v.pous] + \
+               [PLC_DIR / "GVL" / f"{s}.st" for s in self.gvl]
 
     def available(self, variant: str) -> bool:
         """Whether `variant` can be built here (a reference solution needs a checkout)."""
@@ -131,14 +132,16 @@ def _strip_comments(text: str) -> str:
     return re.sub(r"\(\*.*?\*\)", " ", text, flags=re.DOTALL)
 
 
-def pou_path(stem: str) -> Path:
-    """The file of a POU: shipped (`plclab/plc/POUs`) or, in a checkout, a reference
-    solution's (`solutions/POUs`). A stem is in one of them only (a test checks it)."""
-    shipped = PLC_DIR / "POUs" / f"{stem}.st"
-    if shipped.is_file() or SOLUTIONS_DIR is None:
-        return shipped
-    solution = SOLUTIONS_DIR / "POUs" / f"{stem}.st"
-    return solution if solution.is_file() else shipped
+def pou_path(stem: str, reference: bool = False) -> Path:
+    """The file of a POU. A reference solution's own version (`solutions/POUs`, checkout
+    only) comes first for a reference variant: a block of the same name there is the model
+    answer's version of the student's starting block (e.g. T_ControlProgram with a pause per
+    frame). Everything else is shipped (`plclab/plc/POUs`)."""
+    if reference and SOLUTIONS_DIR is not None:
+        solution = SOLUTIONS_DIR / "POUs" / f"{stem}.st"
+        if solution.is_file():
+            return solution
+    return PLC_DIR / "POUs" / f"{stem}.st"
 
 
 def sources(stand: Stand, variant: str) -> list[tuple[str, str]]:

@@ -12,12 +12,19 @@ from plclab.scenario import ScenarioFailure, Session
 from plclab.stands import Stand, Task, Variant, gvl_labels
 from plclab.stands.base import Fault, FaultParam, StandSpec
 
-SHARED = ("FC_PackBits7", "FC_BitOf", "FB_Sb1Button", "FB_FrameStore", "FB_PauseTimer",
-          "FB_FrameWatchdog", "FB_Blink", "FB_ResetIndicator", "FB_FrameSequencer", "FB_Mp9cRobot")
+# the starting program (Appendix 1: main program, manual / automatic / continuous /
+# step-by-step subroutines), shipped; the reference solutions' blocks (solutions/POUs
+# first: FB_FrameStore, FB_FrameSequencer, FB_Mp9cRobot and their T_ControlProgram)
+STARTING = ("FC_PackBits7", "FC_BitOf", "FB_Sb1Button", "FB_PauseTimer", "FB_FrameWatchdog", "FB_Blink",
+            "FB_ResetIndicator", "T_Playback", "FB_Mp9cManual", "FB_Mp9cContinuous", "FB_Mp9cStep",
+            "FB_Mp9cAutomatic")
+REFERENCE = ("FC_PackBits7", "FC_BitOf", "FB_Sb1Button", "FB_FrameStore", "FB_PauseTimer",
+             "FB_FrameWatchdog", "FB_Blink", "FB_ResetIndicator", "FB_FrameSequencer", "FB_Mp9cRobot")
 
 
 def _variant(name: str, prg: str, doc: str, reference: bool = True) -> Variant:
-    return Variant(name, SHARED + (prg,), (Task("MainTask", "T#10ms", 1, (("Main", prg),)),), doc, reference)
+    pous = (REFERENCE if reference else STARTING) + (prg,)
+    return Variant(name, pous, (Task("MainTask", "T#10ms", 1, (("Main", prg),)),), doc, reference)
 
 
 STAND = Stand(

@@ -13,13 +13,19 @@ from plclab.scenario import ScenarioFailure, Session
 from plclab.stands import Stand, Task, Variant, gvl_labels
 from plclab.stands.base import Fault, FaultParam, StandSpec
 
-SHARED = ("FC_PackBits7", "FC_BitOf", "FC_JogReference", "FB_Sb1Button", "FB_FrameStore", "FB_PauseTimer",
-          "FB_FrameWatchdog", "FB_Blink", "FB_ResetIndicator", "FB_FrameSequencer", "FB_SensorBus",
-          "FB_Tur10Sensors", "FB_PositionRegulator", "FB_Tur10Robot", "PRG_Tur10Regulators")
+# the starting program (Appendix 2: main program, manual / automatic subroutines, the timer
+# interrupt routine PRG_Tur10Regulators), shipped; the reference solutions' blocks
+# (solutions/POUs first: FB_FrameStore, FB_FrameSequencer, FB_Tur10Robot, T_ControlProgram)
+STARTING = ("FC_PackBits7", "FC_BitOf", "FC_JogReference", "FB_Sb1Button", "FB_PauseTimer",
+            "FB_FrameWatchdog", "FB_Blink", "FB_ResetIndicator", "FB_SensorBus", "FB_Tur10Sensors",
+            "FB_PositionRegulator", "PRG_Tur10Regulators", "T_Playback", "FB_Tur10Manual", "FB_Tur10Automatic")
+REFERENCE = ("FC_PackBits7", "FC_BitOf", "FC_JogReference", "FB_Sb1Button", "FB_FrameStore", "FB_PauseTimer",
+             "FB_FrameWatchdog", "FB_Blink", "FB_ResetIndicator", "FB_FrameSequencer", "FB_SensorBus",
+             "FB_Tur10Sensors", "FB_PositionRegulator", "FB_Tur10Robot", "PRG_Tur10Regulators")
 
 
 def _variant(name: str, prg: str, doc: str, reference: bool = True) -> Variant:
-    return Variant(name, SHARED + (prg,), (
+    return Variant(name, (REFERENCE if reference else STARTING) + (prg,), (
         Task("MainTask", "T#20ms", 1, (("Main", prg),)),
         Task("RegTask", "T#10ms", 0, (("Regulators", "PRG_Tur10Regulators"),)),
     ), doc, reference)
