@@ -179,6 +179,14 @@ def _cmd_build(args: argparse.Namespace) -> int:
     return 0
 
 
+def _cmd_handout(args: argparse.Namespace) -> int:
+    from plclab.handout import write_handout
+
+    for path in write_handout(args.stand, args.output):
+        print(f"wrote {path}")
+    return 0
+
+
 def _cmd_grade(args: argparse.Namespace) -> int:
     from plclab.grader import grade
 
@@ -232,6 +240,11 @@ def build_parser() -> argparse.ArgumentParser:
     c.add_argument("-o", "--output", metavar="FILE.st", help="default: STAND_VARIANT.st")
     c.add_argument("--xml", metavar="FILE.xml", help="also write the PLCopen XML project")
     c.set_defaults(func=_cmd_build)
+
+    c = sub.add_parser("handout", help="the student's starting program, I/O map and task sheet (no solution)")
+    c.add_argument("stand", choices=stands)
+    c.add_argument("-o", "--output", metavar="DIR", required=True, help="directory to write into")
+    c.set_defaults(func=_cmd_handout)
 
     c = sub.add_parser("run", help="run a scenario of a stand in virtual time; timeline and traces")
     c.add_argument("stand", choices=stands)

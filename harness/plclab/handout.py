@@ -1,0 +1,79 @@
+"""`plclab handout STAND -o DIR`: what a student is handed for a lab, and nothing more.
+
+Three files: the starting program as one OpenPLC-loadable bundle (`STAND.st`, the shipped
+starting variant: never a reference solution), the I/O map (`io-map.md`, read from the
+stand's GVL, the one source of its addresses) and the task sheet (`tasks.md`, package data
+under `plclab/handouts/`, the same text as the Tasks section of `docs/STAND.md`).
+
+The directory may hold other files; a file of ours may be replaced (a new hand-out after
+an update), anything else is never overwritten: the whole hand-out is refused in one line
+before anything is written. Our files are the ones whose first line is our marker.
+"""
+from __future__ import annotations
+
+import re
+from pathlib import Path
+
+from plclab import fileio
+from plclab.errors import PlcLabError
+from plclab.stands import PLC_DIR, Stand, bundle, get_stand
+
+HANDOUTS_DIR = Path(__file__).resolve().parent / "handouts"
+MARKER = "plclab handout"
+_GVL_LINE = re.compile(r"^\s*(\w+)\s+AT\s+(%\w+(?:\.\d+)?)\s*:\s*(\w+)[^;]*;[ \t]*(?:\(\*\s*(.*?)\s*\*\))?", re.M)
+
+
+def io_map(stand: Stand) -> str:
+    """The located variables of the stand's GVL as a markdown table: name, address, type, meaning."""
+    rows = ["| name | address | type | meaning |", "|---|---|---|---|"]
+    for stem in stand.gvl:
+        text = (PLC_DIR / "GVL" / f"{stem}.st").read_text(encoding="utf-8")
+        for name, addr, typ, comment in _GVL_LINE.findall(text):
+            rows.append(f"| {name} | {addr.upper()} | {typ} | {comment} |")
+    return (f"# {stand.title}: I/O map\n\n"
+            "The located variables of the stand (its GVL): the program reaches each through a "
+            "VAR_EXTERNAL of the same name.\n\n" + "\n".join(rows) + "\n")
+
+
+def task_sheet(stand: Stand) -> str:
+    path = HANDOUTS_DIR / f"{stand.name}-tasks.md"
+    try:
+        return path.read_text(encoding="utf-8")
+    except FileNotFoundError:
+        raise PlcLabError(f"handout: no task sheet for stand '{stand.name}' ({path.name} is missing)") from None
+
+
+def handout_files(stand_name: str) -> dict[str, str]:
+    """File name -> text of the hand-out of `stand_name`, each starting with the marker."""
+    stand = get_stand(stand_name)
+    variant = stand.starting_variant
+    tag = f"{MARKER} {stand.name}"
+    return {
+        f"{stand.name}.st": f"(* {tag}: the starting program ('{variant}'). *)\n" + bundle(stand, variant),
+        "io-map.md": f"<!-- {tag} -->\n" + io_map(stand),
+        "tasks.md": f"<!-- {tag} -->\n" + task_sheet(stand),
+    }
+
+
+def _ours(path: Path) -> bool:
+    try:
+        with path.open(encoding="utf-8") as f:
+            return MARKER in f.readline()
+    except (OSError, UnicodeDecodeError):
+        return False
+
+
+def write_handout(stand_name: str, out_dir: str) -> list[Path]:
+    """Write the hand-out into `out_dir` (created if missing); the paths written."""
+    files = handout_files(stand_name)
+    out = Path(out_dir)
+    if out.exists() and not out.is_dir():
+        raise PlcLabError(f"{out}: exists and is not a directory")
+    targets = [out / name for name in files]
+    for target in targets:
+        if target.is_symlink() or (target.exists() and not (target.is_file() and _ours(target))):
+            raise PlcLabError(f"{target}: exists and is not a hand-out file; nothing written "
+                              f"(choose another directory, or move it away)")
+    for target in targets:
+        fileio.check_output(target)
+    return [fileio.write_text(target, files[target.name]) for target in targets]

@@ -1,0 +1,120 @@
+"""`plclab handout`: a student gets the starting program, the I/O map and the task sheet, no
+solution; the hand-out never replaces a file it did not write; the task sheets and I/O maps
+agree with the stand documentation in docs/."""
+from __future__ import annotations
+
+import re
+from pathlib import Path
+
+import pytest
+
+from plclab.cli import main
+from plclab.errors import PlcLabError
+from plclab.frontend import check_sources
+from plclab.handout import HANDOUTS_DIR, handout_files, write_handout
+from plclab.stands import PLC_DIR, SOLUTIONS_DIR, STANDS, bundle, get_stand
+
+DOCS = Path(__file__).resolve().parents[1] / "docs"
+FILES = {"mp9c": "mp9c.st", "tur10": "tur10.st", "thermo": "thermo.st"}
+
+
+def _solution_only_names() -> set[str]:
+    """POUs that exist only as reference solutions, and the names only they declare."""
+    shipped = {p.stem for p in (PLC_DIR / "POUs").glob("*.st")}
+    return {p.stem for p in (SOLUTIONS_DIR / "POUs").glob("*.st")} - shipped | {"RecordPause", "RunEnable"}
+
+
+@pytest.mark.parametrize("stand", STANDS)
+def test_handout_is_the_checked_starting_program_map_and_sheet(stand, tmp_path, capsys):
+    assert main(["handout", stand, "-o", str(tmp_path / "lab")]) == 0
+    out = tmp_path / "lab"
+    assert sorted(p.name for p in out.iterdir()) == sorted([FILES[stand], "io-map.md", "tasks.md"])
+    st = (out / FILES[stand]).read_text(encoding="utf-8")
+    s = get_stand(stand)
+    assert st.splitlines()[1:] == bundle(s, s.starting_variant).splitlines()
+    assert not s.variant(s.starting_variant).reference
+    check_sources([(str(out / FILES[stand]), st)])          # loads as it is
+    assert (out / "tasks.md").read_text(encoding="utf-8").endswith(
+        (HANDOUTS_DIR / f"{stand}-tasks.md").read_text(encoding="utf-8"))
+    assert capsys.readouterr().out.count("wrote ") == 3
+
+
+@pytest.mark.parametrize("stand", STANDS)
+def test_no_solution_is_handed_out(stand):
+    text = "\n".join(handout_files(stand).values())
+    leaked = {name for name in _solution_only_names() if re.search(rf"\b{name}\b", text)}
+    assert leaked == set()
+    if stand != "thermo":
+        assert "Pause : TIME" not in text and not re.search(r"\(\s*Task\s*\d", text)
+
+
+@pytest.mark.parametrize("stand", STANDS)
+def test_io_map_lists_every_located_variable_of_the_gvl(stand):
+    io = handout_files(stand)["io-map.md"]
+    gvl = "\n".join((PLC_DIR / "GVL" / f"{g}.st").read_text(encoding="utf-8") for g in get_stand(stand).gvl)
+    located = re.findall(r"(\w+)\s+AT\s+(%\w+(?:\.\d+)?)", gvl)
+    assert located and all(f"| {name} | {addr.upper()} |" in io for name, addr in located)
+
+
+@pytest.mark.parametrize("stand", STANDS)
+def test_docs_of_the_stand_carry_the_task_sheet_and_every_address(stand):
+    doc = (DOCS / f"{stand}.md").read_text(encoding="utf-8")
+    sheet = (HANDOUTS_DIR / f"{stand}-tasks.md").read_text(encoding="utf-8")
+    end = sheet.find("## Working on it")
+    tasks = sheet[sheet.index("## Task 1"):end if end >= 0 else None].strip()
+    assert tasks in doc
+    gvl = "\n".join((PLC_DIR / "GVL" / f"{g}.st").read_text(encoding="utf-8") for g in get_stand(stand).gvl)
+    addresses = {a.upper() for a in re.findall(r"AT\s+(%\w+(?:\.\d+)?)", gvl)}
+    missing = {a for a in addresses if a not in doc and not _in_a_range(a, doc)}
+    assert missing == set()
+
+
+def _in_a_range(addr: str, doc: str) -> bool:
+    """%IX2.3 is documented by a row `%IX2.0..%IX2.6`."""
+    m = re.fullmatch(r"%IX(\d+)\.(\d)", addr)
+    if not m:
+        return False
+    return any(int(a) <= int(m.group(2)) <= int(b)
+               for a, b in re.findall(rf"%IX{m.group(1)}\.(\d)\.\.%IX{m.group(1)}\.(\d)", doc))
+
+
+def test_a_file_not_written_by_handout_is_never_replaced(tmp_path):
+    out = tmp_path / "lab"
+    out.mkdir()
+    mine = out / "tasks.md"
+    mine.write_text("my notes\n", encoding="utf-8")
+    other = out / "notes.txt"
+    other.write_text("keep\n", encoding="utf-8")
+    with pytest.raises(PlcLabError) as e:
+        write_handout("mp9c", str(out))
+    assert "\n" not in str(e.value) and str(mine) in str(e.value) and "not a hand-out file" in str(e.value)
+    assert sorted(p.name for p in out.iterdir()) == ["notes.txt", "tasks.md"]
+    assert mine.read_text(encoding="utf-8") == "my notes\n"
+
+
+def test_a_symlink_in_place_of_a_handout_file_is_refused(tmp_path):
+    out = tmp_path / "lab"
+    out.mkdir()
+    target = tmp_path / "elsewhere.st"
+    target.write_text("(* plclab handout mp9c *)\n", encoding="utf-8")
+    (out / "mp9c.st").symlink_to(target)
+    with pytest.raises(PlcLabError):
+        write_handout("mp9c", str(out))
+    assert target.read_text(encoding="utf-8") == "(* plclab handout mp9c *)\n"
+    assert sorted(p.name for p in out.iterdir()) == ["mp9c.st"]
+
+
+def test_its_own_files_are_replaced_by_a_new_handout(tmp_path):
+    out = tmp_path / "lab"
+    first = write_handout("tur10", str(out))
+    (out / "io-map.md").write_text((out / "io-map.md").read_text(encoding="utf-8") + "stale\n", encoding="utf-8")
+    assert write_handout("tur10", str(out)) == first
+    assert "stale" not in (out / "io-map.md").read_text(encoding="utf-8")
+
+
+def test_output_that_is_a_file_is_one_clear_error(tmp_path, capsys):
+    f = tmp_path / "lab"
+    f.write_text("x", encoding="utf-8")
+    assert main(["handout", "mp9c", "-o", str(f)]) == 1
+    err = capsys.readouterr().err
+    assert err.count("\n") == 1 and "not a directory" in err and f.read_text(encoding="utf-8") == "x"
