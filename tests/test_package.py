@@ -10,7 +10,9 @@ not activated by a plain path line, so `plclab` comes from the wheel).
 from __future__ import annotations
 
 import os
+import re
 import shutil
+import signal
 import subprocess
 import sys
 import sysconfig
@@ -90,3 +92,24 @@ def test_installed_plclab_builds_runs_and_grades_from_another_folder(installed, 
     r = _run([plclab, "build", "mp9c", "task2", "-o", "ref.st"], cwd=tmp_path)
     assert r.returncode == 1 and r.stderr.count("\n") == 1 and "reference solution" in r.stderr
     assert not (tmp_path / "ref.st").exists()
+
+
+def test_installed_plclab_serves_a_stand_and_writes_a_psm_script(installed, tmp_path):
+    _, bin_dir = installed
+    plclab = str(bin_dir / "plclab")
+    env = {k: v for k, v in os.environ.items() if k not in ("PYTHONPATH", "PYTHONHOME")}
+    proc = subprocess.Popen([plclab, "serve", "tur10", "--port", "0"], cwd=tmp_path, env=env, text=True,
+                            stdout=subprocess.PIPE, stderr=subprocess.PIPE)
+    try:
+        line = proc.stdout.readline()
+        assert re.search(r"modbus on 127\.0\.0\.1:\d+", line), line + (proc.stderr.read() if proc.poll() else "")
+        assert str(bin_dir.parent) in line              # the ST sources come from the installed package
+    finally:
+        proc.send_signal(signal.SIGTERM)
+        out, err = proc.communicate(timeout=20)
+    assert proc.returncode == 0, err
+    assert "stopped:" in out
+
+    r = _run([plclab, "psm-script", "mp9c"], cwd=tmp_path)
+    assert r.returncode == 0, r.stderr
+    assert str(bin_dir.parent) in r.stdout         # the installed package's directory goes on sys.path
