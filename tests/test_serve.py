@@ -42,7 +42,7 @@ def start(tmp_path: Path) -> tuple[subprocess.Popen, int]:
     return proc, int(m.group(1))
 
 
-def wait_for(condition, timeout: float = 5.0, period: float = 0.02):
+def wait_for(condition, timeout: float = 20.0, period: float = 0.02):
     """Poll `condition` until it is true or `timeout` seconds have passed; its last value. A
     slow machine gets the time it needs, a server that does not do it still fails."""
     deadline = time.monotonic() + timeout
