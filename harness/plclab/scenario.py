@@ -1,6 +1,6 @@
 """Scenarios: a stand (PLC program + plant) driven like the lab instructions, in virtual time.
 
-Modelled on cocotb and pytest (style.md):
+Modelled on cocotb and pytest (docs/contributing.md):
 
     s = Session.for_stand("mp9c", "full")
     s.console.set(SA1=0, SA5=1)                     # manual mode, arm down

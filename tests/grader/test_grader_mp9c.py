@@ -1,4 +1,4 @@
-"""The grader on MP-9C (labs.md, Grader; mp9c.md Tasks 1-3): requirements that discriminate.
+"""The grader on MP-9C (docs/instructors.md; docs/mp9c.md Tasks): requirements that discriminate.
 
 The shipped baseline fails every task, each reference solution passes its own task (and the
 full program passes all three), every wrong solution in fixtures/mp9c fails with the

@@ -1,4 +1,4 @@
-"""The grader on TUR-10 (labs.md, Grader; tur10.md Tasks 1-3): requirements that discriminate.
+"""The grader on TUR-10 (docs/instructors.md; docs/tur10.md Tasks): requirements that discriminate.
 
 The shipped baseline fails every task, each reference solution passes its own task (and the
 full program passes all three), every wrong solution in fixtures/tur10 fails with the

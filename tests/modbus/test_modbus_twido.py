@@ -1,4 +1,4 @@
-"""Twido map with the thermo stand's register table (thermo.md), through both clients."""
+"""Twido map with the thermo stand's register table (docs/thermo.md), through both clients."""
 from __future__ import annotations
 
 import pytest

@@ -1,4 +1,4 @@
-"""MP-9C plant model (mp9c.md, Plant and I/O map): valves, links, switches, console, faults."""
+"""MP-9C plant model (docs/mp9c.md, Plant and I/O map): valves, links, switches, console, faults."""
 from __future__ import annotations
 
 import pytest

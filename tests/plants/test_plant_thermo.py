@@ -1,6 +1,6 @@
-"""The thermostabilization stand's plant model (spec/thermo.md, textbook section 5.3).
+"""The thermostabilization stand's plant model (docs/thermo.md, textbook section 5.3).
 
-Numbers come from the spec's defaults: 40 W heater, 400 J/K, loss 0.8 W/K + 1.2 W/K at full fan,
+Numbers come from the defaults of docs/thermo.md: 40 W heater, 400 J/K, loss 0.8 W/K + 1.2 W/K at full fan,
 so full heat settles at 72 C with the fan off (time constant 500 s) and 42 C with it full
 (200 s); the fan reaches 3000 rpm with a 1 s lag and gives 2 pulses per revolution.
 """

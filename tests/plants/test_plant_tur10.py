@@ -1,4 +1,4 @@
-"""The TUR-10 plant model against spec/tur10.md: sensor bus, drives, stops, faults, console."""
+"""The TUR-10 plant model against docs/tur10.md: sensor bus, drives, stops, faults, console."""
 from __future__ import annotations
 
 import math

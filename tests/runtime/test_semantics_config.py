@@ -1,9 +1,9 @@
 """CONFIGURATION / RESOURCE / TASK scheduling, global variables, located I/O and runtime faults.
 
-Execution model (spec/runtime.md): the base tick is the GCD of the task intervals; each tick
+Execution model (docs/timing.md): the base tick is the GCD of the task intervals; each tick
 samples the inputs, runs the due PROGRAM instances in RESOURCE declaration order (as OpenPLC's
 generated Res0.c does: PRIORITY does not reorder) and publishes the outputs. Timing convention
-(spec/labs.md): the first scan is at t = 0 and an input event at t is seen by the first scan at
+(docs/timing.md): the first scan is at t = 0 and an input event at t is seen by the first scan at
 or after t.
 """
 from __future__ import annotations

@@ -1,6 +1,6 @@
 """Thermostabilization stand: every scenario passes and never shows a command out of range,
-the heater on with an open sensor or a wrong automatic-mode report; the spec's control goals
-(thermo.md "Regulators") measured from the trace; bumpless transfer and anti-windup are what
+the heater on with an open sensor or a wrong automatic-mode report; the control goals
+(docs/thermo.md "Control program") measured from the trace; bumpless transfer and anti-windup are what
 make the scenarios pass (a program without them fails); golden trace of the demo.
 
 Regenerate the golden trace after an intended change of behaviour with

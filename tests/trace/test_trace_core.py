@@ -1,4 +1,4 @@
-"""Trace recording and the query helpers scenarios use (style.md: read like the lab plan)."""
+"""Trace recording and the query helpers scenarios use (docs/contributing.md: read like the lab plan)."""
 from __future__ import annotations
 
 import math

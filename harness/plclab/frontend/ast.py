@@ -412,7 +412,7 @@ class Configuration(Node):
 
 @dataclass(eq=False)
 class GlobalBlock(Node):
-    """A VAR_GLOBAL block outside any CONFIGURATION: a GVL file (see labs.md). The build places
+    """A VAR_GLOBAL block outside any CONFIGURATION: a GVL file (see docs/cli.md). The build places
     it inside the bundle's configuration; the checker treats it as configuration-level."""
 
     block: VarBlock

@@ -1,4 +1,4 @@
-"""The grader (labs.md, Grader): a task's requirement checks run against a student's program.
+"""The grader (docs/instructors.md, docs/cli.md): a task's requirement checks run against a student's program.
 
     report = grade("mp9c", "task2", ["my_robot.st"], out_dir="out/grade")
     print(report.text())            # one row per requirement: id, what, PASS/FAIL, why

@@ -1,4 +1,4 @@
-"""MP-9C requirement sets: Tasks 1-3 of the pneumatic robot lab (mp9c.md), judged by I/O alone.
+"""MP-9C requirement sets: Tasks 1-3 of the pneumatic robot lab (docs/mp9c.md), judged by I/O alone.
 
 Every scenario runs the student's program on a fresh robot and console, in virtual time, and
 looks only at the located I/O by their console and wiring labels (SQ1..SQ7, SA1..SA6, SB1,

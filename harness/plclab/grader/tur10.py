@@ -1,4 +1,4 @@
-"""TUR-10 requirement sets: Tasks 1-3 of the positional robot lab (tur10.md), judged by I/O alone.
+"""TUR-10 requirement sets: Tasks 1-3 of the positional robot lab (docs/tur10.md), judged by I/O alone.
 
 Every scenario runs the student's program on a fresh robot and console, in virtual time, and
 looks only at the located I/O by their console and wiring labels (SA1_FWD..SA5_BWD, SA6, SB1,

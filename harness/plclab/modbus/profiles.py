@@ -2,7 +2,7 @@
 
 A SCADA exercise relies on a register contract (which %MW exist, which are read-only, which
 values are accepted and when); keeping that contract in a table rather than in code lets the
-server, the thermo stand, the HMI and the docs share one source. THERMO is `thermo.md`'s table.
+server, the thermo stand, the HMI and the docs share one source. THERMO is `docs/thermo.md`'s table.
 """
 from __future__ import annotations
 

@@ -1,4 +1,4 @@
-"""MP-9C pneumatic cyclic robot (mp9c.md, sections Plant and I/O map): the plant model.
+"""MP-9C pneumatic cyclic robot (docs/mp9c.md, sections Plant and I/O map): the plant model.
 
 Three double-acting cylinders on bistable 5/2 valves (lift, rotation, extension), a gripper on a
 single-coil spring-return valve, reed switches SQ1..SQ7 at the end stops, and the operator
@@ -19,7 +19,7 @@ from typing import Any, Mapping
 
 from plclab.plants.base import ConsoleFace, PlantError, PlantModel, unsigned16
 
-# I/O map (mp9c.md): console names -> OpenPLC locations.
+# I/O map (docs/mp9c.md): console names -> OpenPLC locations.
 SENSORS = {"SQ1": "IX0.0", "SQ2": "IX0.1", "SQ3": "IX0.2", "SQ4": "IX0.3",
            "SQ5": "IX0.4", "SQ6": "IX0.5", "SQ7": "IX0.6"}
 CONSOLE = {"I07": "IX0.7", "SA1": "IX1.0", "SA2": "IX1.1", "SA3": "IX1.2", "SA4": "IX1.3",

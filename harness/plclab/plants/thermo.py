@@ -1,7 +1,7 @@
 """Thermostabilization stand (textbook section 5.3): a radiator heated by a transistor heater,
 cooled by a fan, with a temperature sensor and the fan's pulse speed sensor, on a Twido PLC.
 
-I/O map (spec/thermo.md):
+I/O map (docs/thermo.md):
   %IX0.0  disturbance toggle switch (console; set it with set_disturbance)
   %IX0.1  fan tacho pulse, raw
   %IW0    temperature ADC, 0..1000 = 0.0..100.0 C
@@ -11,8 +11,8 @@ I/O map (spec/thermo.md):
 
 Physics. The radiator is one lumped heat capacity C:
     C dT/dt = P_heater - k (T - T_ambient),   k = loss_base + loss_fan * airflow
-where airflow is the fan speed as a fraction of full speed. The spec writes the loss with the
-fan *command*; we use the fan *speed* it produces, which is the same in steady state (the 1 s
+where airflow is the fan speed as a fraction of full speed. docs/thermo.md writes the loss with
+the fan *command*; we use the fan *speed* it produces, which is the same in steady state (the 1 s
 fan lag is negligible against the 200..500 s thermal time constant) and makes a stalled fan
 stop cooling, as a stalled fan does. The fan speed is a first-order lag on its command.
 
@@ -39,10 +39,10 @@ from plclab.plants.base import ConsoleFace, PlantError, PlantModel, signed16, un
 
 @dataclass(frozen=True)
 class ThermoParams:
-    """Model parameters; the defaults are the stand of spec/thermo.md."""
+    """Model parameters; the defaults are the stand of docs/thermo.md."""
 
     ambient: float = 22.0              # C
-    start_temperature: float | None = None   # C at power-up; None = ambient (the spec's power-up)
+    start_temperature: float | None = None   # C at power-up; None = ambient (the documented power-up)
     heat_capacity: float = 400.0       # J/K
     heater_max_w: float = 40.0         # W at full heater command
     heater_full_scale: int = 2000      # heater command giving heater_max_w

@@ -1,6 +1,6 @@
 """TUR-10 five-axis electromechanical robot, positional control: the plant model.
 
-The contract is spec/tur10.md (plant, sensor bus, I/O map, Fig. 6-7 of the textbook).
+The contract is docs/tur10.md (plant, sensor bus, I/O map, Fig. 6-7 of the textbook).
 Each link is a DC motor-reducer under an analog speed loop (ARS with tacho feedback): the PLC
 writes a speed reference to a DAC word and the link follows it as a first-order lag. Link
 positions come back as absolute 15-bit codes on ONE shared sensor bus; the PLC selects a sensor
@@ -8,8 +8,8 @@ by driving its read-enable output OFF (active low, textbook Table 1 codes writte
 
 Timing of the bus: the plant returns the code for the enables it is given in the same step.
 The harness steps the plant between scans (outputs of scan n -> plant step -> inputs of scan
-n+1), so a sensor selected in one scan is read by the next one: the one scan of latency the
-spec asks for, exactly as on the S7-200 (outputs written at the end of a scan, inputs sampled
+n+1), so a sensor selected in one scan is read by the next one: the one scan of latency that
+docs/tur10.md describes, exactly as on the S7-200 (outputs written at the end of a scan, inputs sampled
 at the start of the next). Adding a delay inside the plant would make it two scans.
 
 The console (SA1..SA7, SB1, the spare I1.5) is part of this plant too, so that one object is
@@ -277,5 +277,5 @@ def _axis(axis: Any) -> int:
 
 
 def create(**params: Any) -> Tur10:
-    """The TUR-10 plant with the spec's defaults; keywords override (see Tur10.__init__)."""
+    """The TUR-10 plant with the defaults of docs/tur10.md; keywords override (see Tur10.__init__)."""
     return Tur10(**params)

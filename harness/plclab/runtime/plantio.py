@@ -1,6 +1,6 @@
 """Connecting plant models to the process image.
 
-A plant is a plain object (style.md): `outputs` (the PLC outputs it reads, OpenPLC location
+A plant is a plain object (docs/contributing.md): `outputs` (the PLC outputs it reads, OpenPLC location
 names such as "QX0.1" or "QW0"), `period` (seconds between steps in real time) and
 `step(outputs, dt) -> inputs`, where both dicts map location names to raw values (bits 0/1,
 words unsigned 16-bit) and dt is in seconds. The same object runs in-process here and in a

@@ -1,6 +1,6 @@
 """Virtual time: the PLC (and optionally a plant model) advanced in lockstep, with a trace.
 
-Timing convention (labs.md, OpenPLC's scan loop): the first scan runs at t = 0; an input
+Timing convention (docs/timing.md, OpenPLC's scan loop): the first scan runs at t = 0; an input
 event at time t is seen by the first scan at or after t; a change a scan produces is stamped
 with that scan's time. Each tick the plants step first (from the outputs of the previous
 scan, over one tick), then scripted inputs apply, then the PLC scans. Plants are plain

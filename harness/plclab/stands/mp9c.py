@@ -1,6 +1,6 @@
 """The MP-9C pneumatic robot stand: program variants, labels, timeline and scenarios.
 
-Scenarios are written like the lab instructions (style.md) and check what they claim: a
+Scenarios are written like the lab instructions (docs/contributing.md) and check what they claim: a
 scenario that does not see what the manual says raises ScenarioFailure with the time and
 the reason. None may ever show a valve conflict (both coils of one valve energized).
 """

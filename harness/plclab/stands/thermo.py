@@ -1,11 +1,11 @@
-"""The thermostabilization stand (textbook section 5.3, thermo.md): a Twido PLC keeping a
+"""The thermostabilization stand (textbook section 5.3, docs/thermo.md): a Twido PLC keeping a
 radiator's temperature with a heater or a fan, operated from SCADA through %MW0..%MW6.
 
 One program, `full` (PRG_Thermo), in one 100 ms TASK. Scenarios are written like the lab
 work: SCADA writes the mode, the setpoint and the manual commands into the registers (through
 the Twido map, so a write the stand refuses over Modbus is refused here too), the operator
 flips the disturbance toggle switch, and the trend (temperature, setpoint, heater, fan) is
-checked against the spec's goals. No scenario may ever show a command outside its range, the
+checked against the goals of docs/thermo.md. No scenario may ever show a command outside its range, the
 heater on with an open sensor, or an automatic-mode report (%MW1/%MW2) that differs from
 what is output (check_never).
 """
@@ -47,7 +47,7 @@ CELSIUS = "Celsius"                # the regulators' measurement, 0.1 C (an obse
 BAND = 1.0                         # C: "within +/-1 C"
 FINE_BAND = 0.2                    # C: steady (two ADC steps), the integral action's work done
 
-# The spec's goals for the default model (thermo.md, "Regulators").
+# The goals for the default model (docs/thermo.md, "Control program").
 STEP_SETTLE_S = 300.0
 STEP_OVERSHOOT_C = 2.0
 DISTURBANCE_DEVIATION_C = 1.5
@@ -313,7 +313,7 @@ def manual(s: Session) -> None:
 
 def setpoint_step(s: Session, low: int = 40, high: int = 50, watch: float = 600.0) -> Response:
     """Automatic-1 (the heater regulates, fan off), steady at `low`; the setpoint steps to
-    `high`: settling within +/-1 C under 300 s, overshoot under 2 C (thermo.md goals)."""
+    `high`: settling within +/-1 C under 300 s, overshoot under 2 C (docs/thermo.md goals)."""
     settle_at(s, AUTO1, low)
     s.scada.write(SETPOINT=high)
     start = s.now - s.tick

@@ -1,6 +1,6 @@
 """CSV traces: `time_s,name,value`, one change per row, the format of traces and input scripts.
 
-Writer rules (labs.md, "Scenarios and traces"): rows sorted by time, rows of one instant in
+Writer rules (docs/timing.md): rows sorted by time, rows of one instant in
 declaration order, every signal's initial value at time 0, BOOL as 0/1, times printed exactly
 from integer ns (`1.25`, `0.01`, no float noise). Two further rules make a round trip exact:
 REAL values are written with `repr` (always a `.`, `e`, `inf` or `nan`, and enough digits to
