@@ -4,7 +4,11 @@
     print(report.text())            # one row per requirement: id, what, PASS/FAIL, why
     sys.exit(report.exit_code)      # 0 only if every requirement passed
 
-Requirement sets are registered per (stand, task) by `plclab.grader.<stand>`; see registry.
+Requirement sets are registered per (stand, task) by `plclab.grader.<stand>`. How to declare a
+requirement (once: id, sentence built from the thresholds it quotes, scenario) and check it
+(`with c.requirement(REQ) as rid:` passes on exit unless a failure was recorded) is in
+`plclab.grader.registry`. Exit codes: 0 every requirement passed, 1 the program failed one,
+2 the grader itself failed (ERROR rows: never charged to the student).
 """
 from .engine import grade, grade_sources, requirement_table
 from .registry import (EVERY, Checks, Requirement, RequirementSet, Scenario, register, registered,

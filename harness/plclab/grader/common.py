@@ -206,11 +206,17 @@ def lamp_requirements(lamp: str, bounce: str, reset: str) -> tuple[Requirement, 
     return (
         Requirement(lamp, "HL1 is ON while the program is empty (at power-up) and OFF once a frame is "
                     "recorded with a short SB1 press.", "basics"),
-        Requirement(bounce, "A press of SB1 shorter than 50 ms is contact bounce: it records nothing.",
+        Requirement(bounce, f"A press of SB1 shorter than {DEBOUNCE * 1000:.0f} ms is contact bounce: it "
+                    "records nothing.", "basics"),
+        Requirement(reset, f"Holding SB1 resets the program at {LONG_PRESS:.1f} s, while it is still held "
+                    "(HL1 ON); the release records nothing and a start then finds the program empty.",
                     "basics"),
-        Requirement(reset, "Holding SB1 resets the program at 3.0 s, while it is still held (HL1 ON); the "
-                    "release records nothing and a start then finds the program empty.", "basics"),
     )
+
+
+def within_scan(op: "Op[Any]") -> str:
+    """The timing tolerance as a row prints it: '+/- one scan (10 ms)'."""
+    return f"+/- one scan ({op.scan * 1000:.0f} ms)"
 
 
 def basics_flow(op: Op[Any], ids: tuple[str, str, str], record: Callable[[], float],
@@ -220,19 +226,22 @@ def basics_flow(op: Op[Any], ids: tuple[str, str, str], record: Callable[[], flo
     and records a second frame, so that the reset has a program to empty."""
     lamp, bounce, reset = ids
     c = op.c
-    c.check(lamp, op.hl1() == 1, "HL1=1 at power-up (no frame recorded)", "HL1=0", op.now)
-    t = op.press(0.03)
-    op.run(0.5)
-    off = op.s.trace.first(lambda st: not st.HL1, after=t, default=None)
-    if c.check(bounce, off is None, "HL1 stays 1 after a 30 ms SB1 press (nothing recorded)",
-               "HL1 went 0: the bounce recorded a frame", off):
-        c.ok(bounce)
-    released = record()
-    if c.check(lamp, op.hl1(at=released + 2 * op.tol) == 0,
-               "HL1=0 once a frame is recorded (short SB1 press)", "HL1 still 1", released + 2 * op.tol):
-        c.ok(lamp)
+    with c.requirement(lamp):
+        c.check(lamp, op.hl1() == 1, "HL1=1 at power-up (no frame recorded)", "HL1=0", op.now)
+        with c.requirement(bounce):
+            t = op.press(0.03)
+            op.run(0.5)
+            off = op.s.trace.first(lambda st: not st.HL1, after=t, default=None)
+            c.check(bounce, off is None, "HL1 stays 1 after a 30 ms SB1 press (nothing recorded)",
+                    "HL1 went 0: the bounce recorded a frame", off)
+        released = record()
+        c.check(lamp, op.hl1(at=released + 2 * op.tol) == 0,
+                "HL1=0 once a frame is recorded (short SB1 press)", "HL1 still 1", released + 2 * op.tol)
     record_another()
-    _long_press_resets(op, reset)
+    with c.requirement(reset):
+        _long_press_resets(op, reset)
+    op.set(**{op.auto: 0})
+    op.run(0.2)
 
 
 def _long_press_resets(op: Op[Any], rid: str) -> None:
@@ -249,7 +258,8 @@ def _long_press_resets(op: Op[Any], rid: str) -> None:
     else:
         held = on - pressed
         c.check(rid, LONG_PRESS - op.tol <= held <= LONG_PRESS + DEBOUNCE + op.tol,
-                "the reset (HL1=1) 3.0 s after SB1 is pressed, while it is held",
+                f"the reset (HL1=1) {LONG_PRESS:.1f} s after SB1 is pressed (+ up to {DEBOUNCE * 1000:.0f} ms "
+                f"debounce, {within_scan(op)}), while it is held",
                 f"HL1=1 {held:.2f} s after the press", on)
         op.run_until(pressed + LONG_PRESS + 0.5)
     released = op.now
@@ -259,27 +269,24 @@ def _long_press_resets(op: Op[Any], rid: str) -> None:
     c.check(rid, off is None, "HL1 stays 1 after the release (the release records nothing)",
             "HL1 went 0: a frame was recorded (or the reset never happened)", off or released)
     op.start_auto()
-    t = op.press()
-    if op.quiet(rid, t, REFUSED, "after the reset an SB1 press in automatic mode starts nothing",
-                "a frame started: the program was not empty"):
-        c.ok(rid)
-    op.set(**{op.auto: 0})
-    op.run(0.2)
+    op.quiet(rid, op.press(), REFUSED, "after the reset an SB1 press in automatic mode starts nothing",
+             "a frame started: the program was not empty")
 
 
 def restart_flow(op: Op[F], rid: str, first: F, second: F, off_time: float) -> bool:
     """Two taught frames, a PLC restart (power off `off_time` s): HL1 stays OFF and an SB1
     press plays the frames back. False if the program was lost (nothing was started)."""
-    t = op.now
-    op.s.restart_plc(off_time=off_time)
-    op.run(0.3)
-    if not op.c.check(rid, op.hl1() == 0, "HL1=0 after the restart (the program is kept)",
-                      "HL1=1: the program is empty after the restart", t):
-        return False
-    op.start_auto()
-    r1 = op.press_starts(rid, first, "frame 1 after the restart", op.press())
-    if r1 and op.follow(rid, second, "frame 2 after the restart", r1.done, NEXT_WAIT):
-        op.c.ok(rid)
+    with op.c.requirement(rid):
+        t = op.now
+        op.s.restart_plc(off_time=off_time)
+        op.run(0.3)
+        if not op.c.check(rid, op.hl1() == 0, "HL1=0 after the restart (the program is kept)",
+                          "HL1=1: the program is empty after the restart", t):
+            return False
+        op.start_auto()
+        r1 = op.press_starts(rid, first, "frame 1 after the restart", op.press())
+        if r1:
+            op.follow(rid, second, "frame 2 after the restart", r1.done, NEXT_WAIT)
     return True
 
 
@@ -289,9 +296,10 @@ def task2_requirements(enable: str, measured: str) -> tuple[Requirement, ...]:
     """Task 2 with the pause input `enable` ("I0.7"); `measured` says where the stand's pause
     starts and ends."""
     return (
-        Requirement("T2.1", f"A frame recorded with {enable} = 0 is followed by a 0.5 s pause ({measured}).",
+        Requirement("T2.1", f"A frame recorded with {enable} = 0 is followed by a {PAUSE_SHORT:.1f} s pause "
+                    f"({measured}).", "pauses"),
+        Requirement("T2.2", f"A frame recorded with {enable} = 1 is followed by a {PAUSE_LONG:.1f} s pause.",
                     "pauses"),
-        Requirement("T2.2", f"A frame recorded with {enable} = 1 is followed by a 3.0 s pause.", "pauses"),
         Requirement("T2.3", f"{enable} changes nothing in automatic mode: switched during execution, every "
                     "frame keeps the pause recorded with it.", "pauses"),
     )
@@ -304,42 +312,47 @@ def pauses_flow(op: Op[F], first: F, second: F, start_checked: bool = True) -> N
     press (MP-9C's Task 2 never made it; G6 does)."""
     c, name = op.c, op.enable_label
     op.start_auto()
-    if start_checked:
-        r1 = op.press_starts("T2.2", first, "frame 1", op.press())
-    else:
-        r1 = op.follow("T2.2", first, "frame 1", op.press(), DEBOUNCE + 1.0)
-    r2 = r1 and op.follow("T2.2", second, "frame 2", r1.done, NEXT_WAIT)
-    if not r1 or not r2:
-        return
-    if _paused(op, "T2.2", r1, r2, PAUSE_LONG, f"a 3.0 s pause after frame 1 (recorded with {name} = 1)"):
-        c.ok("T2.2")
-    r3 = op.follow("T2.1", first, "frame 1 after frame 2", r2.done, NEXT_WAIT,
-                   on_start=lambda: op.set_enable(0))
-    if not r3:
-        return
-    if _paused(op, "T2.1", r2, r3, PAUSE_SHORT, f"a 0.5 s pause after frame 2 (recorded with {name} = 0)"):
-        c.ok("T2.1")
-    r4 = op.follow("T2.3", second, "frame 2 (second cycle)", r3.done, NEXT_WAIT,
-                   on_start=lambda: op.set_enable(1))
-    if not r4:
-        return
-    p1, p2 = r2.start - r1.done, r3.start - r2.done
-    if not _paused(op, "T2.3", r3, r4, p1, f"the pause after frame 1 is {p1:.2f} s as in the first cycle "
-                   f"although {name} is now 0"):
-        return
-    r5 = op.follow("T2.3", first, "frame 1 (third cycle)", r4.done, NEXT_WAIT)
-    if not r5:
-        return
-    if _paused(op, "T2.3", r4, r5, p2, f"the pause after frame 2 is {p2:.2f} s as in the first cycle "
-               f"although {name} is now 1"):
-        c.ok("T2.3")
+    with c.requirement("T2.2"):
+        if start_checked:
+            r1 = op.press_starts("T2.2", first, "frame 1", op.press())
+        else:
+            r1 = op.follow("T2.2", first, "frame 1", op.press(), DEBOUNCE + 1.0)
+        r2 = r1 and op.follow("T2.2", second, "frame 2", r1.done, NEXT_WAIT)
+        if not r1 or not r2:
+            return
+        _paused(op, "T2.2", r1, r2, PAUSE_LONG, f"after frame 1 (recorded with {name} = 1)")
+    with c.requirement("T2.1"):
+        r3 = op.follow("T2.1", first, "frame 1 after frame 2", r2.done, NEXT_WAIT,
+                       on_start=lambda: op.set_enable(0))
+        if not r3:
+            return
+        _paused(op, "T2.1", r2, r3, PAUSE_SHORT, f"after frame 2 (recorded with {name} = 0)")
+    with c.requirement("T2.3"):
+        r4 = op.follow("T2.3", second, "frame 2 (second cycle)", r3.done, NEXT_WAIT,
+                       on_start=lambda: op.set_enable(1))
+        if not r4:
+            return
+        p1, p2 = r2.start - r1.done, r3.start - r2.done
+        if not _paused(op, "T2.3", r3, r4, p1, f"after frame 1, as in the first cycle although {name} is now 0"):
+            return
+        r5 = op.follow("T2.3", first, "frame 1 (third cycle)", r4.done, NEXT_WAIT)
+        if not r5:
+            return
+        _paused(op, "T2.3", r4, r5, p2, f"after frame 2, as in the first cycle although {name} is now 1")
     op.stop_playback()
 
 
-def _paused(op: Op[Any], rid: str, before: FrameRun, after: FrameRun, seconds: float, expected: str) -> bool:
-    """The pause from `before` done to `after` starting lasts `seconds` (+/- one scan)."""
+def _paused(op: Op[Any], rid: str, before: FrameRun, after: FrameRun, seconds: float, where: str) -> bool:
+    """The pause from `before` done to `after` starting lasts `seconds` (+/- one scan); the
+    expected value names the pause, its tolerance and `where` it is."""
     pause = after.start - before.done
-    return op.c.check(rid, abs(pause - seconds) <= op.tol, expected, f"{pause:.2f} s", before.done)
+    return op.c.check(rid, abs(pause - seconds) <= op.tol, f"a {_secs(seconds)} s pause {within_scan(op)} {where}",
+                      f"{pause:.2f} s", before.done)
+
+
+def _secs(seconds: float) -> str:
+    """3.0 -> '3.0', 0.5 -> '0.5', 1.23456 -> '1.23': a duration as the requirements write it."""
+    return f"{seconds:.1f}" if abs(seconds * 10 - round(seconds * 10)) < 1e-9 else f"{seconds:.2f}"
 
 
 # --------------------------------------------------------------------------- Task 3
@@ -382,18 +395,16 @@ def _enabled_cycle(op: Op[F], frames: Sequence[F]) -> Optional[FrameRun]:
     """T3.2 and T3.3: with the input at 1 an SB1 press starts frame 1, the frames run in order
     and frame 1 follows the last; that frame 1's run, or None."""
     c, name, n = op.c, op.enable_label, len(frames)
-    run = op.press_starts("T3.2", frames[0], f"frame 1 (SB1 pressed with {name} = 1)", op.press())
-    if run is None:
-        return None
-    c.ok("T3.2")
-    for k in range(1, n):
-        run = op.follow("T3.3", frames[k], f"frame {k + 1}", run.done, NEXT_WAIT)
+    with c.requirement("T3.2"):
+        run = op.press_starts("T3.2", frames[0], f"frame 1 (SB1 pressed with {name} = 1)", op.press())
         if run is None:
             return None
-    run = op.follow("T3.3", frames[0], f"frame 1 after frame {n} ({name} = 1)", run.done, NEXT_WAIT)
-    if run is not None:
-        c.ok("T3.3")
-    return run
+    with c.requirement("T3.3"):
+        for k in range(1, n):
+            run = op.follow("T3.3", frames[k], f"frame {k + 1}", run.done, NEXT_WAIT)
+            if run is None:
+                return None
+        return op.follow("T3.3", frames[0], f"frame 1 after frame {n} ({name} = 1)", run.done, NEXT_WAIT)
 
 
 def _dropped_cycle(op: Op[F], frames: Sequence[F], first: FrameRun,
@@ -402,34 +413,33 @@ def _dropped_cycle(op: Op[F], frames: Sequence[F], first: FrameRun,
     to the last still run; the last frame's run, or None."""
     dropped: list[float] = []
     frame2, later = labels
-    run = op.follow("T3.4", frames[1], frame2, first.done, NEXT_WAIT,
-                    on_start=lambda: dropped.append(op.set_enable(0)))
-    for k in range(2, len(frames)):
-        if run is None:
-            return None
-        run = op.follow("T3.4", frames[k], later.format(k=k + 1, dropped=dropped[0]), run.done, NEXT_WAIT)
-    if run is not None:
-        op.c.ok("T3.4")
-    return run
+    with op.c.requirement("T3.4"):
+        run = op.follow("T3.4", frames[1], frame2, first.done, NEXT_WAIT,
+                        on_start=lambda: dropped.append(op.set_enable(0)))
+        for k in range(2, len(frames)):
+            if run is None:
+                return None
+            run = op.follow("T3.4", frames[k], later.format(k=k + 1, dropped=dropped[0]), run.done, NEXT_WAIT)
+        return run
 
 
 def _stops_after_last(op: Op[F], frames: Sequence[F], done: float) -> None:
     """T3.5 and T3.6: with the input at 0, execution stops after the last frame (done at
     `done`) and its pause, and only an SB1 press with the input at 1 starts it again."""
     c, name, n = op.c, op.enable_label, len(frames)
-    if not op.quiet("T3.5", done, PAUSE_LONG + REFUSED, f"no frame starts after frame {n} (the last) and "
-                    f"its pause, {name} being 0", "execution went on to frame 1"):
-        c.fail("T3.6", "", "not checked: execution did not stop after the last frame (see T3.5)", None)
-        return
-    c.ok("T3.5")
-    if not op.quiet("T3.6", op.press(), REFUSED, f"after the stop, an SB1 press with {name} = 0 starts "
-                    "nothing", "the program started"):
-        return
-    if not op.quiet("T3.6", op.set_enable(1), REFUSED, f"after the stop, {name} = 1 alone (no press) starts "
-                    "nothing", "the program started"):
-        return
-    if op.press_starts("T3.6", frames[0], f"frame 1 (a new start: SB1 with {name} = 1)", op.press()):
-        c.ok("T3.6")
+    with c.requirement("T3.5"):
+        if not op.quiet("T3.5", done, PAUSE_LONG + REFUSED, f"no frame starts after frame {n} (the last) and "
+                        f"its pause, {name} being 0", "execution went on to frame 1"):
+            c.fail("T3.6", "", "not checked: execution did not stop after the last frame (see T3.5)", None)
+            return
+    with c.requirement("T3.6"):
+        if not op.quiet("T3.6", op.press(), REFUSED, f"after the stop, an SB1 press with {name} = 0 starts "
+                        "nothing", "the program started"):
+            return
+        if not op.quiet("T3.6", op.set_enable(1), REFUSED, f"after the stop, {name} = 1 alone (no press) "
+                        "starts nothing", "the program started"):
+            return
+        op.press_starts("T3.6", frames[0], f"frame 1 (a new start: SB1 with {name} = 1)", op.press())
     op.back_to_manual()
 
 

@@ -4,6 +4,11 @@ The student's files are one compilation unit forming a complete OpenPLC program 
 the bundle they were handed, modified). It is judged by its I/O behaviour alone: each
 scenario of the task's requirement set runs it on a fresh stand in virtual time, through the
 located I/O (the console and wiring labels); the student's internal names are never read.
+The submission is parsed and checked once per grade; every scenario runs that checked program.
+
+The grader never charges the student for its own bug: an unexpected exception in a scenario
+or a check (anything but ScenarioFailure) turns that scenario's unfinished requirements into
+"grader error" rows (exit code 2), and the other scenarios still run.
 """
 from __future__ import annotations
 
@@ -60,7 +65,7 @@ def grade_sources(stand: str, task: str, sources: Sequence[tuple[str, str]],
             checks.scenario = scenario.name
             retain = Path(tmp) / f"{scenario.name}.retain.json" if scenario.needs_retain else None
             try:
-                s = req.make_session(sources, retain)
+                s = req.make_session(sources, retain, checked)
             except PlcLabError as e:                 # compiles, but cannot be loaded as a program
                 report.errors = [f"{sources[0][0]}:1:1: error: the program cannot run: {e}"]
                 return report
@@ -68,8 +73,13 @@ def grade_sources(stand: str, task: str, sources: Sequence[tuple[str, str]],
                 scenario.run(s, checks)
             except ScenarioFailure as e:
                 checks.stop(str(e), s.now)
+            except Exception as e:                   # a bug of the grader, not of the program
+                checks.grader_error(e, s.now)
             for hook in req.every:
-                hook(s, checks)
+                try:
+                    hook(s, checks)
+                except Exception as e:
+                    checks.grader_error(e, s.now)
             if out_dir is not None:
                 report.traces[scenario.name] = _write_traces(s, req, scenario.name, Path(out_dir))
     report.rows = _rows(req, checks)
@@ -95,6 +105,12 @@ def _rows(req: RequirementSet, checks: Checks) -> list[Row]:
             rows.append(Row(r.id, r.text, False, f.expected, f.observed, f.time, scenario))
         elif r.id in checks.passed:
             rows.append(Row(r.id, r.text, True, scenario=r.scenario if r.scenario != EVERY else ""))
+        elif r.scenario in checks.internal or (r.scenario == EVERY and checks.internal):
+            scenario = r.scenario if r.scenario != EVERY else next(iter(checks.internal))
+            error, time = checks.internal[scenario]
+            rows.append(Row(r.id, r.text, False, "", f"not checked: the grader failed ({error}); this is a "
+                            "bug of the grader, not of your program: please report it", time, scenario,
+                            internal=True))
         elif r.scenario in checks.stopped:
             reason, time = checks.stopped[r.scenario]
             rows.append(Row(r.id, r.text, False, "", f"not checked: the scenario stopped first: {reason}",

@@ -28,6 +28,8 @@ VALVES = tuple(f"L{i}" for i in range(1, 8))
 CONFLICTS = (("L2", "L3", "lift"), ("L4", "L5", "rotation"), ("L6", "L7", "extension"))
 
 FRAME_TIMEOUT = 10.0     # a frame not done in this time is a fault
+TIMEOUT_TOL = 0.1        # s on the frame timeout
+FAULT_BLINK_HZ = 2.0     # HL1 after a frame timeout
 CAPACITY = 32            # frames
 MARGIN = 0.5             # s of slack on plant travel times
 DONE_WAIT = 3.0          # a frame's links all arrive within this (longest travel 1.2 s)
@@ -36,9 +38,9 @@ QUIET = 3.0              # "nothing happens": no valve change for this long
 
 # --------------------------------------------------------------------------- the stand
 
-def make_session(sources: list[tuple[str, str]], retain_path: Optional[Path]) -> Session:
+def make_session(sources: list[tuple[str, str]], retain_path: Optional[Path], checked: Any = None) -> Session:
     return Session(sources, STAND.make_plant(), labels(), watch=(), retain_path=retain_path,
-                   name="mp9c program")
+                   name="mp9c program", checked=checked)
 
 
 # --------------------------------------------------------------------------- frames
@@ -177,12 +179,11 @@ def teach(op: Mp9cOp, frames: list[Frame]) -> list[float]:
 # --------------------------------------------------------------------------- every scenario
 
 def no_conflict(s: Session, c: Checks) -> None:
-    t = s.trace.first(lambda st: any(st[a] and st[b] for a, b, _ in CONFLICTS), default=None)
-    if t is None:
-        c.ok("G2")
-        return
-    a, b, mech = next(p for p in CONFLICTS if s.trace.value_at(p[0], t) and s.trace.value_at(p[1], t))
-    c.fail("G2", f"never {a} and {b} ON together", f"{a}=1 and {b}=1 at once (the {mech} valve)", t)
+    with c.requirement(G2) as rid:
+        t = s.trace.first(lambda st: any(st[a] and st[b] for a, b, _ in CONFLICTS), default=None)
+        if t is not None:
+            a, b, mech = next(p for p in CONFLICTS if s.trace.value_at(p[0], t) and s.trace.value_at(p[1], t))
+            c.fail(rid, f"never {a} and {b} ON together", f"{a}=1 and {b}=1 at once (the {mech} valve)", t)
 
 
 # --------------------------------------------------------------------------- general (G3..G11)
@@ -208,57 +209,57 @@ def sc_automatic(s: Session, c: Checks) -> None:
     """Continuous start/stop, step mode, back to manual (lift only, two frames)."""
     op = Mp9cOp.begin(s, c)
     teach(op, [DOWN, UP])
-    entered = op.set(SA1=1, I07=1)
-    op.run(0.5)
-    op.set(SA5=1)
-    op.run(0.5)
-    if not op.quiet("G6", entered, 1.0, "no valve change on entering automatic mode (SA1 := 1) and "
-                    "moving SA5 there, before any SB1 press", "in automatic mode, before any SB1 press"):
+    with c.requirement(G6) as rid:
+        entered = op.set(SA1=1, I07=1)
+        op.run(0.5)
+        op.set(SA5=1)
+        op.run(0.5)
+        if not op.quiet(rid, entered, 1.0, "no valve change on entering automatic mode (SA1 := 1) and "
+                        "moving SA5 there, before any SB1 press", "in automatic mode, before any SB1 press"):
+            op.set(SA5=0)
+            op.run(2.0)                        # let a switch-following arm come back up
         op.set(SA5=0)
-        op.run(2.0)                        # let a switch-following arm come back up
-    op.set(SA5=0)
-    op.run(0.3)
-    r1 = op.press_starts("G6", DOWN, "frame 1", op.press())
-    r2 = r1 and op.follow("G6", UP, "frame 2 after frame 1", r1.done, NEXT_WAIT)
-    r3 = r2 and op.follow("G6", DOWN, "frame 1 after the last frame", r2.done, NEXT_WAIT)
-    stop: list[float] = []
-    r4 = r3 and op.follow("G6", UP, "frame 2 (second cycle)", r3.done, NEXT_WAIT,
-                          on_start=lambda: stop.append(op.press(0.1)))
-    if not r4:
-        return
-    if not op.quiet("G6", stop[0], QUIET, "no frame starts after the stop press (SB1 at t = "
-                    f"{stop[0]:.2f} s during frame 2)", "execution went on"):
-        return
-    c.ok("G6")
-
-    op.set(SA6=1)
-    op.run(0.3)
-    sequence = ((DOWN, "frame 1 (first step press)"), (UP, "frame 2 (second step press)"),
-                (DOWN, "frame 1 (third step press, after the last frame)"))
-    for frame, label in sequence:
-        run = op.press_starts("G7", frame, label, op.press())
-        if run is None or not op.quiet("G7", run.done + op.tol, QUIET,
-                                       f"after {label} and its pause, no frame starts without a press",
-                                       "a frame started without a press"):
+        op.run(0.3)
+        r1 = op.press_starts(rid, DOWN, "frame 1", op.press())
+        r2 = r1 and op.follow(rid, UP, "frame 2 after frame 1", r1.done, NEXT_WAIT)
+        r3 = r2 and op.follow(rid, DOWN, "frame 1 after the last frame", r2.done, NEXT_WAIT)
+        stop: list[float] = []
+        r4 = r3 and op.follow(rid, UP, "frame 2 (second cycle)", r3.done, NEXT_WAIT,
+                              on_start=lambda: stop.append(op.press(0.1)))
+        if not r4:
             return
-    c.ok("G7")
-
-    for value, frame in ((None, UP), (1, DOWN), (0, UP)):
-        t = op.set(SA1=0, SA6=0) if value is None else op.set(SA5=value)
-        got = op.settled(t, frame.valves)
-        what = "SA1 := 0 with SA5 = 0" if value is None else f"SA5 := {value}"
-        if not c.check("G8", got == frame.valves, f"after {what}: {fmt(frame.valves)} (one scan)",
-                       fmt(got), t):
+        if not op.quiet(rid, stop[0], QUIET, "no frame starts after the stop press (SB1 at t = "
+                        f"{stop[0]:.2f} s during frame 2)", "execution went on"):
             return
-        op.run(1.0)
-    c.ok("G8")
+
+    with c.requirement(G7) as rid:
+        op.set(SA6=1)
+        op.run(0.3)
+        sequence = ((DOWN, "frame 1 (first step press)"), (UP, "frame 2 (second step press)"),
+                    (DOWN, "frame 1 (third step press, after the last frame)"))
+        for frame, label in sequence:
+            run = op.press_starts(rid, frame, label, op.press())
+            if run is None or not op.quiet(rid, run.done + op.tol, QUIET,
+                                           f"after {label} and its pause, no frame starts without a press",
+                                           "a frame started without a press"):
+                return
+
+    with c.requirement(G8) as rid:
+        for value, frame in ((None, UP), (1, DOWN), (0, UP)):
+            t = op.set(SA1=0, SA6=0) if value is None else op.set(SA5=value)
+            got = op.settled(t, frame.valves)
+            what = "SA1 := 0 with SA5 = 0" if value is None else f"SA5 := {value}"
+            if not c.check(rid, got == frame.valves, f"after {what}: {fmt(frame.valves)} (one scan)",
+                           fmt(got), t):
+                return
+            op.run(1.0)
 
 
 def sc_restart(s: Session, c: Checks) -> None:
     """The recorded program survives a PLC restart."""
     op = Mp9cOp.begin(s, c)
     teach(op, [DOWN, UP])
-    restart_flow(op, "G9", DOWN, UP, off_time=1.0)
+    restart_flow(op, G9.id, DOWN, UP, off_time=1.0)
 
 
 def sc_timeout(s: Session, c: Checks) -> None:
@@ -267,82 +268,80 @@ def sc_timeout(s: Session, c: Checks) -> None:
     teach(op, [DOWN, UP])
     s.inject("jammed", mechanism="lift")
     op.start_auto()
-    pressed = op.press()
-    start = op.motion(pressed)
-    if start is None:
-        start = op.wait(lambda io: io.L3, 1.0)
-    if start is None or op.values(DOWN.valves, at=start + op.tol) != DOWN.valves:
-        c.fail("G10", f"frame 1 starts ({fmt(DOWN.valves)})", "it did not start", pressed)
-        return
-    blink = op.when(lambda io: io.HL1, after=start, timeout=FRAME_TIMEOUT + 2.0)
-    if not c.check("G10", blink is not None and abs(blink - start - FRAME_TIMEOUT) <= 0.1,
-                   "HL1 starts blinking 10 s after frame 1 started (the frame is not done)",
-                   "HL1 stayed 0" if blink is None else f"HL1=1 {blink - start:.2f} s after the start",
-                   blink or start + FRAME_TIMEOUT):
-        return
-    op.run_until(blink + 2.0)
-    edges = s.trace.edges("HL1", "rising", after=blink, until=blink + 2.0 - op.tol)
-    if not c.check("G10", 3 <= len(edges) <= 5, "HL1 blinks at 2 Hz: 4 flashes in 2 s",
-                   f"{len(edges)} flashes in 2 s", blink):
-        return
-    cleared = op.now
-    s.clear_faults()
-    if not op.quiet("G10", cleared, QUIET, "execution stays stopped after the timeout (no frame 2 "
-                    "even once the lift gets free and reaches SQ2)", "a frame started"):
-        return
-    manual = op.set(SA1=0)
-    op.run(1.5)
-    late = s.trace.edges("HL1", "rising", after=manual + 2 * op.tol)
-    if c.check("G10", not late and op.hl1() == 0, "HL1 stops blinking (0) once SA1 = 0 (manual mode)",
-               f"HL1 {'still blinking' if late else '=1'} in manual mode", manual):
-        c.ok("G10")
+    with c.requirement(G10) as rid:
+        pressed = op.press()
+        start = op.motion(pressed)
+        if start is None:
+            start = op.wait(lambda io: io.L3, 1.0)
+        if start is None or op.values(DOWN.valves, at=start + op.tol) != DOWN.valves:
+            c.fail(rid, f"frame 1 starts ({fmt(DOWN.valves)})", "it did not start", pressed)
+            return
+        blink = op.when(lambda io: io.HL1, after=start, timeout=FRAME_TIMEOUT + 2.0)
+        if not c.check(rid, blink is not None and abs(blink - start - FRAME_TIMEOUT) <= TIMEOUT_TOL,
+                       f"HL1 starts blinking {FRAME_TIMEOUT:g} s (+/- {TIMEOUT_TOL:g} s) after frame 1 started "
+                       "(the frame is not done)",
+                       "HL1 stayed 0" if blink is None else f"HL1=1 {blink - start:.2f} s after the start",
+                       blink or start + FRAME_TIMEOUT):
+            return
+        op.run_until(blink + 2.0)
+        edges = s.trace.edges("HL1", "rising", after=blink, until=blink + 2.0 - op.tol)
+        if not c.check(rid, 3 <= len(edges) <= 5, f"HL1 blinks at {FAULT_BLINK_HZ:g} Hz: "
+                       f"{2 * FAULT_BLINK_HZ:g} flashes in 2 s (3..5)", f"{len(edges)} flashes in 2 s", blink):
+            return
+        cleared = op.now
+        s.clear_faults()
+        if not op.quiet(rid, cleared, QUIET, "execution stays stopped after the timeout (no frame 2 "
+                        "even once the lift gets free and reaches SQ2)", "a frame started"):
+            return
+        manual = op.set(SA1=0)
+        op.run(1.5)
+        late = s.trace.edges("HL1", "rising", after=manual + 2 * op.tol)
+        c.check(rid, not late and op.hl1() == 0, "HL1 stops blinking (0) once SA1 = 0 (manual mode)",
+                f"HL1 {'still blinking' if late else '=1'} in manual mode", manual)
 
 
 def sc_memory(s: Session, c: Checks) -> None:
     """32 frames fit; the 33rd blinks HL1 at 1 Hz for 2 s."""
     op = Mp9cOp.begin(s, c)
-    first = op.press(0.1)
-    for _ in range(CAPACITY - 1):
-        op.run(0.1)
-        op.press(0.1)
-    op.run(0.3)
-    flash = s.trace.first(lambda st: st.HL1, after=first + 0.1 + 2 * op.tol, default=None)
-    if not c.check("G11", flash is None, "HL1 stays 0 while frames 1..32 are recorded",
-                   "HL1 went 1", flash):
-        return
-    released = op.press(0.1) + 0.1
-    op.run(3.0)
-    edges = s.trace.edges("HL1", "rising", after=released - op.tol, until=released + 2.0 - op.tol)
-    after = s.trace.edges("HL1", "rising", after=released + 2.0, until=op.now)
-    ok = len(edges) == 2 and edges[0] - released <= 2 * op.tol and not after and op.hl1() == 0
-    seen = f"{len(edges)} flash(es) in 2 s"
-    if edges:
-        seen += f" starting {edges[0] - released:.2f} s after the release"
-    if after:
-        seen += f", {len(after)} more after 2 s"
-    if c.check("G11", ok, "after the 33rd short press: HL1 flashes at 1 Hz for 2 s (2 flashes from "
-               "the release), then 0", seen, released):
-        c.ok("G11")
+    with c.requirement(G11) as rid:
+        first = op.press(0.1)
+        for _ in range(CAPACITY - 1):
+            op.run(0.1)
+            op.press(0.1)
+        op.run(0.3)
+        flash = s.trace.first(lambda st: st.HL1, after=first + 0.1 + 2 * op.tol, default=None)
+        if not c.check(rid, flash is None, f"HL1 stays 0 while frames 1..{CAPACITY} are recorded",
+                       "HL1 went 1", flash):
+            return
+        released = op.press(0.1) + 0.1
+        op.run(3.0)
+        edges = s.trace.edges("HL1", "rising", after=released - op.tol, until=released + 2.0 - op.tol)
+        after = s.trace.edges("HL1", "rising", after=released + 2.0, until=op.now)
+        ok = len(edges) == 2 and edges[0] - released <= 2 * op.tol and not after and op.hl1() == 0
+        seen = f"{len(edges)} flash(es) in 2 s"
+        if edges:
+            seen += f" starting {edges[0] - released:.2f} s after the release"
+        if after:
+            seen += f", {len(after)} more after 2 s"
+        c.check(rid, ok, f"after the {CAPACITY + 1}rd short press: HL1 flashes at 1 Hz for 2 s (2 flashes "
+                "from the release), then 0", seen, released)
 
 
-GENERAL = (
-    NO_FAULT,
-    Requirement("G2", "Never a valve conflict: the two coils of one valve (L2/L3, L4/L5, L6/L7) are "
-                "never ON together.", EVERY),
-    *lamp_requirements("G3", "G4", "G5"),
-    Requirement("G6", "Continuous mode: entering automatic mode (or moving a switch there) changes no "
-                "valve; an SB1 press starts frame 1, the frames follow one another, frame 1 follows "
-                "the last one; another press stops execution.", "automatic"),
-    Requirement("G7", "Step mode (SA6 = 1): each SB1 press runs exactly one frame and its pause, then "
-                "execution waits for the next press.", "automatic"),
-    Requirement("G8", "Back in manual mode (SA1 = 0) the valves follow the switches again.", "automatic"),
-    Requirement("G9", "The recorded program survives a PLC restart (power cycle of the controller).",
-                "restart"),
-    Requirement("G10", "A frame not done within 10 s (lift jammed) stops execution; HL1 blinks at 2 Hz "
-                "until manual mode.", "timeout"),
-    Requirement("G11", "Memory full: the 33rd short press records nothing and HL1 blinks at 1 Hz for "
-                "2 s.", "memory"),
-)
+G2 = Requirement("G2", "Never a valve conflict: the two coils of one valve (L2/L3, L4/L5, L6/L7) are never "
+                 "ON together.", EVERY)
+G6 = Requirement("G6", "Continuous mode: entering automatic mode (or moving a switch there) changes no valve; "
+                 "an SB1 press starts frame 1, the frames follow one another, frame 1 follows the last "
+                 "one; another press stops execution.", "automatic")
+G7 = Requirement("G7", "Step mode (SA6 = 1): each SB1 press runs exactly one frame and its pause, then "
+                 "execution waits for the next press.", "automatic")
+G8 = Requirement("G8", "Back in manual mode (SA1 = 0) the valves follow the switches again.", "automatic")
+G9 = Requirement("G9", "The recorded program survives a PLC restart (power cycle of the controller).",
+                 "restart")
+G10 = Requirement("G10", f"A frame not done within {FRAME_TIMEOUT:g} s (lift jammed) stops execution; HL1 "
+                  f"blinks at {FAULT_BLINK_HZ:g} Hz until manual mode.", "timeout")
+G11 = Requirement("G11", f"Memory full: the {CAPACITY + 1}rd short press records nothing and HL1 blinks at "
+                  "1 Hz for 2 s.", "memory")
+GENERAL = (NO_FAULT, G2, *lamp_requirements("G3", "G4", "G5"), G6, G7, G8, G9, G10, G11)
 GENERAL_SCENARIOS = (
     Scenario("basics", sc_basics), Scenario("automatic", sc_automatic),
     Scenario("restart", sc_restart, needs_retain=True), Scenario("timeout", sc_timeout),
@@ -369,19 +368,18 @@ def sc_manual(s: Session, c: Checks) -> None:
     op = Mp9cOp.begin(s, c)
     op.run(0.5)
     for rid, switch, _what, on, off, travel in MECHANISMS:
-        for value, (valves, sensors) in ((1, on), (0, off)):
-            t = op.set(**{switch: value})
-            got = op.settled(t, valves)
-            if not c.check(rid, got == valves, f"after {switch} := {value}: {fmt(valves)} (within one scan)",
-                           fmt(got), t):
-                break
-            reached = op.when(lambda io, w=sensors: matches(io, w), after=t, timeout=travel + MARGIN)
-            if not c.check(rid, reached is not None, f"after {switch} := {value}: {fmt(sensors)} "
-                           f"within {travel + MARGIN:g} s", fmt(op.values(sensors)), t):
-                break
-            op.run(0.5)
-        else:
-            c.ok(rid)
+        with c.requirement(rid):
+            for value, (valves, sensors) in ((1, on), (0, off)):
+                t = op.set(**{switch: value})
+                got = op.settled(t, valves)
+                if not c.check(rid, got == valves, f"after {switch} := {value}: {fmt(valves)} (within one scan)",
+                               fmt(got), t):
+                    break
+                reached = op.when(lambda io, w=sensors: matches(io, w), after=t, timeout=travel + MARGIN)
+                if not c.check(rid, reached is not None, f"after {switch} := {value}: {fmt(sensors)} "
+                               f"within {travel + MARGIN:g} s", fmt(op.values(sensors)), t):
+                    break
+                op.run(0.5)
         op.set(**{switch: 0})
         op.run(travel + MARGIN)
 
@@ -394,14 +392,14 @@ def sc_playback(s: Session, c: Checks) -> None:
     op = Mp9cOp.begin(s, c)
     teach(op, list(PICK_AND_PLACE))
     op.start_auto()
-    since = op.press()
-    for k, frame in enumerate(PICK_AND_PLACE + PICK_AND_PLACE[:1]):
-        label = f"frame {k % 4 + 1}" + (" after frame 4" if k == 4 else "")
-        run = op.follow("T1.5", frame, label, since, DEBOUNCE + 1.0 if k == 0 else NEXT_WAIT)
-        if run is None:
-            return
-        since = run.done
-    c.ok("T1.5")
+    with c.requirement("T1.5") as rid:
+        since = op.press()
+        for k, frame in enumerate(PICK_AND_PLACE + PICK_AND_PLACE[:1]):
+            label = f"frame {k % 4 + 1}" + (" after frame 4" if k == 4 else "")
+            run = op.follow(rid, frame, label, since, DEBOUNCE + 1.0 if k == 0 else NEXT_WAIT)
+            if run is None:
+                return
+            since = run.done
     op.stop_playback()
 
 
@@ -439,10 +437,10 @@ TASK2 = task2_requirements("I0.7", "from the sensors showing the frame done to t
 def refused_start(op: Mp9cOp) -> None:
     """T3.1: an SB1 press with I0.7 = 0 starts nothing. A program that starts is stopped in
     manual mode, where the arm goes back up (SA5 = 0), before the enabled start."""
-    if op.quiet("T3.1", op.press(), REFUSED, "an SB1 press with I0.7 = 0 starts nothing",
-                "the program started"):
-        op.c.ok("T3.1")
-        return
+    with op.c.requirement("T3.1") as rid:
+        if op.quiet(rid, op.press(), REFUSED, "an SB1 press with I0.7 = 0 starts nothing",
+                    "the program started"):
+            return
     op.set(SA1=0)
     op.run(2.0)
     op.set(SA1=1)

@@ -1,21 +1,38 @@
 """Requirement sets: what the grader checks for one task of one stand.
 
-A requirement set is a list of requirements (id, the sentence a student reads) and the
-scenarios that check them. A scenario drives a fresh stand (a Session running the student's
-program) like the lab instructions and reports observations through `Checks`; a requirement
-may be checked by one scenario or by every scenario (`EVERY`, e.g. "never a valve conflict").
-Stands register their sets from `plclab.grader.<stand>` (imported on first use), so adding a
-stand is adding one module:
+How an instructor adds a requirement (one file, `plclab.grader.<stand>`, no engine code):
 
-    register(RequirementSet(stand="tur10", task="task1", title=..., requirements=[...],
-                            scenarios=[Scenario("axes", run_axes)], make_session=...))
+1. Declare it once, next to the constants its sentence quotes, so text and check cannot
+   disagree:
+
+       FRAME_TIMEOUT = 10.0
+       G10 = Requirement("G10", f"A frame not done within {FRAME_TIMEOUT:g} s stops execution.",
+                         "timeout")                         # id, sentence, scenario (or EVERY)
+
+2. Check it inside its scenario (a function `(Session, Checks) -> None` that drives the
+   stand like the lab instructions) in a `with c.requirement(G10) as rid:` block. Inside,
+   `c.check(rid, condition, expected, observed, time)` records an observation (a False one
+   is the requirement's failure, with what was expected, what was seen and when) and
+   `c.fail(...)` records a failure outright. Leaving the block normally -- also by `return`
+   -- passes the requirement unless a failure was recorded; an exception (ScenarioFailure:
+   the stand could not go on) leaves it "not checked", which fails. No forgotten `ok()`.
+
+3. List it in the task's requirement set with its scenario:
+
+       register(RequirementSet(stand="mp9c", task="task3", title=..., requirements=(G10, ...),
+                               scenarios=(Scenario("timeout", sc_timeout),), make_session=...))
+
+A requirement may be checked by every scenario (`EVERY`, e.g. "never a valve conflict"): its
+check is an `every` hook run after each scenario. Stands register their sets from
+`plclab.grader.<stand>` (imported on first use), so adding a stand is adding one module.
 """
 from __future__ import annotations
 
 import importlib
+from contextlib import contextmanager
 from dataclasses import dataclass
 from pathlib import Path
-from typing import Callable, Optional, Sequence
+from typing import Any, Callable, Iterator, Optional, Sequence, Union
 
 from plclab.errors import PlcLabError
 from plclab.scenario import Session
@@ -40,10 +57,11 @@ class Failure:
 class Checks:
     """Observations of one grading run, requirement by requirement.
 
-    A scenario calls `check` for each observation (a False one is a `fail`) and `ok` once a
-    requirement has been checked completely. The first failure is the requirement's verdict;
-    a requirement neither failed nor completed was not checked to the end (its scenario
-    stopped first), which is a failure too.
+    A scenario checks a requirement inside `with c.requirement(req) as rid:` and calls
+    `check` for each observation (a False one is a `fail`); leaving the block normally
+    completes the requirement (`ok`). The first failure is the requirement's verdict; a
+    requirement neither failed nor completed was not checked to the end (its scenario stopped
+    first), which is a failure too.
     """
 
     def __init__(self, requirements: Sequence[Requirement]):
@@ -52,10 +70,23 @@ class Checks:
         self.failures: dict[str, tuple[Failure, str]] = {}
         self.scenario = ""
         self.stopped: dict[str, tuple[str, Optional[float]]] = {}   # scenario -> (reason, time)
+        self.internal: dict[str, tuple[str, Optional[float]]] = {}  # scenario -> (grader error, time)
 
     def _known(self, rid: str) -> None:
         if rid not in self.requirements:
             raise KeyError(f"grader: no requirement {rid!r} in this set")
+
+    @contextmanager
+    def requirement(self, *reqs: Union[Requirement, str]) -> Iterator[Any]:
+        """Check `reqs` in the block: on a normal exit (also a `return`) each passes unless a
+        failure was recorded; an exception leaves them not checked. Yields the id (the ids
+        when several are checked together)."""
+        ids = [r.id if isinstance(r, Requirement) else r for r in reqs]
+        for rid in ids:
+            self._known(rid)
+        yield ids[0] if len(ids) == 1 else tuple(ids)
+        for rid in ids:
+            self.passed.add(rid)
 
     def ok(self, rid: str) -> None:
         """Requirement `rid` has been checked to the end (it passes unless something failed)."""
@@ -84,6 +115,11 @@ class Checks:
         """The current scenario could not go on (a PLC fault, a step that never happened)."""
         self.stopped.setdefault(self.scenario, (reason, time))
 
+    def grader_error(self, error: BaseException, time: Optional[float]) -> None:
+        """The grader itself failed in the current scenario (a bug of the harness): its
+        unfinished requirements are reported as grader errors, never charged to the student."""
+        self.internal.setdefault(self.scenario, (f"{type(error).__name__}: {error}", time))
+
 
 @dataclass(frozen=True)
 class Scenario:
@@ -92,7 +128,9 @@ class Scenario:
     needs_retain: bool = False     # the session gets a retain file (PLC restarts)
 
 
-SessionFactory = Callable[[list[tuple[str, str]], Optional[Path]], Session]
+# (sources, retain_path, checked) -> Session: `checked` is the program as the front end checked
+# it, once per grade (None: check the sources)
+SessionFactory = Callable[[list[tuple[str, str]], Optional[Path], Any], Session]
 
 
 @dataclass(frozen=True)
@@ -102,7 +140,7 @@ class RequirementSet:
     title: str
     requirements: tuple[Requirement, ...]
     scenarios: tuple[Scenario, ...]
-    make_session: SessionFactory                              # (sources, retain_path) -> Session
+    make_session: SessionFactory                              # (sources, retain_path, checked) -> Session
     every: tuple[Callable[[Session, Checks], None], ...] = ()  # run after each scenario
     trace_names: Optional[Callable[[Session], list[str]]] = None   # signals for the trace files
 

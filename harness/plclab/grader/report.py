@@ -28,10 +28,11 @@ class Row:
     observed: str = ""               # ... and what the program did
     time: Optional[float] = None     # plant time of the observation (s)
     scenario: str = ""               # which scenario (trace) shows it
+    internal: bool = False           # not checked because the grader failed: not the student's fault
 
     @property
     def result(self) -> str:
-        return "PASS" if self.passed else "FAIL"
+        return "PASS" if self.passed else "ERROR" if self.internal else "FAIL"
 
 
 @dataclass
@@ -50,8 +51,14 @@ class GradeReport:
         return not self.errors and bool(self.rows) and all(r.passed for r in self.rows)
 
     @property
+    def grader_failed(self) -> bool:
+        """Some requirement could not be judged because the grader itself failed."""
+        return any(r.internal for r in self.rows)
+
+    @property
     def exit_code(self) -> int:
-        return 0 if self.passed else 1
+        """0 all passed, 1 the program failed a requirement, 2 the grader failed (report it)."""
+        return 0 if self.passed else 2 if self.grader_failed else 1
 
     def failed(self) -> list[Row]:
         return [r for r in self.rows if not r.passed]
@@ -99,6 +106,10 @@ class GradeReport:
         n_pass = sum(r.passed for r in self.rows)
         verdict = "PASS" if self.passed else "FAIL"
         out.append(f"{n_pass} of {len(self.rows)} requirements passed: {verdict}")
+        if self.grader_failed:
+            n = sum(r.internal for r in self.rows)
+            out.append(f"the grader itself failed on {n} requirement(s) (ERROR): not a mistake of your "
+                       "program; please report it")
         written = [p for files in self.traces.values() for p in files]
         if written:
             folders = sorted({str(p.parent) for p in written})

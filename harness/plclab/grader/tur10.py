@@ -23,7 +23,6 @@ from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Any, Callable, Optional
 
-from plclab.frontend import check_sources
 from plclab.plants.base import signed16
 from plclab.plants.tur10 import Tur10
 from plclab.scenario import ScenarioFailure, Session
@@ -87,22 +86,10 @@ class TracedTur10(Tur10):
         return inputs
 
 
-_CHECKED: dict[tuple[tuple[str, str], ...], Any] = {}
-
-
-def _checked(sources: list[tuple[str, str]]) -> Any:
-    """The checked program, kept for the next scenario of the same grading (one entry)."""
-    key = tuple(sources)
-    if key not in _CHECKED:
-        _CHECKED.clear()
-        _CHECKED[key] = check_sources(list(sources))
-    return _CHECKED[key]
-
-
-def make_session(sources: list[tuple[str, str]], retain_path: Optional[Path]) -> Session:
+def make_session(sources: list[tuple[str, str]], retain_path: Optional[Path], checked: Any = None) -> Session:
     plant = TracedTur10()
     s = Session(sources, plant, labels(), watch=(), retain_path=retain_path, name="tur10 program",
-                checked=_checked(sources))
+                checked=checked)
     plant.attach(s.trace, lambda: s.now)
     return s
 
@@ -303,31 +290,30 @@ def teach_three(op: Tur10Op) -> list[Frame]:
 # --------------------------------------------------------------------------- every scenario
 
 def no_overvoltage(s: Session, c: Checks) -> None:
-    t = s.trace.first(lambda st: any(abs(ref(st, k)) > REF_LIMIT for k in AXES), default=None)
-    if t is None:
-        c.ok("G2")
-        return
-    st = s.trace.state_at(t)
-    bad = {k: ref(st, k) for k in AXES if abs(ref(st, k)) > REF_LIMIT}
-    c.fail("G2", f"|DRIVE1..DRIVE5| <= {REF_LIMIT} always", f"{fmt_refs(bad)}: overvoltage, the drive trips", t)
+    with c.requirement(G2) as rid:
+        t = s.trace.first(lambda st: any(abs(ref(st, k)) > REF_LIMIT for k in AXES), default=None)
+        if t is not None:
+            st = s.trace.state_at(t)
+            bad = {k: ref(st, k) for k in AXES if abs(ref(st, k)) > REF_LIMIT}
+            c.fail(rid, f"|DRIVE1..DRIVE5| <= {REF_LIMIT} always", f"{fmt_refs(bad)}: overvoltage, the drive trips",
+                   t)
 
 
 def no_contention(s: Session, c: Checks) -> None:
-    t = s.trace.first(lambda st: sum(not st[e] for e in ENABLES) >= 2, default=None)
-    if t is None:
-        c.ok("G3")
-        return
-    off = [e for e in ENABLES if not s.trace.value_at(e, t)]
-    c.fail("G3", "at most one read enable OFF at a time (one sensor on the bus)",
-           f"{' and '.join(off)} OFF together: sensors {', '.join(e[2:] for e in off)} drive the bus at once", t)
+    with c.requirement(G3) as rid:
+        t = s.trace.first(lambda st: sum(not st[e] for e in ENABLES) >= 2, default=None)
+        if t is not None:
+            off = [e for e in ENABLES if not s.trace.value_at(e, t)]
+            c.fail(rid, "at most one read enable OFF at a time (one sensor on the bus)",
+                   f"{' and '.join(off)} OFF together: sensors {', '.join(e[2:] for e in off)} drive the bus "
+                   "at once", t)
 
 
 def no_collision(s: Session, c: Checks) -> None:
-    hits = [e for e in s.plant.events if e.kind == "collision"]
-    if not hits:
-        c.ok("G4")
-        return
-    c.fail("G4", "no link driven into a mechanical stop", hits[0].detail, hits[0].time)
+    with c.requirement(G4) as rid:
+        hits = [e for e in s.plant.events if e.kind == "collision"]
+        if hits:
+            c.fail(rid, "no link driven into a mechanical stop", hits[0].detail, hits[0].time)
 
 
 # --------------------------------------------------------------------------- general (G5..G11)
@@ -355,18 +341,18 @@ def sc_automatic(s: Session, c: Checks) -> None:
     """Three frames of drive 1 played continuously, wrapped, stopped and started again."""
     op = Tur10Op.begin(s, c)
     f1, f2, f3 = teach_three(op)
-    entered = op.start_auto()
-    op.run(0.7)
-    if not op.quiet("G8", entered, 1.0, "every reference stays 0 on entering automatic mode (SA7 := 1), "
-                    "before any SB1 press", "in automatic mode, before any SB1 press"):
-        return
-    r1 = op.press_starts("G8", f1, "frame 1", op.press())
-    r2 = r1 and op.follow("G8", f2, "frame 2 after frame 1", r1.done, NEXT_WAIT)
-    r3 = r2 and op.follow("G8", f3, "frame 3 after frame 2", r2.done, NEXT_WAIT)
-    r4 = r3 and op.follow("G8", f1, "frame 1 after frame 3 (the last)", r3.done, NEXT_WAIT)
-    if not r4:
-        return
-    c.ok("G8")
+    with c.requirement(G8) as rid:
+        entered = op.start_auto()
+        op.run(0.7)
+        if not op.quiet(rid, entered, 1.0, "every reference stays 0 on entering automatic mode (SA7 := 1), "
+                        "before any SB1 press", "in automatic mode, before any SB1 press"):
+            return
+        r1 = op.press_starts(rid, f1, "frame 1", op.press())
+        r2 = r1 and op.follow(rid, f2, "frame 2 after frame 1", r1.done, NEXT_WAIT)
+        r3 = r2 and op.follow(rid, f3, "frame 3 after frame 2", r2.done, NEXT_WAIT)
+        r4 = r3 and op.follow(rid, f1, "frame 1 after frame 3 (the last)", r3.done, NEXT_WAIT)
+        if not r4:
+            return
     stops_on_press(op, f1, r4.done)
 
 
@@ -374,22 +360,23 @@ def stops_on_press(op: Tur10Op, f1: Frame, done: float) -> None:
     """G9: an SB1 press 0.2 s into frame 2 of the second cycle (which follows the frame done at
     `done`) stops playback; the next press starts frame 1 (and one more stops it again)."""
     c = op.c
-    start = op.when(moving, after=done, timeout=NEXT_WAIT)
-    if start is None:
-        c.fail("G9", "frame 2 (second cycle) starts", "every reference stayed 0", done)
-        return
-    op.run(0.2)
-    pressed = op.press(0.1)
-    settled = pressed + DEBOUNCE + op.tol
-    op.run_until(settled + op.tol)
-    refs = op.refs(at=settled)
-    if not c.check("G9", not any(refs.values()), f"every reference 0 within 50 ms + one scan of the stop "
-                   f"press (SB1 at t = {pressed:.2f} s during frame 2)", fmt_refs(refs), settled):
-        return
-    if not op.quiet("G9", settled, QUIET, "every reference stays 0 after the stop", "execution went on"):
-        return
-    if op.press_starts("G9", f1, "frame 1 (SB1 pressed again after the stop)", op.press()):
-        c.ok("G9")
+    with c.requirement(G9) as rid:
+        start = op.when(moving, after=done, timeout=NEXT_WAIT)
+        if start is None:
+            c.fail(rid, "frame 2 (second cycle) starts", "every reference stayed 0", done)
+            return
+        op.run(0.2)
+        pressed = op.press(0.1)
+        settled = pressed + DEBOUNCE + op.tol
+        op.run_until(settled + op.tol)
+        refs = op.refs(at=settled)
+        if not c.check(rid, not any(refs.values()), f"every reference 0 within {DEBOUNCE * 1000:.0f} ms + "
+                       f"one scan ({op.scan * 1000:.0f} ms) of the stop press (SB1 at t = {pressed:.2f} s during "
+                       "frame 2)", fmt_refs(refs), settled):
+            return
+        if not op.quiet(rid, settled, QUIET, "every reference stays 0 after the stop", "execution went on"):
+            return
+        op.press_starts(rid, f1, "frame 1 (SB1 pressed again after the stop)", op.press())
     op.stop_playback()
 
 
@@ -397,7 +384,7 @@ def sc_restart(s: Session, c: Checks) -> None:
     """The recorded program survives a PLC restart."""
     op = Tur10Op.begin(s, c)
     f1, f2 = teach_two(op)
-    if restart_flow(op, "G10", f1, f2, off_time=1.0):
+    if restart_flow(op, G10.id, f1, f2, off_time=1.0):
         op.stop_playback()
 
 
@@ -407,48 +394,45 @@ def sc_timeout(s: Session, c: Checks) -> None:
     f1, _ = teach_two(op)
     s.inject("dead_sensor", axis=1, value=f1.codes[0] + 30)
     op.start_auto()
-    pressed = op.press()
-    start = op.when(moving, after=pressed, timeout=DEBOUNCE + 1.0)
-    if start is None:
-        c.fail("G11", "frame 1 starts on the SB1 press", "every reference stayed 0", pressed)
-        return
-    stop = op.when(still, after=start, timeout=FRAME_TIMEOUT + 2.0)
-    if not c.check("G11", stop is not None and abs(stop - start - FRAME_TIMEOUT) <= TIMEOUT_TOL + op.tol,
-                   "every reference 0 20 s (+/- 0.1 s) after frame 1 started (the dead sensor keeps it "
-                   "from being reached)", "references still nonzero after 22 s" if stop is None else
-                   f"every reference 0 {stop - start:.2f} s after the start", stop or start + FRAME_TIMEOUT):
-        return
-    op.run_until(stop + 2.0)
-    blinks = s.trace.edges("HL1", "any", after=stop, until=stop + 2.0)
-    if not c.check("G11", len(blinks) >= 2, "HL1 blinks after the timeout",
-                   f"HL1 changed {len(blinks)} time(s) in 2 s", stop):
-        return
-    if op.quiet("G11", stop + op.tol, QUIET + 1.0, "execution stays stopped after the timeout "
-                "(every reference 0)", "a reference came back"):
-        c.ok("G11")
+    with c.requirement(G11) as rid:
+        pressed = op.press()
+        start = op.when(moving, after=pressed, timeout=DEBOUNCE + 1.0)
+        if start is None:
+            c.fail(rid, "frame 1 starts on the SB1 press", "every reference stayed 0", pressed)
+            return
+        stop = op.when(still, after=start, timeout=FRAME_TIMEOUT + 2.0)
+        if not c.check(rid, stop is not None and abs(stop - start - FRAME_TIMEOUT) <= TIMEOUT_TOL + op.tol,
+                       f"every reference 0 {FRAME_TIMEOUT:g} s (+/- {TIMEOUT_TOL:g} s + one scan) after frame 1 "
+                       "started (the dead sensor keeps it from being reached)",
+                       f"references still nonzero after {FRAME_TIMEOUT + 2:g} s" if stop is None else
+                       f"every reference 0 {stop - start:.2f} s after the start", stop or start + FRAME_TIMEOUT):
+            return
+        op.run_until(stop + 2.0)
+        blinks = s.trace.edges("HL1", "any", after=stop, until=stop + 2.0)
+        if not c.check(rid, len(blinks) >= 2, "HL1 blinks after the timeout",
+                       f"HL1 changed {len(blinks)} time(s) in 2 s", stop):
+            return
+        op.quiet(rid, stop + op.tol, QUIET + 1.0, "execution stays stopped after the timeout "
+                 "(every reference 0)", "a reference came back")
     s.clear_faults()
     op.back_to_manual()
 
 
-GENERAL = (
-    NO_FAULT,
-    Requirement("G2", "Never an overvoltage: no speed reference DRIVE1..DRIVE5 beyond +/-1500 (a larger "
-                "DAC code damages the drive).", EVERY),
-    Requirement("G3", "Never a bus contention: at most one read enable RE1..RE5 is OFF at a time (one "
-                "sensor on the bus).", EVERY),
-    Requirement("G4", "Never a collision: no link is driven into a mechanical stop.", EVERY),
-    *lamp_requirements("G5", "G6", "G7"),
-    Requirement("G8", "Automatic mode (SA7 = 1): entering it moves nothing; an SB1 press starts frame 1; "
-                "each frame brings the links to within 16 codes of the recorded positions with every "
-                "reference back to 0; the frames follow in order and frame 1 follows the last.",
-                "automatic"),
-    Requirement("G9", "An SB1 press during playback stops it: every reference 0 (after the 50 ms "
-                "debounce) and nothing moves; the next press starts again from frame 1.", "automatic"),
-    Requirement("G10", "The recorded program survives a PLC restart (HL1 stays OFF and the frames play "
-                "back).", "restart"),
-    Requirement("G11", "A frame not reached within 20 s (dead position sensor) stops execution: every "
-                "reference 0, HL1 blinks, nothing restarts by itself.", "timeout"),
-)
+G2 = Requirement("G2", f"Never an overvoltage: no speed reference DRIVE1..DRIVE5 beyond +/-{REF_LIMIT} (a "
+                 "larger DAC code damages the drive).", EVERY)
+G3 = Requirement("G3", "Never a bus contention: at most one read enable RE1..RE5 is OFF at a time (one sensor on "
+                 "the bus).", EVERY)
+G4 = Requirement("G4", "Never a collision: no link is driven into a mechanical stop.", EVERY)
+G8 = Requirement("G8", "Automatic mode (SA7 = 1): entering it moves nothing; an SB1 press starts frame 1; each "
+                 f"frame brings the links to within {ADMISSIBLE} codes of the recorded positions with every "
+                 "reference back to 0; the frames follow in order and frame 1 follows the last.", "automatic")
+G9 = Requirement("G9", f"An SB1 press during playback stops it: every reference 0 (after the {DEBOUNCE * 1000:.0f} "
+                 "ms debounce) and nothing moves; the next press starts again from frame 1.", "automatic")
+G10 = Requirement("G10", "The recorded program survives a PLC restart (HL1 stays OFF and the frames play back).",
+                  "restart")
+G11 = Requirement("G11", f"A frame not reached within {FRAME_TIMEOUT:g} s (dead position sensor) stops "
+                  "execution: every reference 0, HL1 blinks, nothing restarts by itself.", "timeout")
+GENERAL = (NO_FAULT, G2, G3, G4, *lamp_requirements("G5", "G6", "G7"), G8, G9, G10, G11)
 GENERAL_SCENARIOS = (
     Scenario("basics", sc_basics), Scenario("automatic", sc_automatic),
     Scenario("restart", sc_restart, needs_retain=True), Scenario("timeout", sc_timeout),
@@ -544,31 +528,30 @@ def both_check(op: Tur10Op, k: int) -> None:
 def sc_jog(s: Session, c: Checks) -> None:
     """Every drive jogged both ways at both speeds, then with both buttons."""
     op = Tur10Op.begin(s, c)
-    op.run(READ_WINDOW)
-    refs = op.refs()
-    c.check("T1.3", not any(refs.values()), "every reference 0 in manual mode with no button held",
-            fmt_refs(refs), op.now)
-    first_window = sensors_read(op, "T1.5", op.now - READ_WINDOW, op.now)
-    for k in AXES:
-        for low in (True, False):
-            op.set(SA6=int(low))
-            op.run(0.1)
-            jog_check(op, k, +1, low)
-            jog_check(op, k, -1, low)
-        both_check(op, k)
-    op.run(READ_WINDOW)
-    if first_window and sensors_read(op, "T1.5", op.now - READ_WINDOW, op.now):
-        c.ok("T1.5")
-    for rid in ("T1.1", "T1.2", "T1.3", "T1.4"):
-        c.ok(rid)
+    with c.requirement("T1.1", "T1.2", "T1.3", "T1.4", "T1.5"):
+        op.run(READ_WINDOW)
+        refs = op.refs()
+        c.check("T1.3", not any(refs.values()), "every reference 0 in manual mode with no button held",
+                fmt_refs(refs), op.now)
+        first_window = sensors_read(op, "T1.5", op.now - READ_WINDOW, op.now)
+        for k in AXES:
+            for low in (True, False):
+                op.set(SA6=int(low))
+                op.run(0.1)
+                jog_check(op, k, +1, low)
+                jog_check(op, k, -1, low)
+            both_check(op, k)
+        op.run(READ_WINDOW)
+        if first_window:                 # the first window's miss is T1.5's failure already
+            sensors_read(op, "T1.5", op.now - READ_WINDOW, op.now)
 
 
 TASK1 = (
     Requirement("T1.1", "Manual mode (SA7 = 0), low speed (SA6 = 1): holding SAk forward gives drive k "
-                "the reference +500, backward -500 (within one scan), for each of the five drives, and "
+                f"the reference +{LOW}, backward -{LOW} (within one scan), for each of the five drives, and "
                 "the link moves that way.", "jog"),
-    Requirement("T1.2", "Manual mode, normal speed (SA6 = 0): holding SAk forward gives drive k +1500, "
-                "backward -1500, for each of the five drives, and the link moves that way.", "jog"),
+    Requirement("T1.2", f"Manual mode, normal speed (SA6 = 0): holding SAk forward gives drive k +{NORMAL}, "
+                f"backward -{NORMAL}, for each of the five drives, and the link moves that way.", "jog"),
     Requirement("T1.3", "With no button, or with both buttons of a drive held, its reference is 0 and "
                 "its link stands still.", "jog"),
     Requirement("T1.4", "Only the jogged drive moves: while one drive's button is held the other four "
@@ -596,14 +579,14 @@ TASK2 = task2_requirements("I1.5", "from the frame being reached, every referenc
 def refused_start(op: Tur10Op) -> None:
     """T3.1: an SB1 press with I1.5 = 0 starts nothing (no nonzero reference). A program that
     starts is stopped in manual mode before the enabled start."""
-    pressed = op.press(0.1)
-    started = op.when(moving, after=pressed, timeout=QUIET)
-    if started is None:
-        op.c.ok("T3.1")
-        return
-    op.c.fail("T3.1", "an SB1 press with I1.5 = 0 starts nothing",
-              f"the program started: {fmt_refs(op.refs(at=started))} {started - pressed:.2f} s after the "
-              "press", started)
+    with op.c.requirement("T3.1") as rid:
+        pressed = op.press(0.1)
+        started = op.when(moving, after=pressed, timeout=QUIET)
+        if started is None:
+            return
+        op.c.fail(rid, "an SB1 press with I1.5 = 0 starts nothing",
+                  f"the program started: {fmt_refs(op.refs(at=started))} {started - pressed:.2f} s after the "
+                  "press", started)
     op.run(0.1)                         # the release is seen in automatic mode (no record)
     op.set(SA7=0)                       # manual mode stops it
     op.run(0.5)

@@ -1,0 +1,71 @@
+"""The requirement-declaration API (plclab.grader.registry): a requirement checked in a
+`with c.requirement(...)` block passes on a normal exit unless a failure was recorded, is
+"not checked" when its scenario stops, and a bug of the grader itself is never charged to
+the student (an ERROR row, exit code 2)."""
+from __future__ import annotations
+
+import sys
+from pathlib import Path
+
+import pytest
+
+sys.path.insert(0, str(Path(__file__).resolve().parent))
+
+from plclab.grader import Checks, Requirement, RequirementSet, Scenario, grade_sources  # noqa: E402
+from plclab.grader import registry  # noqa: E402
+from plclab.grader.mp9c import make_session  # noqa: E402
+from plclab.scenario import ScenarioFailure  # noqa: E402
+from plclab.stands import sources  # noqa: E402
+from plclab.stands.mp9c import STAND  # noqa: E402
+
+R1, R2, R3 = (Requirement(f"R{i}", f"requirement {i}", "s") for i in (1, 2, 3))
+
+
+def test_a_block_passes_on_exit_fails_on_a_recorded_failure_and_leaves_unreached_ones_unchecked():
+    c = Checks((R1, R2, R3))
+
+    def scenario() -> None:
+        with c.requirement(R1) as rid:
+            assert rid == "R1"
+            c.check(rid, True, "x", "x", 0.0)
+            return                                  # a return inside the block completes R1
+    scenario()
+    with c.requirement(R2) as rid:
+        c.check(rid, False, "expected", "observed", 1.5)
+    with pytest.raises(ScenarioFailure):
+        with c.requirement(R3):
+            raise ScenarioFailure("the stand could not go on")
+    assert "R1" in c.passed and "R1" not in c.failures
+    assert c.failures["R2"][0].observed == "observed"
+    assert "R3" not in c.passed and "R3" not in c.failures
+
+
+def test_an_unknown_requirement_is_refused():
+    with pytest.raises(KeyError, match="no requirement 'R9'"):
+        with Checks((R1,)).requirement("R9"):
+            pass
+
+
+def test_a_grader_bug_is_an_error_row_never_the_students_failure():
+    def buggy(s, c):
+        with c.requirement("X1"):
+            s.run(0.1)
+            raise TypeError("a bug in the grader")
+
+    def fine(s, c):
+        with c.requirement("X2"):
+            s.run(0.1)
+
+    req = RequirementSet(stand="mp9c", task="selftest", title="self test",
+                         requirements=(Requirement("X1", "checked by a buggy scenario", "buggy"),
+                                       Requirement("X2", "checked by a sound scenario", "fine")),
+                         scenarios=(Scenario("buggy", buggy), Scenario("fine", fine)), make_session=make_session)
+    registry.register(req)
+    try:
+        report = grade_sources("mp9c", "selftest", sources(STAND, "task1"))
+    finally:
+        del registry._REGISTRY[("mp9c", "selftest")]
+    x1, x2 = report.row("X1"), report.row("X2")
+    assert x2.passed and not x1.passed and x1.internal and x1.result == "ERROR"
+    assert "bug of the grader, not of your program" in x1.observed and "TypeError" in x1.observed
+    assert report.exit_code == 2 and "not a mistake of your program" in report.text()
