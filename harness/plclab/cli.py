@@ -198,7 +198,8 @@ def _cmd_grade(args: argparse.Namespace) -> int:
 def _cmd_run(args: argparse.Namespace) -> int:
     from plclab.runner import run_scenario
 
-    r = run_scenario(args.stand, args.variant, args.scenario, args.csv, args.vcd, args.plot)
+    r = run_scenario(args.stand, args.variant, args.scenario, args.csv, args.vcd, args.plot,
+                     program=args.program)
     print("\n".join(r.timeline))
     for f in r.files:
         print(f"wrote {f}")
@@ -253,6 +254,8 @@ def build_parser() -> argparse.ArgumentParser:
     c.add_argument("--csv", metavar="F")
     c.add_argument("--vcd", metavar="F")
     c.add_argument("--plot", metavar="F")
+    c.add_argument("--program", nargs="+", metavar="FILE.st", help="run these ST files (your program) instead "
+                   "of a variant")
     c.set_defaults(func=_cmd_run)
 
     c = sub.add_parser("grade", help="grade a program on a lab task: one row per requirement")

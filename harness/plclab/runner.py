@@ -1,11 +1,19 @@
-"""`plclab run`: one scenario of a stand in virtual time, its timeline and its trace files."""
+"""`plclab run`: one scenario of a stand in virtual time, its timeline and its trace files.
+
+The program is a shipped variant or a student's own ST files (`--program`): a scenario drives
+either through the stand's console and I/O labels. A scenario that also reads one of the
+stand's observables (the frame pointer...) says so in one line when the student's program
+has no such variable; everything else of the scenario works on any program.
+"""
 from __future__ import annotations
 
 from dataclasses import dataclass
 from pathlib import Path
-from typing import Optional
+from typing import Optional, Sequence
 
+from plclab.errors import PlcLabError
 from plclab.fileio import check_output
+from plclab.frontend import check_sources, read_sources
 from plclab.scenario import ScenarioFailure, Session
 from plclab.stands.base import stand_spec
 from plclab.trace import plot_trace, write_csv, write_vcd
@@ -21,19 +29,37 @@ class RunResult:
 
 def run_scenario(stand: str, variant: Optional[str] = None, scenario: Optional[str] = None,
                  csv: Optional[str] = None, vcd: Optional[str] = None, plot: Optional[str] = None,
-                 out_dir: str = "out", retain_dir: Optional[Path] = None) -> RunResult:
+                 out_dir: str = "out", retain_dir: Optional[Path] = None,
+                 program: Optional[Sequence[str]] = None) -> RunResult:
+    """Run scenario `scenario` (default: the demo) of `stand` on `variant` or on the ST files
+    `program` (one compilation unit, a complete program with its CONFIGURATION). A program
+    that does not compile raises CompileError (its `file:line:col: error:` lines)."""
     spec = stand_spec(stand)
+    if program and variant:
+        raise PlcLabError("run: give --variant or --program, not both")
     for out in (csv, vcd, plot):
         if out:
             check_output(out)                # plclab.fileio: a bad output path is refused up front
     name = scenario or spec.default_scenario
     play = spec.scenario(name)
-    variant = variant or spec.stand.richest_variant   # installed: no reference solution to run
-    spec.stand.variant(variant)
+    srcs, checked = None, None
+    if program:
+        srcs = read_sources(program)
+        checked = check_sources(srcs)
+        if checked.config is None:
+            raise PlcLabError(f"{srcs[-1][0]}: no CONFIGURATION: run the complete program (the bundle you "
+                              "were given, with its CONFIGURATION Config0)")
+        variant = "program"
+    else:
+        variant = variant or spec.stand.richest_variant   # installed: no reference solution to run
+        spec.stand.variant(variant)
     retain_path = (retain_dir or Path(out_dir) / "retain") / f"{stand}-{variant}-{name}.json"
     if retain_path.exists():
         retain_path.unlink()               # a scenario starts from a fresh controller
-    s = spec.session(variant, retain_path=retain_path)
+    if srcs is None:
+        s = spec.session(variant, retain_path=retain_path)
+    else:
+        s = spec.session(program=srcs, checked=checked, retain_path=retain_path)
     failure = None
     try:
         play(s)

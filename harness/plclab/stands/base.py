@@ -105,14 +105,16 @@ class StandSpec:
         return self.scenarios[name]
 
     def session(self, variant: Optional[str] = None, program: Optional[Sequence[tuple[str, str]]] = None,
-                retain_path: Optional[Path] = None, watch_internals: bool = True, **plant_params: Any) -> Session:
+                retain_path: Optional[Path] = None, watch_internals: bool = True, checked: Any = None,
+                **plant_params: Any) -> Session:
         """A fresh stand: the shipped `variant` (or a student's `program` sources, which need not
-        have every observable) and a plant at power-up (`plant_params` set it up)."""
+        have every observable, and `checked`, the program as the front end checked it) and a
+        plant at power-up (`plant_params` set it up)."""
         variant = variant or self.stand.richest_variant
         srcs = list(program) if program is not None else sources(self.stand, variant)
         paths = self.observables_for(variant if program is None else None) if watch_internals else {}
         s = Session(srcs, self.stand.make_plant(**plant_params), self.labels(), watch=list(paths),
-                    observables=paths, retain_path=retain_path, strict_watch=program is None,
+                    observables=paths, retain_path=retain_path, strict_watch=program is None, checked=checked,
                     name=f"{self.name} {variant if program is None else 'program'}")
         if self.setup is not None:
             self.setup(s)
