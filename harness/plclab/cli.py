@@ -195,6 +195,24 @@ def _cmd_grade(args: argparse.Namespace) -> int:
     return report.exit_code
 
 
+def _cmd_grade_class(args: argparse.Namespace) -> int:
+    from plclab.grader.classroom import grade_class, write_class_outputs
+
+    def progress(result, done: int, total: int) -> None:
+        print(f"[{done:>{len(str(total))}}/{total}] {result.student}: {result.summary()}", flush=True)
+
+    report = grade_class(args.stand, args.task, args.folder, args.out, jobs=args.jobs,
+                         time_limit_s=args.time_limit, on_result=progress)
+    for path in report.ignored:
+        print(f"ignored {path}: not a .st file or a folder")
+    counts = {s: sum(r.status == s for r in report.results) for s in ("PASS", "FAIL", "ERROR")}
+    print(f"{len(report.results)} submissions: {counts['PASS']} pass, {counts['FAIL']} fail, "
+          f"{counts['ERROR']} not graded")
+    for path in write_class_outputs(report, args.out):
+        print(f"wrote {path}")
+    return 0 if report.complete else 1
+
+
 def _cmd_run(args: argparse.Namespace) -> int:
     from plclab.runner import run_scenario
 
@@ -264,6 +282,18 @@ def build_parser() -> argparse.ArgumentParser:
     c.add_argument("files", nargs="+", metavar="FILE.st")
     c.add_argument("--out", default="out/grade", metavar="DIR", help="trace files (CSV + VCD per scenario)")
     c.set_defaults(func=_cmd_grade)
+
+    c = sub.add_parser("grade-class", help="grade a folder of submissions (a .st file or a folder per student) "
+                                           "in parallel: results.csv, junit.xml, report.html")
+    c.add_argument("stand", choices=stands)
+    c.add_argument("task", metavar="TASK", help="task1, task2 or task3")
+    c.add_argument("folder", metavar="DIR", help="one .st file or one folder of .st files per student")
+    c.add_argument("--jobs", type=int, metavar="N", help="submissions graded at once (default: CPU count)")
+    c.add_argument("--out", default="out/grade-class", metavar="DIR",
+                   help="results.csv, junit.xml, report.html and traces/<student>/ (default out/grade-class)")
+    c.add_argument("--time-limit", type=_seconds, default=300.0, metavar="T",
+                   help="per submission; past it the student's row says 'not graded' (default 300 s)")
+    c.set_defaults(func=_cmd_grade_class)
 
     c = sub.add_parser("serve", help="real time: soft PLC + plant + Modbus face until Ctrl-C")
     c.add_argument("stand", choices=stands)

@@ -1,0 +1,33 @@
+"""A grader that misbehaves on purpose, for tests/grader/test_classroom.py: grade-class must
+survive a grading process that is killed, hangs or hits a grader bug, and still grade the
+other students with the real `grade()`.
+
+A submission chooses its misbehaviour with its first line, `(* classroom test: crash *)`,
+`... hang *)` or `... bug *)`; any other submission is graded for real. Lives in a module of
+its own (not the test file) so a grading process started with spawn/forkserver can import it.
+"""
+from __future__ import annotations
+
+import os
+import re
+import signal
+import time
+from pathlib import Path
+from typing import Optional, Sequence
+
+from plclab.grader import GradeReport, grade
+
+MARK = re.compile(r"\(\* classroom test: (\w+) \*\)")
+
+
+def grade_or_misbehave(stand: str, task: str, files: Sequence[str], out_dir: Optional[str]) -> GradeReport:
+    first = Path(files[0]).read_text(encoding="utf-8").splitlines()[0] if files else ""
+    m = MARK.match(first)
+    what = m.group(1) if m else ""
+    if what == "crash":                 # as the kernel's OOM killer would end it
+        os.kill(os.getpid(), signal.SIGKILL)
+    if what == "hang":
+        time.sleep(3600)
+    if what == "bug":
+        return {}["no such key"]        # a grader bug: KeyError deep inside the grading
+    return grade(stand, task, files, out_dir)

@@ -1,0 +1,350 @@
+"""`plclab grade-class` (issue 12 part 4): a folder of submissions graded in parallel gives
+the same verdicts as `plclab grade` on each, survives a submission that crashes or hangs the
+grader, and writes results.csv, a JUnit XML valid under the common schema and report.html.
+"""
+from __future__ import annotations
+
+import csv
+import io
+import shutil
+import sys
+from pathlib import Path
+
+import pytest
+from lxml import etree
+from lxml import html as lhtml
+
+sys.path.insert(0, str(Path(__file__).resolve().parent))
+
+from plclab.cli import main  # noqa: E402
+from plclab.grader import grade  # noqa: E402
+from plclab.grader.classroom import (find_submissions, grade_class, junit_xml, report_html,  # noqa: E402
+                                     results_csv, write_class_outputs)
+from plclab.stands import get_stand, sources  # noqa: E402
+from classroom_faults import grade_or_misbehave  # noqa: E402
+from grader_helpers import FIXTURES_DIR, fixtures  # noqa: E402
+
+BROKEN = "PROGRAM Broken\nVAR x : INT; END_VAR\nx := ;\nEND_PROGRAM\n"   # a syntax error, line 3
+
+
+def read_csv(path: Path) -> list[dict[str, str]]:
+    return list(csv.DictReader(io.StringIO(path.read_text(encoding="utf-8"))))
+
+
+# --------------------------------------------------------------------------- a class of the fixtures
+@pytest.fixture(scope="module")
+def mp9c_class(tmp_path_factory):
+    """The MP-9C Task 2 wrong-solution fixtures as students, plus the reference solution as a
+    folder of the plc/ files (carol), a program that does not compile (bob),
+    a folder with no .st file (dave) and a file that is no submission; graded with 2 jobs."""
+    root = tmp_path_factory.mktemp("class")
+    folder = root / "submissions"
+    folder.mkdir()
+    for name, task, _ in fixtures("mp9c"):
+        if task == "task2":
+            shutil.copy(FIXTURES_DIR / "mp9c" / name, folder / name)
+    stand = get_stand("mp9c")
+    carol = folder / "carol"
+    for name, text in sources(stand, "task2"):
+        rel = Path(*Path(name).parts[-2:]) if Path(name).exists() else Path("config.st")
+        (carol / rel).parent.mkdir(parents=True, exist_ok=True)
+        (carol / rel).write_text(text, encoding="utf-8")
+    (folder / "bob.st").write_text(BROKEN, encoding="utf-8")
+    (folder / "dave").mkdir()
+    (folder / "dave" / "readme.txt").write_text("forgot the program\n", encoding="utf-8")
+    (folder / "grades.xlsx").write_bytes(b"PK\x03\x04")
+    out = root / "out"
+    progress = []
+    report = grade_class("mp9c", "task2", folder, out, jobs=2,
+                         on_result=lambda r, done, total: progress.append((r.student, done, total)))
+    written = write_class_outputs(report, out)
+    return folder, out, report, progress, written
+
+
+def test_class_gives_the_verdicts_of_grading_one_by_one(mp9c_class, tmp_path):
+    folder, out, report, _, _ = mp9c_class
+    submissions, _ = find_submissions(folder)
+    by_student = {r.student: r for r in report.results}
+    rows = read_csv(out / "results.csv")
+    assert sorted(by_student) == sorted(s.student for s in submissions)
+    for sub in submissions:
+        alone = grade("mp9c", "task2", [str(f) for f in sub.files], out_dir=str(tmp_path / sub.student))
+        mine = [r for r in rows if r["student"] == sub.student]
+        assert by_student[sub.student].status == ("PASS" if alone.passed else "FAIL"), alone.text()
+        if not sub.files:            # dave: nothing `plclab grade` could be given
+            assert all(r["result"] == "FAIL" and "no .st file" in r["message"] for r in mine), mine
+            continue
+        if alone.errors:
+            assert all(r["result"] == "FAIL" and alone.errors[0] in r["message"] for r in mine), mine
+            continue
+        assert [(r["requirement"], r["result"]) for r in mine] == [(row.id, row.result) for row in alone.rows]
+        for csv_row, row in zip(mine, alone.rows):
+            if not row.passed:
+                assert f"expected: {row.expected}" in csv_row["message"]
+                assert f"observed: {row.observed}" in csv_row["message"]
+                assert f"scenario '{row.scenario}'" in csv_row["message"]
+            else:
+                assert csv_row["message"] == ""
+
+
+def test_each_fixture_fails_the_row_its_header_names_in_the_class(mp9c_class):
+    _, out, report, _, _ = mp9c_class
+    rows = {(r["student"], r["requirement"]): r for r in read_csv(out / "results.csv")}
+    expected = [(Path(name).stem, rid) for name, task, rid in fixtures("mp9c") if task == "task2"]
+    assert len(expected) >= 4
+    for student, rid in expected:
+        assert rows[(student, rid)]["result"] == "FAIL", rows[(student, rid)]
+        assert rows[(student, rid)]["message"].startswith("expected: ")
+    statuses = {r.student: r.status for r in report.results}
+    assert statuses["carol"] == "PASS"
+    assert statuses["bob"] == statuses["dave"] == "FAIL"
+    assert rows[("bob", "T2.1")]["message"] == ("not checked: the program does not compile: "
+                                                 f"{folder_of(report, 'bob')}:3:6: error: "
+                                                 "missing expression after ':=' (before ';')")
+    assert "no .st file in this folder" in rows[("dave", "G1")]["message"]
+    assert [p.name for p in report.ignored] == ["grades.xlsx"]
+
+
+def folder_of(report, student: str) -> Path:
+    return next(r.submission.source for r in report.results if r.student == student)
+
+
+def test_progress_is_one_line_per_finished_student(mp9c_class):
+    _, _, report, progress, _ = mp9c_class
+    assert sorted(s for s, _, _ in progress) == sorted(r.student for r in report.results)
+    assert [done for _, done, _ in progress] == list(range(1, len(report.results) + 1))
+    assert {total for _, _, total in progress} == {len(report.results)}
+
+
+def test_csv_has_one_row_per_requirement_per_student(mp9c_class):
+    _, out, report, _, written = mp9c_class
+    assert written == [out / "results.csv", out / "junit.xml", out / "report.html"]
+    rows = read_csv(out / "results.csv")
+    assert list(rows[0]) == ["student", "requirement", "result", "message"]
+    ids = [rid for rid, _ in report.requirements]
+    assert ids[:3] == ["T2.1", "T2.2", "T2.3"]
+    assert len(rows) == len(ids) * len(report.results)
+    assert {r["result"] for r in rows} == {"PASS", "FAIL"}
+
+
+# The conventions CI servers and LMS importers read, as Ant's XMLJUnitResultFormatter writes
+# them and the common JUnit XSDs (Ant/windyroad, Jenkins junit-10) require: every attribute
+# named below is required; a <testsuite> holds <properties>, its <testcase>s, <system-out> and
+# <system-err> in this order; a <testcase> holds at most one <failure> or <error>.
+JUNIT_XSD = b"""<?xml version="1.0" encoding="UTF-8"?>
+<xs:schema xmlns:xs="http://www.w3.org/2001/XMLSchema" elementFormDefault="qualified">
+  <xs:simpleType name="timestamp">
+    <xs:restriction base="xs:dateTime">
+      <xs:pattern value="[0-9]{4}-[0-9]{2}-[0-9]{2}T[0-9]{2}:[0-9]{2}:[0-9]{2}"/>
+    </xs:restriction>
+  </xs:simpleType>
+  <xs:simpleType name="nonblank">
+    <xs:restriction base="xs:token"><xs:minLength value="1"/></xs:restriction>
+  </xs:simpleType>
+  <xs:complexType name="problem" mixed="true">
+    <xs:attribute name="message" type="xs:string" use="required"/>
+    <xs:attribute name="type" type="xs:string" use="required"/>
+  </xs:complexType>
+  <xs:element name="testsuites">
+    <xs:complexType>
+      <xs:sequence>
+        <xs:element name="testsuite" minOccurs="0" maxOccurs="unbounded">
+          <xs:complexType>
+            <xs:sequence>
+              <xs:element name="properties">
+                <xs:complexType><xs:sequence>
+                  <xs:element name="property" minOccurs="0" maxOccurs="unbounded">
+                    <xs:complexType>
+                      <xs:attribute name="name" type="nonblank" use="required"/>
+                      <xs:attribute name="value" type="xs:string" use="required"/>
+                    </xs:complexType>
+                  </xs:element>
+                </xs:sequence></xs:complexType>
+              </xs:element>
+              <xs:element name="testcase" minOccurs="0" maxOccurs="unbounded">
+                <xs:complexType>
+                  <xs:choice minOccurs="0">
+                    <xs:element name="error" type="problem"/>
+                    <xs:element name="failure" type="problem"/>
+                  </xs:choice>
+                  <xs:attribute name="name" type="nonblank" use="required"/>
+                  <xs:attribute name="classname" type="nonblank" use="required"/>
+                  <xs:attribute name="time" type="xs:decimal" use="required"/>
+                </xs:complexType>
+              </xs:element>
+              <xs:element name="system-out" type="xs:string"/>
+              <xs:element name="system-err" type="xs:string"/>
+            </xs:sequence>
+            <xs:attribute name="name" type="nonblank" use="required"/>
+            <xs:attribute name="timestamp" type="timestamp" use="required"/>
+            <xs:attribute name="hostname" type="nonblank" use="required"/>
+            <xs:attribute name="tests" type="xs:nonNegativeInteger" use="required"/>
+            <xs:attribute name="failures" type="xs:nonNegativeInteger" use="required"/>
+            <xs:attribute name="errors" type="xs:nonNegativeInteger" use="required"/>
+            <xs:attribute name="skipped" type="xs:nonNegativeInteger" use="required"/>
+            <xs:attribute name="time" type="xs:decimal" use="required"/>
+            <xs:attribute name="id" type="xs:nonNegativeInteger" use="required"/>
+            <xs:attribute name="package" type="nonblank" use="required"/>
+          </xs:complexType>
+        </xs:element>
+      </xs:sequence>
+      <xs:attribute name="name" type="xs:string"/>
+      <xs:attribute name="tests" type="xs:nonNegativeInteger" use="required"/>
+      <xs:attribute name="failures" type="xs:nonNegativeInteger" use="required"/>
+      <xs:attribute name="errors" type="xs:nonNegativeInteger" use="required"/>
+      <xs:attribute name="time" type="xs:decimal"/>
+    </xs:complexType>
+  </xs:element>
+</xs:schema>
+"""
+
+
+def assert_valid_junit(path: Path) -> etree._Element:
+    schema = etree.XMLSchema(etree.fromstring(JUNIT_XSD))
+    doc = etree.parse(str(path))
+    assert schema.validate(doc), schema.error_log
+    return doc.getroot()
+
+
+def test_junit_has_one_testcase_per_requirement_per_student(mp9c_class):
+    _, out, report, _, _ = mp9c_class
+    root = assert_valid_junit(out / "junit.xml")
+    rows = read_csv(out / "results.csv")
+    suites = root.findall("testsuite")
+    assert [s.get("name") for s in suites] == [r.student for r in report.results]
+    assert int(root.get("tests")) == len(rows)
+    assert int(root.get("failures")) == sum(r["result"] == "FAIL" for r in rows)
+    for suite in suites:
+        cases = suite.findall("testcase")
+        mine = [r for r in rows if r["student"] == suite.get("name")]
+        assert [c.get("name").split()[0] for c in cases] == [r["requirement"] for r in mine]
+        for case, row in zip(cases, mine):
+            failure = case.find("failure")
+            assert (failure is not None) == (row["result"] == "FAIL")
+            if failure is not None:
+                assert failure.get("message") == row["message"]
+        assert int(suite.get("failures")) == sum(r["result"] == "FAIL" for r in mine)
+    short = next(s for s in suites if s.get("name") == "task2_short_pause_1s")
+    assert "13 of 14 requirements passed: FAIL" in short.findtext("system-out")
+
+
+def test_html_report_has_a_row_per_student_and_links_to_failing_traces(mp9c_class):
+    _, out, report, _, _ = mp9c_class
+    text = (out / "report.html").read_text(encoding="utf-8")
+    page = lhtml.fromstring(text)
+    assert not page.xpath("//script") and not page.xpath("//link")
+    assert not [u for u in page.xpath("//@href | //@src") if "://" in u]     # self-contained
+    table = page.xpath("//table")[0]
+    header = [th.text_content() for th in table.xpath("./tr[1]/th")]
+    assert header == ["student", "result"] + [rid for rid, _ in report.requirements]
+    body = {tr.get("id"): tr for tr in table.xpath("./tr[@id]")}
+    assert sorted(body) == sorted(r.student for r in report.results)
+    swapped = body["task2_pauses_swapped"]
+    cell = swapped.xpath("./td")[header.index("T2.1")]
+    assert "FAIL" in cell.text_content() and "expected:" in cell.text_content()
+    links = cell.xpath(".//a/@href")
+    assert links and all((out / href).is_file() for href in links)
+    assert {Path(h).suffix for h in links} == {".csv", ".vcd"}
+    assert "does not compile" in body["bob"].text_content()
+    assert body["carol"].xpath("./td")[1].text_content().startswith("PASS")
+
+
+# --------------------------------------------------------------------------- crash, hang, bug
+def test_a_crash_a_hang_and_a_grader_bug_stop_nobody_else(tmp_path):
+    folder = tmp_path / "class"
+    folder.mkdir()
+    for student in ("a_hang", "b_crash", "c_bug"):
+        what = student.split("_")[1]
+        (folder / f"{student}.st").write_text(f"(* classroom test: {what} *)\n" + BROKEN, encoding="utf-8")
+    (folder / "d_broken.st").write_text(BROKEN, encoding="utf-8")
+    out = tmp_path / "out"
+    # one job: each student after the hang is graded only once the hang was stopped
+    report = grade_class("mp9c", "task1", folder, out, jobs=1, time_limit_s=2.0,
+                         grade_one=grade_or_misbehave)
+    write_class_outputs(report, out)
+    status = {r.student: (r.status, r.not_graded) for r in report.results}
+    assert status["a_hang"][0] == "ERROR" and "time limit of 2 s" in status["a_hang"][1]
+    assert status["b_crash"][0] == "ERROR" and "killed by signal 9" in status["b_crash"][1]
+    assert status["c_bug"][0] == "ERROR" and "KeyError" in status["c_bug"][1]
+    assert "not a verdict on the program" in status["c_bug"][1]
+    assert status["d_broken"] == ("FAIL", "")                  # graded for real after all that
+    assert not report.complete
+    rows = read_csv(out / "results.csv")
+    assert {r["result"] for r in rows if r["student"] != "d_broken"} == {"ERROR"}
+    root = assert_valid_junit(out / "junit.xml")
+    hang = root.find("testsuite[@name='a_hang']")
+    assert hang.get("errors") == hang.get("tests") != "0"
+    assert "time limit" in hang.find("testcase/error").get("message")
+
+
+def test_outputs_of_nothing_graded_are_still_valid(tmp_path):
+    folder = tmp_path / "class"
+    folder.mkdir()
+    (folder / "eve.st").write_text(BROKEN, encoding="utf-8")
+    report = grade_class("tur10", "task3", folder, tmp_path / "out", jobs=1)
+    assert [r.status for r in report.results] == ["FAIL"]
+    assert results_csv(report).count("\neve,") == len(report.requirements)
+    etree.XMLSchema(etree.fromstring(JUNIT_XSD)).assertValid(etree.fromstring(junit_xml(report)))
+    assert "eve" in report_html(report, tmp_path / "out")
+
+
+# --------------------------------------------------------------------------- the command
+def test_cli_grades_the_folder_prints_progress_and_writes_the_files(tmp_path, capsys):
+    folder = tmp_path / "class"
+    (folder / "zoe").mkdir(parents=True)
+    (folder / "zoe" / "main.st").write_text(BROKEN, encoding="utf-8")
+    (folder / "yan.st").write_text(BROKEN.replace("x := ;", "x := 1;"), encoding="utf-8")
+    out = folder / "results"                 # inside the class folder: not taken for a student
+    assert main(["grade-class", "mp9c", "task1", str(folder), "--out", str(out), "--jobs", "2"]) == 0
+    printed = capsys.readouterr().out.splitlines()
+    progress = [line for line in printed if line.startswith("[")]
+    assert [line[:6] for line in progress] == ["[1/2] ", "[2/2] "]
+    assert sorted(line[6:] for line in progress) == [
+        f"yan: FAIL   does not compile: {folder / 'yan.st'}:1:1: error: no CONFIGURATION: "
+        "hand in the complete program (the bundle you were given, with its CONFIGURATION Config0)",
+        f"zoe: FAIL   does not compile: {folder / 'zoe' / 'main.st'}:3:6: error: missing "
+        "expression after ':=' (before ';')"], printed
+    assert "2 submissions: 0 pass, 2 fail, 0 not graded" in printed
+    assert {p.name for p in out.iterdir()} >= {"results.csv", "junit.xml", "report.html"}
+    assert {r["student"] for r in read_csv(out / "results.csv")} == {"yan", "zoe"}
+
+
+def test_cli_refuses_to_replace_what_is_not_a_regular_file(tmp_path, capsys):
+    folder = tmp_path / "class"
+    folder.mkdir()
+    (folder / "eve.st").write_text(BROKEN, encoding="utf-8")
+    out = tmp_path / "out"
+    (out / "junit.xml").mkdir(parents=True)
+    (out / "junit.xml" / "keep.txt").write_text("mine", encoding="utf-8")
+    assert main(["grade-class", "mp9c", "task1", str(folder), "--out", str(out)]) == 1
+    err = capsys.readouterr().err
+    assert err.strip() == f"plclab: error: grade-class: {out / 'junit.xml'} exists and is not a regular file: " \
+                          "not replaced (choose another --out)"
+    assert (out / "junit.xml" / "keep.txt").read_text(encoding="utf-8") == "mine"
+    assert not (out / "results.csv").exists()
+
+
+@pytest.mark.parametrize("argv, message", [
+    (["mp9c", "task9"], "grade: stand 'mp9c' has no task 'task9' (one of task1, task2, task3)"),
+    (["mp9c", "task1", "--jobs", "0"], "grade-class: --jobs must be at least 1 (got 0)"),
+])
+def test_cli_bad_arguments_are_one_line(argv, message, tmp_path, capsys):
+    (tmp_path / "eve.st").write_text(BROKEN, encoding="utf-8")
+    args = ["grade-class", argv[0], argv[1], str(tmp_path), "--out", str(tmp_path / "o")] + argv[2:]
+    assert main(args) == 1
+    assert capsys.readouterr().err == f"plclab: error: {message}\n"
+
+
+def test_cli_missing_or_empty_folder_is_one_line(tmp_path, capsys):
+    assert main(["grade-class", "mp9c", "task1", str(tmp_path / "nope")]) == 1
+    assert "not a folder" in capsys.readouterr().err
+    (tmp_path / "empty").mkdir()
+    assert main(["grade-class", "mp9c", "task1", str(tmp_path / "empty"), "--out", str(tmp_path / "o")]) == 1
+    assert capsys.readouterr().err.startswith(f"plclab: error: grade-class: no submission in {tmp_path / 'empty'}")
+
+
+def test_two_entries_for_one_student_are_refused(tmp_path):
+    (tmp_path / "amy").mkdir()
+    (tmp_path / "amy.st").write_text(BROKEN, encoding="utf-8")
+    with pytest.raises(Exception, match="are both student 'amy': rename one"):
+        find_submissions(tmp_path)
