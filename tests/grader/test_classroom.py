@@ -318,8 +318,8 @@ def test_cli_refuses_to_replace_what_is_not_a_regular_file(tmp_path, capsys):
     (out / "junit.xml" / "keep.txt").write_text("mine", encoding="utf-8")
     assert main(["grade-class", "mp9c", "task1", str(folder), "--out", str(out)]) == 1
     err = capsys.readouterr().err
-    assert err.strip() == f"plclab: error: grade-class: {out / 'junit.xml'} exists and is not a regular file: " \
-                          "not replaced (choose another --out)"
+    assert err.strip() == f"plclab: error: {out / 'junit.xml'}: exists and is a directory; refusing to replace " \
+                          "it (name a regular file)"
     assert (out / "junit.xml" / "keep.txt").read_text(encoding="utf-8") == "mine"
     assert not (out / "results.csv").exists()
 

@@ -32,6 +32,7 @@ from typing import Callable, Optional, Sequence
 
 from lxml import etree
 
+from plclab import fileio
 from plclab.errors import PlcLabError
 
 from .engine import grade, grade_sources, requirement_table
@@ -448,46 +449,25 @@ def _link(path: Path, out: Path) -> str:
 
 
 def write_class_outputs(report: ClassReport, out_dir: str | Path) -> list[Path]:
-    """Write results.csv, junit.xml and report.html into `out_dir` (created if missing).
-
-    Each file is written next to its target and renamed over it, so a reader never sees half a
-    file; a target that exists and is not a regular file (a folder, a link, a device) is refused,
-    never replaced.
-    """
+    """Write results.csv, junit.xml and report.html into `out_dir` (created if missing), each
+    atomically through plclab.fileio (nothing else there is replaced, renamed or removed)."""
     out = Path(out_dir)
     contents = {"results.csv": results_csv(report).encode("utf-8"),
                 "junit.xml": junit_xml(report),
                 "report.html": report_html(report, out).encode("utf-8")}
     targets = check_class_outputs(out)
-    try:
-        out.mkdir(parents=True, exist_ok=True)
-        for t in targets:
-            _write_atomic(t, contents[t.name])
-    except OSError as e:
-        raise PlcLabError(f"grade-class: cannot write {e.filename or out}: {e.strerror}") from None
+    for t in targets:
+        fileio.write_bytes(t, contents[t.name])
     return targets
 
 
 def check_class_outputs(out_dir: str | Path) -> list[Path]:
-    """The three result files in `out_dir`; refuses (one line) any that exists and is not a
-    regular file, so a bad --out is reported before a class is graded, not after."""
+    """The three result files in `out_dir`, each refused (one line) if it exists and is not a
+    regular file: a bad --out is reported before a class is graded, not after."""
     targets = [Path(out_dir) / name for name in OUTPUT_FILES]
     for t in targets:
-        if t.is_symlink() or (t.exists() and not t.is_file()):
-            raise PlcLabError(f"grade-class: {t} exists and is not a regular file: not replaced "
-                              f"(choose another --out)")
+        fileio.check_output(t)
     return targets
-
-
-def _write_atomic(target: Path, data: bytes) -> None:
-    tmp = target.with_name(f".{target.name}.{os.getpid()}.tmp")
-    try:
-        with open(tmp, "xb") as f:
-            f.write(data)
-        os.replace(tmp, target)
-    finally:
-        if tmp.exists():
-            tmp.unlink()
 
 
 __all__ = ["ClassReport", "Cell", "StudentResult", "Submission", "cells", "find_submissions", "grade_class",
