@@ -190,7 +190,39 @@ def _cmd_handout(args: argparse.Namespace) -> int:
 def _cmd_grade(args: argparse.Namespace) -> int:
     from plclab.grader import grade
 
+    if args.stand == "thermo":
+        return _cmd_grade_scada(args)
+    if args.listen or args.traffic or args.duration is not None:
+        raise PlcLabError("grade: --listen, --duration and --traffic are for the thermo SCADA tasks "
+                          "(plclab grade thermo scada1|scada2)")
+    if not args.files:
+        raise PlcLabError("grade: give the program's ST files (plclab grade STAND TASK FILE.st...)")
     report = grade(args.stand, args.task, args.files, out_dir=args.out)
+    print(report.text(), end="")
+    return report.exit_code
+
+
+def _cmd_grade_scada(args: argparse.Namespace) -> int:
+    from plclab.grader.thermo import grade_live, grade_log, scada_task
+
+    scada_task(args.task)
+    if args.files:
+        raise PlcLabError(f"grade: thermo {args.task} grades the Modbus traffic of the student's SCADA client, "
+                          f"not ST files: serve the stand with --listen HOST:PORT [--duration T], or grade a "
+                          f"recording with --traffic FILE")
+    if args.traffic:
+        if args.listen or args.duration is not None:
+            raise PlcLabError("grade: --traffic grades a recording, --listen/--duration make one: give one or the other")
+        report = grade_log(args.task, args.traffic, args.out)
+    else:
+        host, port = _host_port(args.listen or "127.0.0.1:5020", "--listen")
+        until = f"grading after {args.duration:g} s or Ctrl-C" if args.duration else "Ctrl-C ends it and grades"
+
+        def listening(h: str, p: int) -> None:
+            print(f"thermo stand on {h}:{p} (Modbus TCP, holding register n = %MWn): start the SCADA client "
+                  f"and do {args.task}; recording, {until}", flush=True)
+        report, traffic, log = grade_live(args.task, host, port, args.duration, args.out, on_listening=listening)
+        print(f"recorded {len(traffic.exchanges)} requests in {traffic.duration_s:.1f} s: {log}")
     print(report.text(), end="")
     return report.exit_code
 
@@ -278,9 +310,13 @@ def build_parser() -> argparse.ArgumentParser:
 
     c = sub.add_parser("grade", help="grade a program on a lab task: one row per requirement")
     c.add_argument("stand", choices=stands)
-    c.add_argument("task", metavar="TASK", help="task1, task2 or task3")
-    c.add_argument("files", nargs="+", metavar="FILE.st")
+    c.add_argument("task", metavar="TASK", help="task1, task2 or task3; thermo: scada1 or scada2")
+    c.add_argument("files", nargs="*", metavar="FILE.st")
     c.add_argument("--out", default="out/grade", metavar="DIR", help="trace files (CSV + VCD per scenario)")
+    c.add_argument("--listen", metavar="HOST:PORT",
+                   help="thermo SCADA tasks: serve the stand here and record the client (default 127.0.0.1:5020)")
+    c.add_argument("--duration", type=_seconds, metavar="T", help="thermo SCADA tasks: record for T, then grade")
+    c.add_argument("--traffic", metavar="FILE.csv", help="thermo SCADA tasks: grade a recorded traffic log")
     c.set_defaults(func=_cmd_grade)
 
     c = sub.add_parser("grade-class", help="grade a folder of submissions (a .st file or a folder per student) "

@@ -327,6 +327,8 @@ def test_cli_refuses_to_replace_what_is_not_a_regular_file(tmp_path, capsys):
 @pytest.mark.parametrize("argv, message", [
     (["mp9c", "task9"], "grade: stand 'mp9c' has no task 'task9' (one of task1, task2, task3)"),
     (["mp9c", "task1", "--jobs", "0"], "grade-class: --jobs must be at least 1 (got 0)"),
+    (["thermo", "scada1"], "grade-class: the thermo stand's tasks are graded from each student's SCADA client "
+                           "traffic: plclab grade thermo scada1|scada2 --traffic LOG.csv"),
 ])
 def test_cli_bad_arguments_are_one_line(argv, message, tmp_path, capsys):
     (tmp_path / "eve.st").write_text(BROKEN, encoding="utf-8")

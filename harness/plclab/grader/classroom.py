@@ -37,6 +37,7 @@ from plclab.errors import PlcLabError
 
 from .engine import grade, grade_sources, requirement_table
 from .report import GradeReport, Row
+from .thermo import STAND as SCADA_STAND, TASKS as SCADA_TASKS
 
 DEFAULT_TIME_LIMIT_S = 300.0        # one submission; normal grading takes seconds
 OUTPUT_FILES = ("results.csv", "junit.xml", "report.html")
@@ -153,6 +154,9 @@ def grade_class(stand: str, task: str, folder: str | Path, out_dir: str | Path,
 
     Writes nothing but the traces; `write_class_outputs` writes the three result files.
     """
+    if stand == SCADA_STAND:
+        raise PlcLabError(f"grade-class: the {SCADA_STAND} stand's tasks are graded from each student's SCADA "
+                          f"client traffic: plclab grade {SCADA_STAND} {'|'.join(SCADA_TASKS)} --traffic LOG.csv")
     requirements = requirement_table(stand, task)         # unknown stand / task: one line, before any work
     if jobs is not None and jobs < 1:
         raise PlcLabError(f"grade-class: --jobs must be at least 1 (got {jobs})")
