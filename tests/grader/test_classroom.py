@@ -277,6 +277,22 @@ def test_a_crash_a_hang_and_a_grader_bug_stop_nobody_else(tmp_path):
     assert "time limit" in hang.find("testcase/error").get("message")
 
 
+def test_fresh_interpreters_grade_the_same_when_forking_is_unsafe(tmp_path):
+    """With other threads running, grading processes are spawned (no fork): a crash is still
+    that student's row and the others get their real verdict."""
+    folder = tmp_path / "class"
+    folder.mkdir()
+    (folder / "a_crash.st").write_text("(* classroom test: crash *)\n" + BROKEN, encoding="utf-8")
+    (folder / "b_broken.st").write_text(BROKEN, encoding="utf-8")
+    report = grade_class("mp9c", "task1", folder, tmp_path / "out", jobs=2, time_limit_s=120.0,
+                         grade_one=grade_or_misbehave, start_method="spawn")
+    status = {r.student: (r.status, r.not_graded) for r in report.results}
+    assert status["a_crash"][0] == "ERROR" and "killed by signal 9" in status["a_crash"][1]
+    assert status["b_broken"] == ("FAIL", "")
+    assert report.results[1].report.errors == [f"{folder / 'b_broken.st'}:3:6: error: missing expression after "
+                                               "':=' (before ';')"]
+
+
 def test_outputs_of_nothing_graded_are_still_valid(tmp_path):
     folder = tmp_path / "class"
     folder.mkdir()

@@ -147,10 +147,11 @@ def _is_st(p: Path) -> bool:
 def grade_class(stand: str, task: str, folder: str | Path, out_dir: str | Path,
                 jobs: Optional[int] = None, time_limit_s: float = DEFAULT_TIME_LIMIT_S,
                 on_result: Optional[Callable[[StudentResult, int, int], None]] = None,
-                grade_one: GradeOne = grade) -> ClassReport:
+                grade_one: GradeOne = grade, start_method: Optional[str] = None) -> ClassReport:
     """Grade every submission in `folder` on `task` of `stand`; traces go to
     OUT/traces/<student>/. `on_result(result, done, total)` is called as each student finishes
-    (progress). `grade_one` is `grade` (tests substitute one that crashes or hangs).
+    (progress). `grade_one` is `grade` (tests substitute one that crashes or hangs);
+    `start_method` forces how grading processes start (default: see `_context`).
 
     Writes nothing but the traces; `write_class_outputs` writes the three result files.
     """
@@ -168,7 +169,7 @@ def grade_class(stand: str, task: str, folder: str | Path, out_dir: str | Path,
     started = datetime.now(timezone.utc).replace(tzinfo=None, microsecond=0).isoformat()
     title = grade_sources(stand, task, [("warm-up.st", "")]).title   # also builds the parser once, before forking
     results = _run_parallel(stand, task, title, submissions, out, jobs or os.cpu_count() or 1, time_limit_s,
-                            on_result, grade_one)
+                            on_result, grade_one, _context(start_method))
     results.sort(key=lambda r: r.student)
     return ClassReport(stand, task, title, requirements, results, ignored, started)
 
@@ -189,13 +190,14 @@ def _grade_in_child(conn, grade_one: GradeOne, stand: str, task: str, files: lis
         conn.close()
 
 
-def _context():
+def _context(start_method: Optional[str] = None):
     """Fork (cheap: the parent has the grader loaded and warm) when that is safe, i.e. the
-    parent runs no other thread; otherwise a fresh interpreter per submission."""
-    methods = multiprocessing.get_all_start_methods()
-    if "fork" in methods and threading.active_count() == 1:
-        return multiprocessing.get_context("fork")
-    return multiprocessing.get_context("forkserver" if "forkserver" in methods else "spawn")
+    parent runs no other thread; otherwise spawn, a fresh interpreter per submission (which
+    gets the parent's sys.path, so a `grade_one` from any importable module works)."""
+    if start_method is None:
+        fork_ok = "fork" in multiprocessing.get_all_start_methods() and threading.active_count() == 1
+        start_method = "fork" if fork_ok else "spawn"
+    return multiprocessing.get_context(start_method)
 
 
 @dataclass
@@ -207,8 +209,7 @@ class _Running:
 
 
 def _run_parallel(stand: str, task: str, title: str, submissions: list[Submission], out: Path, jobs: int,
-                  time_limit_s: float, on_result, grade_one: GradeOne) -> list[StudentResult]:
-    ctx = _context()
+                  time_limit_s: float, on_result, grade_one: GradeOne, ctx) -> list[StudentResult]:
     pending = deque(submissions)
     running: list[_Running] = []
     results: list[StudentResult] = []
