@@ -227,6 +227,8 @@ def test_traffic_log_round_trips_and_grades_the_same(tmp_path):
     ("time_s,unit,request,response\n1.0,1,zz,\n", "log.csv:2: error: unit must be a whole number and "
                                                   "request/response hexadecimal PDUs"),
     ("time_s,unit,request,response\n1.0,1\n", "log.csv:2: error: expected time_s,unit,request,response[,what]"),
+    ("# plclab modbus traffic; duration_s=1e8\ntime_s,unit,request,response\n", "log.csv:1: error: duration_s "
+     "1e+08 is not a time in seconds within 0..86400 (a lab session of at most a day)"),
 ])
 def test_a_bad_traffic_log_is_one_line(text, message):
     with pytest.raises(PlcLabError) as e:
@@ -434,3 +436,17 @@ def test_a_failing_traffic_observer_costs_the_client_nothing():
         assert c.read_holding_registers(6, count=1, device_id=1).registers == [40]
         c.close()
     assert calls == [(1, read(6, 1), bytes.fromhex("0302") + struct.pack(">H", 40))]
+
+
+def test_cli_a_port_in_use_is_one_line_and_nothing_is_recorded(tmp_path, capsys):
+    import socket
+
+    with socket.socket() as busy:
+        busy.bind(("127.0.0.1", 0))
+        busy.listen(1)
+        port = busy.getsockname()[1]
+        assert main(["grade", "thermo", "scada1", "--listen", f"127.0.0.1:{port}", "--duration", "1",
+                     "--out", str(tmp_path)]) == 1
+    err = capsys.readouterr().err
+    assert err.startswith(f"plclab: error: modbus: cannot listen on 127.0.0.1:{port}: ") and err.count("\n") == 1
+    assert not (tmp_path / "thermo-scada1-traffic.csv").exists()

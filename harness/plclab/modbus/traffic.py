@@ -29,6 +29,7 @@ from .protocol import ALL_FUNCTIONS, ExceptionCode, ModbusException, Request, Ta
 
 HEADER = ("time_s", "unit", "request", "response", "what")
 MAGIC = "# plclab modbus traffic"
+MAX_TIME_S = 86400.0                # a log is replayed scan by scan: a day of lab session at most
 FUNCTION_NAMES = {1: "read coils", 2: "read discrete inputs", 3: "read holding registers",
                   4: "read input registers", 5: "write single coil", 6: "write single register",
                   15: "write multiple coils", 16: "write multiple registers",
@@ -198,6 +199,7 @@ def _number(text: str, name: str, line: int, what: str) -> float:
         value = float(text)
     except ValueError:
         raise PlcLabError(f"{name}:{line}: error: {what} '{text}' is not a number") from None
-    if not 0 <= value < 1e9:
-        raise PlcLabError(f"{name}:{line}: error: {what} {value:g} is not a time in seconds >= 0")
+    if not 0 <= value <= MAX_TIME_S:
+        raise PlcLabError(f"{name}:{line}: error: {what} {value:g} is not a time in seconds within 0..{MAX_TIME_S:g} "
+                          f"(a lab session of at most a day)")
     return value
