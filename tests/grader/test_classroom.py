@@ -7,6 +7,7 @@ from __future__ import annotations
 import csv
 import io
 import shutil
+from urllib.parse import unquote
 import sys
 from pathlib import Path
 
@@ -243,10 +244,32 @@ def test_html_report_has_a_row_per_student_and_links_to_failing_traces(mp9c_clas
     cell = swapped.xpath("./td")[header.index("T2.1")]
     assert "FAIL" in cell.text_content() and "expected:" in cell.text_content()
     links = cell.xpath(".//a/@href")
-    assert links and all((out / href).is_file() for href in links)
+    assert links and all((out / unquote(href)).is_file() for href in links)
     assert {Path(h).suffix for h in links} == {".csv", ".vcd"}
     assert "does not compile" in body["bob"].text_content()
     assert body["carol"].xpath("./td")[1].text_content().startswith("PASS")
+
+
+def test_html_escapes_names_and_links_survive_odd_characters(tmp_path):
+    from plclab.grader import GradeReport, Row
+    from plclab.grader.classroom import ClassReport, StudentResult, Submission
+
+    out = tmp_path / "out"
+    trace = out / "traces" / "<eve> #1" / "mp9c-task1-manual.csv"
+    trace.parent.mkdir(parents=True)
+    trace.write_text("time_s,name,value\n", encoding="utf-8")
+    graded = GradeReport("mp9c", "task1", "MP-9C <Task 1>", ["eve.st"],
+                         rows=[Row("T1.1", "gripper", False, "L1 = 1", "L1 = 0 & <stuck>", 1.5, "manual")],
+                         traces={"manual": [trace]})
+    sub = Submission("<eve> #1", (tmp_path / "x.st",), tmp_path / "x.st")
+    report = ClassReport("mp9c", "task1", "MP-9C <Task 1>", [("T1.1", "gripper")], [StudentResult(sub, graded)])
+    page = lhtml.fromstring(report_html(report, out))
+    assert page.xpath("//h1")[0].text_content() == "MP-9C <Task 1>"
+    row = page.xpath("//tr[@id]")[0]
+    assert row.get("id") == "<eve> #1"
+    assert "observed: L1 = 0 & <stuck>" in row.text_content()
+    (href,) = row.xpath(".//a/@href")
+    assert (out / unquote(href)) == trace
 
 
 # --------------------------------------------------------------------------- crash, hang, bug

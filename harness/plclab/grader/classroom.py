@@ -23,6 +23,7 @@ import os
 import threading
 import time
 import traceback
+import urllib.parse
 from collections import deque
 from dataclasses import dataclass, field
 from datetime import datetime, timezone
@@ -446,9 +447,10 @@ def report_html(report: ClassReport, out_dir: str | Path) -> str:
 
 
 def _link(path: Path, out: Path) -> str:
+    """A relative URL from the page to a trace file (a student's name may hold '#', '?', spaces)."""
     p = Path(path).resolve()
     try:
-        return p.relative_to(out).as_posix()
+        return urllib.parse.quote(p.relative_to(out).as_posix())
     except ValueError:
         return p.as_uri()
 
