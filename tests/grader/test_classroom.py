@@ -16,6 +16,7 @@ from lxml import etree
 from lxml import html as lhtml
 
 sys.path.insert(0, str(Path(__file__).resolve().parent))
+pytest.register_assert_rewrite("grader_helpers")      # its asserts report like the tests' own
 
 from plclab.cli import main  # noqa: E402
 from plclab.grader import grade  # noqa: E402
