@@ -49,6 +49,22 @@ def _cmd_sim(args: argparse.Namespace) -> int:
     return 0 if result.fault is None else 1
 
 
+def _cmd_cnc(args: argparse.Namespace) -> int:
+    from plclab.cnc.gcode import GcodeError
+    from plclab.cnc.run import run_cnc
+
+    try:
+        result = run_cnc(args.part, method=args.method, step_mm=args.step, feed=args.feed, csv=args.csv,
+                         vcd=args.vcd, plot=args.plot, svg=args.svg, diagonal=args.diagonal)
+    except GcodeError as e:              # already `file:line:col: error: ...`; nothing has run
+        print(e, file=sys.stderr)
+        return 1
+    print("\n".join(result.lines))
+    for f in result.files:
+        print(f"wrote {f}")
+    return 0 if result.ok else 1
+
+
 def _cmd_bench(args: argparse.Namespace) -> int:
     from plclab.bench import run_bench
 
@@ -284,9 +300,10 @@ def build_parser() -> argparse.ArgumentParser:
     c.set_defaults(func=_cmd_sim)
 
     stands = ("mp9c", "tur10", "thermo")
+    every_stand = stands + ("cnc",)          # build and run serve every stand; cnc has no Modbus/grader face yet
 
     c = sub.add_parser("build", help="write the OpenPLC bundle (.st) and a PLCopen TC6 XML project")
-    c.add_argument("stand", choices=stands)
+    c.add_argument("stand", choices=every_stand)
     c.add_argument("variant", choices=("baseline", "task1", "task2", "task3", "full"))
     c.add_argument("-o", "--output", metavar="FILE.st", help="default: STAND_VARIANT.st")
     c.add_argument("--xml", metavar="FILE.xml", help="also write the PLCopen XML project")
@@ -298,7 +315,7 @@ def build_parser() -> argparse.ArgumentParser:
     c.set_defaults(func=_cmd_handout)
 
     c = sub.add_parser("run", help="run a scenario of a stand in virtual time; timeline and traces")
-    c.add_argument("stand", choices=stands)
+    c.add_argument("stand", choices=every_stand)
     c.add_argument("--variant", choices=("baseline", "task1", "task2", "task3", "full"))
     c.add_argument("--scenario", metavar="NAME", help="default: the demo")
     c.add_argument("--csv", metavar="F")
@@ -376,6 +393,16 @@ def build_parser() -> argparse.ArgumentParser:
     c.add_argument("--press", nargs="+", metavar="NAME[=SECONDS]",
                    help="press and release, e.g. SB1 (0.3 s) or SA1_FWD=1.5")
     c.set_defaults(func=_cmd_console)
+
+    c = sub.add_parser("cnc", help="run a G-code part program on the CNC stand; contour error per frame")
+    c.add_argument("part", metavar="PART.nc")
+    c.add_argument("--method", choices=("evalfn", "dda", "integration"), default="evalfn")
+    c.add_argument("--diagonal", action="store_true", help="evaluation function: the diagonal variant")
+    c.add_argument("--step", type=float, default=0.01, metavar="MM", help="the drives' step (default 0.01 mm)")
+    c.add_argument("--feed", type=float, metavar="MM_MIN", help="feed of every cutting block (replaces F)")
+    for opt in ("csv", "vcd", "plot", "svg"):
+        c.add_argument(f"--{opt}", metavar="F")
+    c.set_defaults(func=_cmd_cnc)
 
     c = sub.add_parser("bench", help="performance figures: front end, scan cost, virtual-time speed-up, Modbus")
     c.add_argument("--quick", action="store_true", help="shorter runs")

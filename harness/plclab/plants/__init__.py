@@ -8,7 +8,7 @@ from __future__ import annotations
 
 import importlib
 
-STANDS = ("mp9c", "tur10", "thermo")
+STANDS = ("mp9c", "tur10", "thermo", "cnc")
 
 
 def make_plant(stand: str, **params):

@@ -32,7 +32,7 @@ def _checkout_solutions() -> Path | None:
 
 
 SOLUTIONS_DIR = _checkout_solutions()
-STANDS = ("mp9c", "tur10", "thermo")
+STANDS = ("mp9c", "tur10", "thermo", "cnc")
 
 
 @dataclass(frozen=True)

@@ -1,0 +1,179 @@
+"""`plclab cnc PART.nc`: a part program through the G-code front end onto the CNC stand in
+virtual time; per frame the contour error against its bound; the tool path as CSV, a plot
+(matplotlib) and an SVG."""
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass, replace
+from pathlib import Path
+from typing import Optional
+
+from plclab.cnc.gcode import Frame, Program, parse_file
+from plclab.cnc.toolpath import HEADER, BlockResult, check_blocks, path_mm
+from plclab.errors import PlcLabError
+from plclab.fileio import check_output, open_atomic, write_text
+
+
+@dataclass
+class CncResult:
+    program: Program
+    blocks: list[BlockResult]
+    missed: dict[str, int]
+    finished: bool
+    lines: list[str]
+    files: list[Path]
+
+    @property
+    def ok(self) -> bool:
+        return self.finished and all(b.ok for b in self.blocks) and not any(self.missed.values())
+
+
+def run_cnc(part: str, method: str = "evalfn", step_mm: float = 0.01, feed: Optional[float] = None,
+            csv: Optional[str] = None, vcd: Optional[str] = None, plot: Optional[str] = None,
+            svg: Optional[str] = None, diagonal: bool = False) -> CncResult:
+    from plclab.stands import cnc
+    from plclab.trace import write_vcd
+
+    if method not in cnc.METHODS:
+        raise PlcLabError(f"unknown method '{method}' (one of {', '.join(cnc.METHODS)})")
+    if not 0.001 <= step_mm <= 1.0:
+        raise PlcLabError(f"--step {step_mm}: the drives' step must be 0.001..1 mm")
+    if feed is not None and feed <= 0:
+        raise PlcLabError(f"--feed {feed}: the feed must be > 0 mm/min")
+    for target in (csv, vcd, plot, svg):
+        if target:
+            check_output(target)         # a bad output is refused before the run
+    program = parse_file(part)
+    frames = program.frames
+    if feed is not None:
+        frames = [f if f.kind == 0 else replace(f, feed=feed) for f in frames]
+    if not frames:
+        raise PlcLabError(f"{part}: no motion in the part program")
+    s = cnc.session(step_mm=step_mm)
+    _check_travel(frames, s.plant)
+    length = sum(math.dist(f.start, f.end) if not f.is_arc else 2 * math.pi * math.hypot(f.i, f.j)
+                 for f in frames)
+    slowest = min(min(f.feed, 60_000 * step_mm) for f in frames) / 60.0
+    run = cnc.run_part(s, frames, method, diagonal, timeout=10.0 + 3.0 * length / slowest)
+    blocks = check_blocks(frames, run.points, step_mm, method, start_time=run.start)
+    lines = list(program.notes) + [f"{part}: {len(frames)} frames, method {method}, step {step_mm:g} mm", HEADER]
+    lines += [b.row() for b in blocks]
+    worst = max(blocks, key=lambda b: b.error_mm - b.bound_mm)
+    lines.append(f"largest contour error {max(b.error_mm for b in blocks):.4f} mm "
+                 f"(frame {worst.index}: bound {worst.bound_mm:.4f} mm); "
+                 f"frames to the step grid: up to {max(b.grid_mm for b in blocks):.4f} mm; "
+                 f"missed steps {sum(run.missed.values())}")
+    if not run.finished:
+        lines.append("the part program did not end (see the stand's timeline)")
+    files = []
+    points = path_mm(run.points, step_mm)
+    if csv:
+        files.append(_write_csv(csv, points))
+    if vcd:
+        write_vcd(s.trace, vcd)
+        files.append(Path(vcd))
+    if plot:
+        files.append(_plot(plot, frames, points, blocks, step_mm, part, method))
+    if svg:
+        files.append(_svg(svg, frames, points))
+    result = CncResult(program, blocks, run.missed, run.finished, lines, files)
+    lines.append("ok: every frame within its bound" if result.ok else "FAILED: see the rows above")
+    return result
+
+
+def _check_travel(frames: list[Frame], plant) -> None:
+    lo, hi = plant.travel[0] * plant.step_mm, plant.travel[1] * plant.step_mm
+    for f in frames:
+        reach = [f.end]
+        if f.is_arc:
+            cx, cy = f.centre
+            r = math.hypot(f.i, f.j)
+            reach += [(cx - r, cy - r, 0.0), (cx + r, cy + r, 0.0)]
+        for p in reach:
+            if any(not lo < v < hi for v in p):
+                raise PlcLabError(f"line {f.line}: the block leaves the table's travel ({lo:g}..{hi:g} mm)")
+
+
+def _write_csv(path: str, points) -> Path:
+    with open_atomic(path) as fh:
+        fh.write("time_s,X,Y,Z\n")
+        for t, x, y, z in points:
+            fh.write(f"{t:.6f},{x:.4f},{y:.4f},{z:.4f}\n")
+    return Path(path)
+
+
+def contour(frames: list[Frame], per_mm: int = 20) -> list[tuple[float, float]]:
+    """The programmed contour as a dense polyline (mm)."""
+    pts = [frames[0].start[:2]]
+    for f in frames:
+        if not f.is_arc:
+            pts.append(f.end[:2])
+            continue
+        cx, cy = f.centre
+        r = math.hypot(f.i, f.j)
+        a0 = math.atan2(f.start[1] - cy, f.start[0] - cx)
+        a1 = math.atan2(f.end[1] - cy, f.end[0] - cx)
+        sweep = ((a1 - a0) if f.kind == 3 else (a0 - a1)) % (2 * math.pi) or 2 * math.pi
+        n = max(8, int(sweep * r * per_mm))
+        sign = 1 if f.kind == 3 else -1
+        pts += [(cx + r * math.cos(a0 + sign * sweep * k / n), cy + r * math.sin(a0 + sign * sweep * k / n))
+                for k in range(1, n + 1)]
+    return pts
+
+
+def _plot(path: str, frames, points, blocks, h, part, method) -> Path:
+    from matplotlib.backends.backend_agg import FigureCanvasAgg
+    from matplotlib.figure import Figure
+
+    fig = Figure(figsize=(8, 11))
+    FigureCanvasAgg(fig)
+    ax, ax_err, ax_feed = fig.subplots(3, 1, gridspec_kw={"height_ratios": [3, 1, 1]})
+    cx, cy = zip(*contour(frames))
+    ax.plot(cx, cy, "k--", lw=0.8, label="programmed contour")
+    if points:
+        ax.plot([p[1] for p in points], [p[2] for p in points], "b-", lw=0.8, label="tool path")
+    ax.set_aspect("equal")
+    ax.set_title(f"{Path(part).name}: {method}, step {h:g} mm")
+    ax.set_xlabel("X mm")
+    ax.set_ylabel("Y mm")
+    ax.legend(loc="best")
+    ax_err.bar([b.index for b in blocks], [b.error_mm for b in blocks], color="tab:blue", label="largest error")
+    ax_err.step([b.index for b in blocks], [b.bound_mm for b in blocks], "r-", where="mid", label="bound")
+    ax_err.set_xlabel("frame")
+    ax_err.set_ylabel("contour error mm")
+    ax_err.legend(loc="best")
+    if len(points) > 1:
+        window = max(1, len(points) // 400)
+        ts, vs = [], []
+        for a, b in zip(points[::window], points[window::window]):
+            if b[0] > a[0]:
+                ts.append(b[0])
+                vs.append(math.dist(a[1:], b[1:]) / (b[0] - a[0]) * 60.0)
+        ax_feed.plot(ts, vs, "g-", lw=0.8)
+    ax_feed.set_xlabel("time s")
+    ax_feed.set_ylabel("feed mm/min")
+    fig.tight_layout()
+    with open_atomic(path, binary=True) as fh:
+        fig.savefig(fh, format="png")
+    return Path(path)
+
+
+def _svg(path: str, frames, points) -> Path:
+    prog = contour(frames)
+    path_pts = [(p[1], p[2]) for p in points] or prog[:1]
+    xs = [x for x, _ in prog + path_pts]
+    ys = [y for _, y in prog + path_pts]
+    pad = 0.05 * max(max(xs) - min(xs), max(ys) - min(ys), 1.0)
+    x0, y0, w, hgt = min(xs) - pad, min(ys) - pad, max(xs) - min(xs) + 2 * pad, max(ys) - min(ys) + 2 * pad
+
+    def poly(pts, style):
+        d = " ".join(f"{x:.4f},{-y:.4f}" for x, y in pts)
+        return f'  <polyline fill="none" {style} points="{d}"/>'
+
+    text = "\n".join([
+        f'<svg xmlns="http://www.w3.org/2000/svg" viewBox="{x0:.4f} {-(y0 + hgt):.4f} {w:.4f} {hgt:.4f}" '
+        f'width="800" height="{800 * hgt / w:.0f}">',
+        poly(prog, f'stroke="black" stroke-dasharray="{w / 200:.4f}" stroke-width="{w / 800:.4f}"'),
+        poly(path_pts, f'stroke="blue" stroke-width="{w / 800:.4f}"'),
+        "</svg>", ""])
+    return write_text(path, text)

@@ -1,0 +1,123 @@
+"""Checks of a tool path against the programmed contour and the interpolators' error
+bounds (textbook 4.2.1, docs/cnc.md): per frame its length, time, largest contour error,
+end-point error. The contour is the frame as the PLC got it (end points and centre on the
+steps' grid); how far that grid frame is from the programmed one is reported apart.
+
+Bounds: one step h for the evaluation-function method (every visited point within h of the
+line, radial error within h); for the DDA and digital-integration methods the pulses keep
+within half a pulse per axis of the interpolated point (h / sqrt 2 from the contour), and
+an arc by digital integration adds the accumulated error of eq. (19), N R dphi^3 / 3!, and
+the chord's sag R (1 - cos(dphi / 2)) between interpolation cycles.
+"""
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass
+from typing import Sequence
+
+from plclab.cnc.gcode import Frame
+
+INTERPOLATION_CYCLE_S = 0.004      # PRG_CncStand: T = 4 fine cycles of 1 ms
+
+
+@dataclass(frozen=True)
+class BlockResult:
+    index: int                 # 1-based frame number
+    line: int                  # source line of the block
+    kind: int
+    length_mm: float
+    time_s: float
+    error_mm: float            # largest contour error of the visited points
+    bound_mm: float
+    end_error_mm: float
+    grid_mm: float             # programmed frame -> the steps' grid
+
+    @property
+    def ok(self) -> bool:
+        return self.error_mm <= self.bound_mm + 1e-9 and self.end_error_mm <= 1e-9
+
+    def row(self) -> str:
+        verdict = "ok" if self.ok else "OUT OF BOUND"
+        return (f"{self.index:>5} {self.line:>5}  G{self.kind:02d} {self.length_mm:9.3f} {self.time_s:8.3f} "
+                f"{self.error_mm:9.4f} {self.bound_mm:9.4f} {self.end_error_mm:9.4f}  {verdict}")
+
+
+HEADER = f"{'frame':>5} {'line':>5}  {'G':3} {'length mm':>9} {'time s':>8} {'error mm':>9} {'bound mm':>9} {'end mm':>9}"
+
+
+def grid(v: float, h: float) -> int:
+    return round(v / h)
+
+
+def check_blocks(frames: Sequence[Frame], points: Sequence[tuple[float, int, int, int, int]], h: float,
+                 method: str, start_time: float = 0.0) -> list[BlockResult]:
+    """One result per frame; `points` are (time, frame, x, y, z) in steps, in time order."""
+    results = []
+    prev_end = (0, 0, 0)
+    prev_time = start_time
+    for k, f in enumerate(frames, start=1):
+        pts = [p for p in points if p[1] == k]
+        start = prev_end
+        end = tuple(grid(v, h) for v in f.end)
+        visited = [start] + [p[2:] for p in pts]
+        error = max((_error(f, start, end, q, h) for q in visited), default=0.0) * h
+        reached = visited[-1]
+        end_error = math.dist(reached, end) * h
+        t_end = pts[-1][0] if pts else prev_time
+        results.append(BlockResult(k, f.line, f.kind, _length(f), t_end - prev_time, error,
+                                   _bound(f, method, h), end_error, _grid_error(f, start, end, h)))
+        prev_end, prev_time = reached, t_end
+    return results
+
+
+def _error(f: Frame, start, end, q, h: float) -> float:
+    """Contour error of point q, in steps, against the grid frame."""
+    if f.is_arc:
+        cx, cy = start[0] + grid(f.centre[0], h) - grid(f.start[0], h), start[1] + grid(f.centre[1], h) - grid(f.start[1], h)
+        r = math.hypot(start[0] - cx, start[1] - cy)
+        return abs(math.hypot(q[0] - cx, q[1] - cy) - r)
+    return _segment_distance(start, end, q)
+
+
+def _segment_distance(a, b, q) -> float:
+    d = [bi - ai for ai, bi in zip(a, b)]
+    dd = sum(c * c for c in d)
+    if dd == 0:
+        return math.dist(a, q)
+    t = max(0.0, min(1.0, sum((qi - ai) * di for ai, qi, di in zip(a, q, d)) / dd))
+    return math.dist([ai + t * di for ai, di in zip(a, d)], q)
+
+
+def _length(f: Frame) -> float:
+    if not f.is_arc:
+        return math.dist(f.start, f.end)
+    return abs(_sweep(f)) * math.hypot(f.i, f.j)
+
+
+def _sweep(f: Frame) -> float:
+    cx, cy = f.centre
+    a0 = math.atan2(f.start[1] - cy, f.start[0] - cx)
+    a1 = math.atan2(f.end[1] - cy, f.end[0] - cx)
+    s = (a1 - a0) if f.kind == 3 else (a0 - a1)
+    s %= 2 * math.pi
+    return s if s > 1e-12 else 2 * math.pi
+
+
+def _bound(f: Frame, method: str, h: float) -> float:
+    if method == "evalfn":
+        return h
+    bound = h / math.sqrt(2)
+    if f.is_arc:
+        r = math.hypot(f.i, f.j)
+        dphi = min(f.feed, 600.0) / 60.0 * INTERPOLATION_CYCLE_S / r
+        n = math.ceil(_sweep(f) / dphi)
+        bound += n * r * dphi ** 3 / 6 + r * (1 - math.cos(dphi / 2))
+    return bound
+
+
+def _grid_error(f: Frame, start, end, h: float) -> float:
+    return max(math.dist(end, [v / h for v in f.end]), 0.0) * h
+
+
+def path_mm(points, h: float) -> list[tuple[float, float, float, float]]:
+    return [(t, x * h, y * h, z * h) for t, _k, x, y, z in points]

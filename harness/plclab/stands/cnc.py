@@ -1,0 +1,194 @@
+"""The CNC stand (docs/cnc.md): an X-Y-Z table with step/direction drives run by
+PRG_CncStand in a 1 ms fine-cycle task, executing a part program's frames with the
+evaluation-function, DDA or digital-integration interpolators of textbook chapter 4.
+
+`run_part` loads a part program's frames into the PLC's frame table (GVL_CNC), presses
+SB1 and records the table's path, frame by frame; `plclab cnc` and the scenarios use it.
+"""
+from __future__ import annotations
+
+import re
+from dataclasses import dataclass, field
+from typing import Callable, Optional
+
+from plclab.cnc.gcode import Frame, parse
+from plclab.scenario import ScenarioFailure, Session
+from plclab.stands import PLC_DIR, Stand, Task, Variant, sources
+
+POUS = ("FC_CncArcQuadrant", "FC_CncAngle", "FB_CncEvalLinear", "FB_CncEvalCircular", "FB_CncDdaPulses",
+        "FB_CncDdaLinear", "FB_CncIntegLinear", "FB_CncIntegCircular", "PRG_CncStand")
+FINE_CYCLE_S = 0.001
+MAX_FRAMES = 200
+METHODS = {"evalfn": 0, "dda": 1, "integration": 2}
+
+STAND = Stand(
+    name="cnc",
+    title="CNC stand (X-Y-Z table, step/direction drives)",
+    gvl=("GVL_CNC",),
+    variants={
+        "full": Variant("full", POUS, (Task("FineTask", "T#1ms", 0, (("Main", "PRG_CncStand"),)),),
+                        "Part program from the frame table; interpolators of textbook chapter 4."),
+    },
+)
+
+
+def labels() -> dict[str, str]:
+    """Wiring labels -> addresses, read from the GVL (the single source)."""
+    text = (PLC_DIR / "GVL" / "GVL_CNC.st").read_text(encoding="utf-8")
+    return {m.group(1): m.group(2).upper() for m in re.finditer(r"(\w+)\s+AT\s+(%\w+(?:\.\d+)?)", text)}
+
+
+def session(variant: str = "full", program: Optional[list[tuple[str, str]]] = None,
+            retain_path=None, step_mm: float = 0.01, **plant_params) -> Session:
+    srcs = program if program is not None else sources(STAND, variant)
+    s = Session(srcs, STAND.make_plant(step_mm=step_mm, **plant_params), labels(), watch=["Frame"],
+                retain_path=retain_path, tick_s=FINE_CYCLE_S, name=f"cnc {variant}")
+    s.plc.write("StepMm", step_mm)
+    return s
+
+
+def load_frames(s: Session, frames: list[Frame], method: str = "evalfn", diagonal: bool = False) -> None:
+    """Write the frame table into the PLC (GVL_CNC), in steps of the drives."""
+    if len(frames) > MAX_FRAMES:
+        raise ScenarioFailure(f"{len(frames)} frames: the frame table holds {MAX_FRAMES}")
+    if method not in METHODS:
+        raise ScenarioFailure(f"unknown method {method!r} (one of {', '.join(METHODS)})")
+    h = s.plant.step_mm
+    write = s.plc.write
+    for k, f in enumerate(frames, start=1):
+        write(f"FrameKind[{k}]", f.kind)
+        for axis, v in zip("XYZ", f.end):
+            write(f"Frame{axis}[{k}]", round(v / h))
+        if f.is_arc:
+            cx, cy = f.centre
+            write(f"FrameI[{k}]", round(cx / h) - round(f.start[0] / h))
+            write(f"FrameJ[{k}]", round(cy / h) - round(f.start[1] / h))
+        write(f"FrameFeed[{k}]", round(f.feed / 60.0 / h))
+    write("FrameCount", len(frames))
+    write("Method", METHODS[method])
+    write("Diagonal", bool(diagonal))
+    s.log(f"{len(frames)} frames loaded ({method})")
+
+
+@dataclass
+class PartRun:
+    """What the table did: positions (steps) after each fine cycle with the frame they belong to."""
+
+    frames: list[Frame]
+    step_mm: float
+    points: list[tuple[float, int, int, int, int]] = field(default_factory=list)   # t, frame, x, y, z
+    missed: dict[str, int] = field(default_factory=dict)
+    finished: bool = False
+    start: float = 0.0         # s: when SB1 started the program
+
+
+def run_part(s: Session, frames: list[Frame], method: str = "evalfn", diagonal: bool = False,
+             timeout: float = 600.0) -> PartRun:
+    """Load the frames, press SB1 and run until the program ends (or `timeout` s)."""
+    load_frames(s, frames, method, diagonal)
+    run = PartRun(frames, s.plant.step_mm, start=s.now)
+    s.console.press("SB1", hold=0.005)
+    record_until(s, run, "ProgramEnd", timeout)
+    run.finished = bool(s.plc.read("ProgramEnd"))
+    return run
+
+
+def record_until(s: Session, run: PartRun, flag: str, timeout: float) -> None:
+    """Scan fine cycle by fine cycle until the global `flag` is TRUE, recording each move of
+    the table with the frame it belongs to."""
+    axes = [s.plant.axes[a] for a in "XYZ"]
+    frame_at, frame_key = s.plc.resolve("Frame")          # resolved once: read every cycle
+    flag_at, flag_key = s.plc.resolve(flag)
+    last = tuple(a.steps for a in axes)
+    frame = getattr(frame_at, frame_key)
+    step = s.sim.step
+    for _ in range(round(timeout / s.tick) + 1):
+        step(1)                             # the plant took the previous scan's steps first
+        pos = tuple(a.steps for a in axes)
+        if pos != last:
+            run.points.append((s.now, frame, *pos))
+            last = pos
+        if getattr(flag_at, flag_key) and frame == getattr(frame_at, frame_key):
+            break
+        frame = getattr(frame_at, frame_key)
+    step(1)                                 # the last scan's steps
+    pos = tuple(a.steps for a in axes)
+    if pos != last:
+        run.points.append((s.now, frame, *pos))
+    s._copy_trace()
+    run.missed = s.plant.missed()
+
+
+# --------------------------------------------------------------------------- scenarios
+
+SQUARE = """(square 20 mm, evaluation function)
+G21 G90 G17
+G01 X20 Y0 F300
+Y20
+X0
+Y0
+"""
+CIRCLE = """(full circle R10 around (10, 0), then a half circle back by R)
+G21 G90 G17 F300
+G01 X20 Y0
+G03 X20 Y0 I-10 J0
+G02 X0 Y0 R10
+"""
+STAR = """(five-pointed star, lines in every quadrant)
+G21 G90 F400
+G01 X10 Y0
+X-8.09 Y5.878
+X3.09 Y-9.511
+X3.09 Y9.511
+X-8.09 Y-5.878
+X10 Y0
+"""
+
+
+def _part(text: str, method: str):
+    def scenario(s: Session) -> None:
+        run = run_part(s, parse(text, f"<{method}>").frames, method)
+        if not run.finished:
+            raise ScenarioFailure(f"t={s.now:.2f} s: the part program did not end")
+        s.cnc_run = run                   # type: ignore[attr-defined]
+    return scenario
+
+
+def estop(s: Session) -> None:
+    """SB3 in the middle of a frame: the drives stop at once, HL2 lights, KM1 drops."""
+    load_frames(s, parse(SQUARE).frames, "evalfn")
+    s.console.press("SB1", hold=0.005)
+    s.run(1.0)
+    s.console.hold("SB3")
+    s.run(0.01)
+    where = (s.plant.axes["X"].steps, s.plant.axes["Y"].steps)
+    s.run(0.5)
+    if (s.plant.axes["X"].steps, s.plant.axes["Y"].steps) != where:
+        raise ScenarioFailure(f"t={s.now:.2f} s: the table moved after the emergency stop")
+    if not s.value("HL2") or s.value("KM1"):
+        raise ScenarioFailure(f"t={s.now:.2f} s: HL2 not lit or KM1 still closed after the emergency stop")
+    s.console.release("SB3")
+    s.run(0.1)
+
+
+SCENARIOS: dict[str, Callable[[Session], None]] = {
+    "demo": _part(SQUARE, "evalfn"), "square": _part(SQUARE, "evalfn"), "circle": _part(CIRCLE, "evalfn"),
+    "star": _part(STAR, "dda"), "estop": estop,
+}
+PLOT_SIGNALS = ["SB1", "SB3", "HL1", "HL2", "STEP_X", "DIR_X", "STEP_Y", "DIR_Y", "CNT_X", "CNT_Y", "Frame"]
+
+
+def check_never(s: Session) -> None:
+    """No step lost to the drives' rate limit in any scenario."""
+    lost = {a: n for a, n in s.plant.missed().items() if n}
+    if lost:
+        raise ScenarioFailure(f"missed steps: {lost}")
+
+
+def timeline(s: Session) -> list[str]:
+    rows = [f"{'time s':>8}  event"]
+    rows += [f"{a.time:8.3f}  {a.text}" for a in s.actions]
+    axes = s.plant.axes
+    rows.append(f"{s.now:8.3f}  table at X {axes['X'].steps * s.plant.step_mm:.3f} "
+                f"Y {axes['Y'].steps * s.plant.step_mm:.3f} Z {axes['Z'].steps * s.plant.step_mm:.3f} mm")
+    return rows

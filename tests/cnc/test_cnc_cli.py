@@ -1,0 +1,40 @@
+"""`plclab cnc PART.nc`: the per-frame table, the exit code, the output files; bad input is
+one line and nothing runs."""
+from __future__ import annotations
+
+from plclab.cli import main
+
+
+def test_cnc_runs_a_part_and_writes_the_tool_path(tmp_path, capsys):
+    part = tmp_path / "part.nc"
+    part.write_text("G21 G90 F600 M03\nG01 X1 Y0.5\nG02 X2 Y0 R0.6\n", encoding="utf-8")
+    csv, svg, plot = tmp_path / "p.csv", tmp_path / "p.svg", tmp_path / "p.png"
+    rc = main(["cnc", str(part), "--method", "dda", "--csv", str(csv), "--svg", str(svg), "--plot", str(plot)])
+    out = capsys.readouterr().out
+    assert rc == 0, out
+    assert "M words ignored" in out
+    rows = [line for line in out.splitlines() if line.strip().endswith(" ok")]
+    assert len(rows) == 2 and " G01 " in rows[0] and " G02 " in rows[1]
+    assert "ok: every frame within its bound" in out
+    lines = csv.read_text(encoding="utf-8").splitlines()
+    assert lines[0] == "time_s,X,Y,Z" and lines[-1].split(",")[1:3] == ["2.0000", "0.0000"]
+    assert svg.read_text(encoding="utf-8").startswith("<svg") and plot.read_bytes()[:4] == b"\x89PNG"
+
+
+def test_cnc_bad_part_program_is_one_line_and_nothing_runs(tmp_path, capsys):
+    part = tmp_path / "bad.nc"
+    part.write_text("G01 X1 F100\nG01 X2 Y1 W3\n", encoding="utf-8")
+    csv = tmp_path / "p.csv"
+    rc = main(["cnc", str(part), "--csv", str(csv)])
+    err = capsys.readouterr().err
+    assert rc == 1
+    assert err.strip() == f"{part}:2:11: error: unknown word 'W3' (supported: G00 G01 G02 G03 (I/J or R) " \
+                          f"G17 G20 G21 G90 G91 F X Y Z N; S M T O ignored)"
+    assert not csv.exists()
+
+
+def test_cnc_block_beyond_the_travel_is_refused(tmp_path, capsys):
+    part = tmp_path / "far.nc"
+    part.write_text("G01 X200 F100\n", encoding="utf-8")
+    assert main(["cnc", str(part)]) == 1
+    assert "leaves the table's travel" in capsys.readouterr().err
