@@ -57,15 +57,17 @@ def test_circular_error_within_the_accumulated_bound(radius, a0, sweep, ccw, vma
     phis, bounds = run["PPhi"][: n + 1], run["PBound"][: n + 1]
     assert pts[-1] == (xe, ye)
     sign = 1 if ccw else -1
+    dphi = vmax / radius                     # the largest step
     for k in range(1, n):                    # the last point is the programmed end point
         exact = (radius * math.cos(a0 + sign * phis[k]), radius * math.sin(a0 + sign * phis[k]))
         err = math.dist(pts[k], exact)
-        # eq. (17)-(19): the sum of R dphi^3 / 3!; 1 % for the higher-order terms the
-        # textbook's first-member estimate leaves out, and the rounding of LREAL
-        allowed = 1.01 * bounds[k] + 1e-12 * radius * k
+        # eq. (17)-(19): the sum of R dphi^3 / 3!, with what the textbook's first-member
+        # estimate leaves out: the next term of the series (a factor 1 + dphi^2 / 32) and the
+        # approximate rotation's norm sqrt(1 + dphi^4 / 4) carrying earlier errors along;
+        # plus the rounding of LREAL
+        allowed = bounds[k] * (1 + dphi * dphi / 32) * (1 + dphi ** 4 / 8) ** k + 1e-12 * radius * k
         assert err <= allowed, f"step {k}: error {err:.3e} > bound {allowed:.3e}"
     # eq. (22): with the largest step dphi = VMax / R, N R dphi^3 / 6
-    dphi = vmax / radius
     assert bounds[n - 1] <= n * radius * dphi ** 3 / 6 + 1e-15
     # a quantum's chord: R dphi, times sqrt(1 + dphi^2 / 4) for the approximate rotation
     for p, q in zip(pts, pts[1:-1]):
