@@ -49,13 +49,26 @@ def _cmd_sim(args: argparse.Namespace) -> int:
     return 0 if result.fault is None else 1
 
 
+def _tool(text: str) -> tuple[int, float]:
+    """A tool-table entry on the command line: `D1=2.5`."""
+    name, _, value = text.partition("=")
+    try:
+        number, radius = int(name.strip().upper().removeprefix("D")), float(value)
+    except ValueError:
+        raise argparse.ArgumentTypeError(f"not a tool entry: '{text}' (e.g. D1=2.5)") from None
+    if number < 1 or radius < 0:
+        raise argparse.ArgumentTypeError(f"not a tool entry: '{text}' (D1 or more, radius >= 0)")
+    return number, radius
+
+
 def _cmd_cnc(args: argparse.Namespace) -> int:
     from plclab.cnc.gcode import GcodeError
     from plclab.cnc.run import run_cnc
 
     try:
         result = run_cnc(args.part, method=args.method, step_mm=args.step, feed=args.feed, csv=args.csv,
-                         vcd=args.vcd, plot=args.plot, svg=args.svg, diagonal=args.diagonal)
+                         vcd=args.vcd, plot=args.plot, svg=args.svg, diagonal=args.diagonal,
+                         tools=dict(args.tool or []))
     except GcodeError as e:              # already `file:line:col: error: ...`; nothing has run
         print(e, file=sys.stderr)
         return 1
@@ -400,6 +413,8 @@ def build_parser() -> argparse.ArgumentParser:
     c.add_argument("--diagonal", action="store_true", help="evaluation function: the diagonal variant")
     c.add_argument("--step", type=float, default=0.01, metavar="MM", help="the drives' step (default 0.01 mm)")
     c.add_argument("--feed", type=float, metavar="MM_MIN", help="feed of every cutting block (replaces F)")
+    c.add_argument("--tool", type=_tool, action="append", metavar="DN=R",
+                   help="the tool-radius table: D number = radius in mm (repeatable), e.g. --tool D1=2.5")
     for opt in ("csv", "vcd", "plot", "svg"):
         c.add_argument(f"--{opt}", metavar="F")
     c.set_defaults(func=_cmd_cnc)

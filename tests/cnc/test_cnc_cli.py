@@ -29,7 +29,7 @@ def test_cnc_bad_part_program_is_one_line_and_nothing_runs(tmp_path, capsys):
     err = capsys.readouterr().err
     assert rc == 1
     assert err.strip() == f"{part}:2:11: error: unknown word 'W3' (supported: G00 G01 G02 G03 (I/J or R) " \
-                          f"G17 G20 G21 G90 G91 F X Y Z N; S M T O ignored)"
+                          f"G17 G20 G21 G40 G41 G42 D G90 G91 F X Y Z N; S M T O ignored)"
     assert not csv.exists()
 
 
@@ -38,3 +38,13 @@ def test_cnc_block_beyond_the_travel_is_refused(tmp_path, capsys):
     part.write_text("G01 X200 F100\n", encoding="utf-8")
     assert main(["cnc", str(part)]) == 1
     assert "leaves the table's travel" in capsys.readouterr().err
+
+
+def test_cnc_tool_table_from_the_command_line(tmp_path, capsys):
+    part = tmp_path / "wall.nc"
+    part.write_text("G21 G90 F600\nG41 D2 G01 X1 Y0\nX2\nY1\nG40 X3 Y2\n", encoding="utf-8")
+    assert main(["cnc", str(part), "--tool", "D2=0.25"]) == 0
+    out = capsys.readouterr().out
+    assert "equidistant at 0.2500 / 0.2500 mm, tool radius 0.25 mm  ok" in out
+    assert main(["cnc", str(part)]) == 1
+    assert capsys.readouterr().err.strip().startswith(f"{part}:2:5: error: D2 is not in the tool table")

@@ -46,7 +46,7 @@ def test_r_negative_takes_the_long_way_round():
     ("G01 X10 F0\n", "p.nc:1:9:", "feed F must be > 0"),
     ("G01 X10\n", "p.nc:1:5:", "no feed"),
     ("G01 X1 Y0 F100\nG02 X3 Y0 R0.5\n", "p.nc:2:11:", "R0.5 cannot join"),
-    ("G41 D1 G01 X10 F100\n", "p.nc:1:1:", "tool-radius correction is not supported"),
+    ("G41 D1 G01 X10 F100\n", "p.nc:1:5:", "D1 is not in the tool table"),
     ("G01 X10 (open comment F100\n", "p.nc:1:9:", "comment not closed"),
 ])
 def test_bad_input_is_one_line_with_file_line_column(text, where, message):
@@ -57,3 +57,25 @@ def test_bad_input_is_one_line_with_file_line_column(text, where, message):
     assert line.startswith(f"{where} error: ") and message in line, line
     if "unknown word" in message:
         assert "supported:" in line
+
+
+TOOLS = {1: 1.0, 2: 3.0}
+
+
+def test_tool_radius_correction_is_carried_by_the_frames():
+    f = parse("G01 X-3 Y-3 F100\nG41 D1 G01 X0 Y0\nX10\nG40 X12 Y-3\nG42 D2 X20 Y-3\n", "p.nc", TOOLS).frames
+    assert [(x.comp, x.tool_radius) for x in f] == [(0, 0.0), (1, 1.0), (1, 1.0), (0, 0.0), (2, 3.0)]
+
+
+@pytest.mark.parametrize("text, where, message", [
+    ("G01 X10 F100\nG41 D1 X10.5\n", "p.nc:2:8:", "shorter than the tool radius"),
+    ("G01 X10 F100\nG41 D1 G03 X0 Y10 I-10\n", "p.nc:2:12:", "switched on in a straight block"),
+    ("G41 D2 G01 X10 F100\nG03 X12 Y2 I0 J2\n", "p.nc:2:5:", "inner arc of radius 2 mm is not larger"),
+    ("G41 D1 G01 X10 F100\nG03 X10 Y10 I-5 J5\n", "p.nc:2:5:", "not tangent"),
+    ("G41 D1 G01 X10 F100\nX5\n", "p.nc:2:1:", "reverses"),
+    ("G41 G01 X10 F100\n", "p.nc:1:1:", "needs a tool radius"),
+])
+def test_a_radius_correction_that_cannot_be_built_is_refused(text, where, message):
+    with pytest.raises(GcodeError) as e:
+        parse(text, "p.nc", TOOLS)
+    assert str(e.value).startswith(f"{where} error: ") and message in str(e.value), str(e.value)

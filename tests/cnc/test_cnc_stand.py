@@ -4,6 +4,8 @@ virtual time; the tool path is checked against each method's bound, and the cons
 says."""
 from __future__ import annotations
 
+import math
+
 import pytest
 
 from plclab.cnc.gcode import parse
@@ -74,3 +76,36 @@ def test_emergency_stop_scenario():
     s = cnc.session()
     cnc.estop(s)                     # raises if the table moved, HL2 dark or KM1 closed
     assert not s.value("HL2") or s.value("SB3")
+
+
+POCKET = """(pocket wall 3 x 2 with a rounded corner R0.5, tool D1: G41 going CCW = inside)
+G21 G90 F600
+G00 X-1 Y-1
+G41 D1 G01 X0 Y0
+X3
+Y1.5
+G03 X2.5 Y2 I-0.5 J0
+G01 X0
+Y0
+G40 G01 X-1 Y-1
+"""
+
+
+@pytest.mark.parametrize("method, side", [("evalfn", "G41"), ("dda", "G42")])
+def test_tool_radius_correction_runs_on_the_equidistant(method, side):
+    from plclab.cnc.toolpath import check_offsets
+
+    text = POCKET.replace("G41", side)
+    frames = parse(text, "pocket.nc", {1: 0.3}).frames
+    s = cnc.session()
+    run = cnc.run_part(s, frames, method)
+    assert run.finished and run.prep_error == 0
+    offsets = check_offsets(frames, run.executed, 0.01)
+    assert len(offsets) == 5 and all(o.ok for o in offsets), [o.row() for o in offsets]
+    for block in check_blocks(run.executed, run.points, 0.01, method, run.start):
+        assert block.ok, block.row()
+    arc = run.executed[4]
+    assert math.hypot(arc.i, arc.j) == pytest.approx(0.2 if side == "G41" else 0.8, abs=0.011)
+    # the tool centre keeps the tool radius from the wall: inside (G41) or outside (G42)
+    wall = [p for p in run.points if p[1] == 3]          # frame 3: along X at Y 0 programmed
+    assert all(abs(p[3] * 0.01 - (0.3 if side == "G41" else -0.3)) <= 0.011 for p in wall)

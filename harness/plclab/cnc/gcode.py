@@ -1,9 +1,16 @@
 """The G-code front end: a part program (ISO 6983 subset, textbook 4.1.3) -> frames.
 
-Supported: G00 G01 G02 G03 (arcs by I/J or R), G17, G20/G21, G90/G91, F, X/Y/Z, N (block
-numbers), comments in parentheses or after ';', '%' lines; S, M, T and O words are ignored
-with a note. Anything else is one `file:line:col: error: ...` line and nothing runs.
-Tool-radius correction (G40/G41/G42 with D) is recognised and refused: it is not built yet.
+Supported: G00 G01 G02 G03 (arcs by I/J or R), G17, G20/G21, G40/G41/G42 with D (the
+tool-radius table), G90/G91, F, X/Y/Z, N (block numbers), comments in parentheses or after
+';', '%' lines; S, M, T and O words are ignored with a note. Anything else is one
+`file:line:col: error: ...` line and nothing runs.
+
+The frames keep the programmed contour; the tool-radius correction itself is made by the PLC
+when it prepares the frames (FB_CncToolRadius, textbook 4.2.2.1). This front end refuses what
+that preparation cannot build: the correction switched on in an arc, a corrected segment
+shorter than the tool radius, an inner arc not larger than the tool, a corner where the
+contour reverses, an arc whose joint with a corrected neighbour is not tangent (the textbook
+builds arcs' equidistants for conjugate contours only).
 """
 from __future__ import annotations
 
@@ -11,10 +18,12 @@ import math
 import re
 from dataclasses import dataclass, field
 from pathlib import Path
+from typing import Optional
 
 from plclab.errors import PlcLabError
 
-SUPPORTED = "G00 G01 G02 G03 (I/J or R) G17 G20 G21 G90 G91 F X Y Z N; S M T O ignored"
+SUPPORTED = "G00 G01 G02 G03 (I/J or R) G17 G20 G21 G40 G41 G42 D G90 G91 F X Y Z N; S M T O ignored"
+TANGENT_RAD = 1e-3               # arcs' joints with corrected neighbours must be this tangent
 ARC_TOLERANCE_MM = 0.01          # the end of an arc may miss its circle by this much
 RAPID_MM_MIN = 600.0             # G00: the stand's largest feed (one step per fine cycle)
 WORD = re.compile(r"\s*([A-Za-z])\s*([-+]?(?:\d+\.?\d*|\.\d+))")
@@ -23,7 +32,8 @@ WORD = re.compile(r"\s*([A-Za-z])\s*([-+]?(?:\d+\.?\d*|\.\d+))")
 @dataclass(frozen=True)
 class Frame:
     """One block of motion, absolute mm: `kind` 0 G00, 1 G01, 2 G02, 3 G03; (i, j) the arc's
-    centre relative to the start; `feed` mm/min; `line` the source line."""
+    centre relative to the start; `feed` mm/min; `line` the source line; `comp` and
+    `tool_radius` the tool-radius correction in effect (applied by the PLC, FB_CncToolRadius)."""
 
     kind: int
     start: tuple[float, float, float]
@@ -32,6 +42,8 @@ class Frame:
     j: float = 0.0
     feed: float = 0.0
     line: int = 0
+    comp: int = 0              # tool-radius correction: 0 G40, 1 G41, 2 G42
+    tool_radius: float = 0.0   # mm, from the D table
 
     @property
     def is_arc(self) -> bool:
@@ -52,19 +64,22 @@ class GcodeError(PlcLabError):
     """A bad part program: `file:line:col: error: ...`."""
 
 
-def parse_file(path: str | Path) -> Program:
+def parse_file(path: str | Path, tools: Optional[dict[int, float]] = None) -> Program:
     p = Path(path)
     try:
         text = p.read_text(encoding="utf-8")
     except (OSError, UnicodeDecodeError) as e:
         raise PlcLabError(f"{p}: cannot read the part program ({e})") from None
-    return parse(text, str(p))
+    return parse(text, str(p), tools)
 
 
-def parse(text: str, filename: str = "<part>") -> Program:
+def parse(text: str, filename: str = "<part>", tools: Optional[dict[int, float]] = None) -> Program:
+    """The frames of a part program; `tools` is the D table (number -> tool radius, mm)."""
+    tools = dict(tools or {})
     prog = Program()
     pos = [0.0, 0.0, 0.0]
     motion, absolute, scale, feed = 0, True, 1.0, 0.0
+    comp, radius = 0, 0.0
     ignored: set[str] = set()
     for lineno, raw in enumerate(text.splitlines(), start=1):
         line = _strip_comments(raw, filename, lineno)
@@ -113,14 +128,22 @@ def parse(text: str, filename: str = "<part>") -> Program:
             elif g == 17:
                 pass
             elif g in (40, 41, 42):
-                raise GcodeError(f"{filename}:{lineno}:{gcol}: error: G{g}: tool-radius correction is not "
-                                 f"supported by this version (supported: {SUPPORTED})")
+                comp = g - 40
+                comp_col = gcol
             else:
                 raise GcodeError(f"{filename}:{lineno}:{gcol}: error: unknown word 'G{g:02d}' "
                                  f"(supported: {SUPPORTED})")
         if "D" in words:
-            raise GcodeError(f"{filename}:{lineno}:{words['D'][1]}: error: D (tool radius) is not supported "
-                             f"by this version (supported: {SUPPORTED})")
+            d, dcol = words["D"]
+            if d == 0:
+                radius = 0.0
+            elif d != int(d) or int(d) not in tools:
+                known = ", ".join(f"D{k}" for k in sorted(tools)) or "none given (plclab cnc --tool D1=R)"
+                raise GcodeError(f"{filename}:{lineno}:{dcol}: error: D{d:g} is not in the tool table ({known})")
+            else:
+                radius = float(tools[int(d)])
+        if comp and radius <= 0 and any(g in (41, 42) for g, _c in gcodes):
+            raise GcodeError(f"{filename}:{lineno}:{comp_col}: error: G{40 + comp} needs a tool radius: D")
         if "F" in words:
             feed = words["F"][0] * scale
             if feed <= 0:
@@ -139,16 +162,61 @@ def parse(text: str, filename: str = "<part>") -> Program:
         first_col = min(c for _v, c in words.values())
         if motion in (1, 2, 3) and feed <= 0:
             raise GcodeError(f"{filename}:{lineno}:{first_col}: error: no feed: program F > 0 before G0{motion}")
+        r = radius if comp else 0.0
         if motion in (0, 1):
-            prog.frames.append(Frame(motion, start, tuple(end), feed=RAPID_MM_MIN if motion == 0 else feed,
-                                     line=lineno))
+            frame = Frame(motion, start, tuple(end), feed=RAPID_MM_MIN if motion == 0 else feed, line=lineno,
+                          comp=comp, tool_radius=r)
         else:
             i, j = _centre(words, start, end, motion, scale, filename, lineno, first_col)
-            prog.frames.append(Frame(motion, start, tuple(end), i, j, feed, lineno))
+            frame = Frame(motion, start, tuple(end), i, j, feed, lineno, comp, r)
+        _check_correction(prog.frames[-1] if prog.frames else None, frame, filename,
+                          min(c for letter, (_v, c) in words.items() if letter in "XYZ"))
+        prog.frames.append(frame)
         pos = end
     for letter in sorted(ignored):
         prog.notes.append(f"{filename}: note: {letter} words ignored (the stand has no spindle, coolant or tool changer)")
     return prog
+
+
+def tangent(f: Frame, at_end: bool) -> tuple[float, float]:
+    """The direction of motion of frame `f` at its start or end (XY)."""
+    if not f.is_arc:
+        return f.end[0] - f.start[0], f.end[1] - f.start[1]
+    cx, cy = f.centre
+    px, py = (f.end if at_end else f.start)[:2]
+    return (-(py - cy), px - cx) if f.kind == 3 else (py - cy, -(px - cx))
+
+
+def _check_correction(prev: Optional[Frame], f: Frame, filename: str, col: int) -> None:
+    """Refuse what the PLC's tool-radius preparation cannot build (see the module doc)."""
+    where = f"{filename}:{f.line}:{col}: error:"
+    if not f.comp:
+        return
+    if f.is_arc and (prev is None or prev.comp != f.comp):
+        raise GcodeError(f"{where} G{40 + f.comp} must be switched on in a straight block (G00/G01), not in an arc")
+    if not f.is_arc:
+        length = math.dist(f.start[:2], f.end[:2])
+        if length < f.tool_radius:
+            raise GcodeError(f"{where} the correction cannot be built: a segment of {length:.3f} mm is shorter "
+                             f"than the tool radius {f.tool_radius:g} mm")
+    else:
+        r = math.hypot(f.i, f.j)
+        inside = (f.comp == 1) == (f.kind == 3)
+        if inside and r <= f.tool_radius:
+            raise GcodeError(f"{where} the correction cannot be built: an inner arc of radius {r:g} mm "
+                             f"is not larger than the tool radius {f.tool_radius:g} mm")
+    if prev is not None and prev.comp == f.comp:
+        d1, d2 = tangent(prev, True), tangent(f, False)
+        n1, n2 = math.hypot(*d1), math.hypot(*d2)
+        if n1 == 0 or n2 == 0:
+            return
+        cross = (d1[0] * d2[1] - d1[1] * d2[0]) / (n1 * n2)
+        dot = (d1[0] * d2[0] + d1[1] * d2[1]) / (n1 * n2)
+        if dot < 0 and abs(cross) < TANGENT_RAD:
+            raise GcodeError(f"{where} the correction cannot be built: the contour reverses at this block")
+        if (prev.is_arc or f.is_arc) and abs(math.atan2(cross, dot)) > TANGENT_RAD:
+            raise GcodeError(f"{where} the correction cannot be built: the joint with an arc is not tangent "
+                             f"(corrected arcs need conjugate contours, textbook 4.2.2.1)")
 
 
 def _strip_comments(line: str, filename: str, lineno: int) -> str:

@@ -9,7 +9,7 @@ from pathlib import Path
 from typing import Optional
 
 from plclab.cnc.gcode import Frame, Program, parse_file
-from plclab.cnc.toolpath import HEADER, BlockResult, check_blocks, path_mm
+from plclab.cnc.toolpath import HEADER, BlockResult, OffsetResult, check_blocks, check_offsets, path_mm
 from plclab.errors import PlcLabError
 from plclab.fileio import check_output, open_atomic, write_text
 
@@ -18,6 +18,7 @@ from plclab.fileio import check_output, open_atomic, write_text
 class CncResult:
     program: Program
     blocks: list[BlockResult]
+    offsets: list[OffsetResult]
     missed: dict[str, int]
     finished: bool
     lines: list[str]
@@ -25,12 +26,14 @@ class CncResult:
 
     @property
     def ok(self) -> bool:
-        return self.finished and all(b.ok for b in self.blocks) and not any(self.missed.values())
+        return (self.finished and all(b.ok for b in self.blocks) and all(o.ok for o in self.offsets)
+                and not any(self.missed.values()))
 
 
 def run_cnc(part: str, method: str = "evalfn", step_mm: float = 0.01, feed: Optional[float] = None,
             csv: Optional[str] = None, vcd: Optional[str] = None, plot: Optional[str] = None,
-            svg: Optional[str] = None, diagonal: bool = False) -> CncResult:
+            svg: Optional[str] = None, diagonal: bool = False,
+            tools: Optional[dict[int, float]] = None) -> CncResult:
     from plclab.stands import cnc
     from plclab.trace import write_vcd
 
@@ -43,7 +46,7 @@ def run_cnc(part: str, method: str = "evalfn", step_mm: float = 0.01, feed: Opti
     for target in (csv, vcd, plot, svg):
         if target:
             check_output(target)         # a bad output is refused before the run
-    program = parse_file(part)
+    program = parse_file(part, tools)
     frames = program.frames
     if feed is not None:
         frames = [f if f.kind == 0 else replace(f, feed=feed) for f in frames]
@@ -55,9 +58,15 @@ def run_cnc(part: str, method: str = "evalfn", step_mm: float = 0.01, feed: Opti
                  for f in frames)
     slowest = min(min(f.feed, 60_000 * step_mm) for f in frames) / 60.0
     run = cnc.run_part(s, frames, method, diagonal, timeout=10.0 + 3.0 * length / slowest)
-    blocks = check_blocks(frames, run.points, step_mm, method, start_time=run.start)
+    blocks = check_blocks(run.executed, run.points, step_mm, method, start_time=run.start)
+    offsets = check_offsets(frames, run.executed, step_mm)
     lines = list(program.notes) + [f"{part}: {len(frames)} frames, method {method}, step {step_mm:g} mm", HEADER]
     lines += [b.row() for b in blocks]
+    if offsets:
+        lines.append("tool-radius correction (frames on the equidistant):")
+        lines += [o.row() for o in offsets]
+    if run.prep_error:
+        lines.append(f"the PLC could not build the tool-radius correction at frame {run.prep_error}")
     worst = max(blocks, key=lambda b: b.error_mm - b.bound_mm)
     lines.append(f"largest contour error {max(b.error_mm for b in blocks):.4f} mm "
                  f"(frame {worst.index}: bound {worst.bound_mm:.4f} mm); "
@@ -73,10 +82,10 @@ def run_cnc(part: str, method: str = "evalfn", step_mm: float = 0.01, feed: Opti
         write_vcd(s.trace, vcd)
         files.append(Path(vcd))
     if plot:
-        files.append(_plot(plot, frames, points, blocks, step_mm, part, method))
+        files.append(_plot(plot, frames, run.executed, points, blocks, step_mm, part, method))
     if svg:
         files.append(_svg(svg, frames, points))
-    result = CncResult(program, blocks, run.missed, run.finished, lines, files)
+    result = CncResult(program, blocks, offsets, run.missed, run.finished, lines, files)
     lines.append("ok: every frame within its bound" if result.ok else "FAILED: see the rows above")
     return result
 
@@ -121,7 +130,7 @@ def contour(frames: list[Frame], per_mm: int = 20) -> list[tuple[float, float]]:
     return pts
 
 
-def _plot(path: str, frames, points, blocks, h, part, method) -> Path:
+def _plot(path: str, frames, executed, points, blocks, h, part, method) -> Path:
     from matplotlib.backends.backend_agg import FigureCanvasAgg
     from matplotlib.figure import Figure
 
@@ -130,6 +139,9 @@ def _plot(path: str, frames, points, blocks, h, part, method) -> Path:
     ax, ax_err, ax_feed = fig.subplots(3, 1, gridspec_kw={"height_ratios": [3, 1, 1]})
     cx, cy = zip(*contour(frames))
     ax.plot(cx, cy, "k--", lw=0.8, label="programmed contour")
+    if any(f.comp for f in frames):
+        ex, ey = zip(*contour(executed))
+        ax.plot(ex, ey, ":", color="tab:orange", lw=1.0, label="equidistant (corrected frames)")
     if points:
         ax.plot([p[1] for p in points], [p[2] for p in points], "b-", lw=0.8, label="tool path")
     ax.set_aspect("equal")

@@ -119,5 +119,50 @@ def _grid_error(f: Frame, start, end, h: float) -> float:
     return max(math.dist(end, [v / h for v in f.end]), 0.0) * h
 
 
+@dataclass(frozen=True)
+class OffsetResult:
+    """A frame on the equidistant: how far its executed ends are from the programmed contour."""
+
+    index: int
+    line: int
+    wanted_mm: float           # the tool radius
+    distance_mm: tuple[float, float]   # of the executed start and end from the programmed line / circle
+    tolerance_mm: float        # the ends are rounded to the steps' grid
+
+    @property
+    def ok(self) -> bool:
+        return all(abs(d - self.wanted_mm) <= self.tolerance_mm for d in self.distance_mm)
+
+    def row(self) -> str:
+        verdict = "ok" if self.ok else "NOT AT THE TOOL RADIUS"
+        return (f"{self.index:>5} {self.line:>5}  equidistant at {self.distance_mm[0]:.4f} / "
+                f"{self.distance_mm[1]:.4f} mm, tool radius {self.wanted_mm:g} mm  {verdict}")
+
+
+def check_offsets(programmed: Sequence[Frame], executed: Sequence[Frame], h: float) -> list[OffsetResult]:
+    """Textbook 4.2.2.1: every frame that runs fully on the equidistant (corrected, after a
+    frame corrected to the same side) lies at the tool radius from its programmed line or
+    circle (an arc's radius becomes R +/- the tool radius); the ends are on the steps' grid."""
+    results = []
+    for k in range(1, len(programmed)):
+        f, prev = programmed[k], programmed[k - 1]
+        if not f.comp or prev.comp != f.comp:
+            continue
+        e = executed[k]
+        if f.is_arc:
+            cx, cy = f.centre
+            r = math.hypot(f.i, f.j)
+            dist = tuple(abs(math.hypot(p[0] - cx, p[1] - cy) - r) for p in (e.start, e.end))
+        else:
+            dist = tuple(_line_distance(f.start[:2], f.end[:2], p[:2]) for p in (e.start, e.end))
+        results.append(OffsetResult(k + 1, f.line, f.tool_radius, dist, h / math.sqrt(2) + 1e-9))
+    return results
+
+
+def _line_distance(a, b, q) -> float:
+    dx, dy = b[0] - a[0], b[1] - a[1]
+    return abs(dx * (q[1] - a[1]) - dy * (q[0] - a[0])) / math.hypot(dx, dy)
+
+
 def path_mm(points, h: float) -> list[tuple[float, float, float, float]]:
     return [(t, x * h, y * h, z * h) for t, _k, x, y, z in points]

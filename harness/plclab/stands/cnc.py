@@ -8,7 +8,7 @@ SB1 and records the table's path, frame by frame; `plclab cnc` and the scenarios
 from __future__ import annotations
 
 import re
-from dataclasses import dataclass, field
+from dataclasses import dataclass, field, replace
 from typing import Callable, Optional
 
 from plclab.cnc.gcode import Frame, parse
@@ -16,7 +16,8 @@ from plclab.scenario import ScenarioFailure, Session
 from plclab.stands import PLC_DIR, Stand, Task, Variant, sources
 
 POUS = ("FC_CncArcQuadrant", "FC_CncAngle", "FB_CncEvalLinear", "FB_CncEvalCircular", "FB_CncDdaPulses",
-        "FB_CncDdaLinear", "FB_CncIntegLinear", "FB_CncIntegCircular", "PRG_CncStand")
+        "FB_CncDdaLinear", "FB_CncIntegLinear", "FB_CncIntegCircular", "FB_CncToolCorner", "FB_CncToolRadius",
+        "PRG_CncStand")
 FINE_CYCLE_S = 0.001
 MAX_FRAMES = 200
 METHODS = {"evalfn": 0, "dda": 1, "integration": 2}
@@ -64,6 +65,8 @@ def load_frames(s: Session, frames: list[Frame], method: str = "evalfn", diagona
             write(f"FrameI[{k}]", round(cx / h) - round(f.start[0] / h))
             write(f"FrameJ[{k}]", round(cy / h) - round(f.start[1] / h))
         write(f"FrameFeed[{k}]", round(f.feed / 60.0 / h))
+        write(f"FrameComp[{k}]", f.comp)
+        write(f"FrameRadius[{k}]", round(f.tool_radius / h))
     write("FrameCount", len(frames))
     write("Method", METHODS[method])
     write("Diagonal", bool(diagonal))
@@ -80,6 +83,8 @@ class PartRun:
     missed: dict[str, int] = field(default_factory=dict)
     finished: bool = False
     start: float = 0.0         # s: when SB1 started the program
+    executed: list[Frame] = field(default_factory=list)   # the frames as the PLC ran them (corrected)
+    prep_error: int = 0        # frame whose tool-radius correction the PLC could not build
 
 
 def run_part(s: Session, frames: list[Frame], method: str = "evalfn", diagonal: bool = False,
@@ -90,7 +95,22 @@ def run_part(s: Session, frames: list[Frame], method: str = "evalfn", diagonal: 
     s.console.press("SB1", hold=0.005)
     record_until(s, run, "ProgramEnd", timeout)
     run.finished = bool(s.plc.read("ProgramEnd"))
+    run.executed = executed_frames(s, frames)
+    run.prep_error = s.plc.read("PrepError")
     return run
+
+
+def executed_frames(s: Session, frames: list[Frame]) -> list[Frame]:
+    """The frames the PLC ran, read back from its executed table (ExecX/ExecY/ExecI/ExecJ:
+    after FB_CncToolRadius), in mm on the steps' grid."""
+    h = s.plant.step_mm
+    out, start = [], (0.0, 0.0, 0.0)
+    for k, f in enumerate(frames, start=1):
+        end = (s.plc.read(f"ExecX[{k}]") * h, s.plc.read(f"ExecY[{k}]") * h, s.plc.read(f"FrameZ[{k}]") * h)
+        out.append(replace(f, start=start, end=end, i=s.plc.read(f"ExecI[{k}]") * h if f.is_arc else 0.0,
+                           j=s.plc.read(f"ExecJ[{k}]") * h if f.is_arc else 0.0))
+        start = end
+    return out
 
 
 def record_until(s: Session, run: PartRun, flag: str, timeout: float) -> None:
@@ -143,11 +163,23 @@ X3.09 Y9.511
 X-8.09 Y-5.878
 X10 Y0
 """
+POCKET = """(pocket wall 10 x 6 with a rounded corner R2, cutter D1 = 1 mm: G41 going CCW is inside)
+G21 G90 G17 F600
+G00 X-3 Y-3
+G41 D1 G01 X0 Y0
+X10
+Y4
+G03 X8 Y6 I-2 J0
+G01 X0
+Y0
+G40 G01 X-3 Y-3
+"""
+POCKET_TOOLS = {1: 1.0}
 
 
-def _part(text: str, method: str):
+def _part(text: str, method: str, tools: Optional[dict[int, float]] = None):
     def scenario(s: Session) -> None:
-        run = run_part(s, parse(text, f"<{method}>").frames, method)
+        run = run_part(s, parse(text, f"<{method}>", tools).frames, method)
         if not run.finished:
             raise ScenarioFailure(f"t={s.now:.2f} s: the part program did not end")
         s.cnc_run = run                   # type: ignore[attr-defined]
@@ -173,7 +205,7 @@ def estop(s: Session) -> None:
 
 SCENARIOS: dict[str, Callable[[Session], None]] = {
     "demo": _part(SQUARE, "evalfn"), "square": _part(SQUARE, "evalfn"), "circle": _part(CIRCLE, "evalfn"),
-    "star": _part(STAR, "dda"), "estop": estop,
+    "star": _part(STAR, "dda"), "pocket": _part(POCKET, "integration", POCKET_TOOLS), "estop": estop,
 }
 PLOT_SIGNALS = ["SB1", "SB3", "HL1", "HL2", "STEP_X", "DIR_X", "STEP_Y", "DIR_Y", "CNT_X", "CNT_Y", "Frame"]
 
