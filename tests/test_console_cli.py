@@ -66,7 +66,7 @@ def test_docs_console_tables_are_the_plants_face_tables():
     from plclab.plants import STANDS, make_plant
 
     text = (Path(__file__).resolve().parents[1] / "docs" / "openplc.md").read_text(encoding="utf-8")
-    sections = dict(zip(("mp9c", "tur10", "thermo"), re.split(r"^### (?:MP-9C|TUR-10|Thermo) console face$",
+    sections = dict(zip(("mp9c", "tur10", "thermo", "cnc"), re.split(r"^### (?:MP-9C|TUR-10|Thermo|CNC) console face$",
                                                               text, flags=re.M)[1:]))
     assert set(sections) == set(STANDS)
     for stand, section in sections.items():

@@ -313,7 +313,7 @@ def build_parser() -> argparse.ArgumentParser:
     c.set_defaults(func=_cmd_sim)
 
     stands = ("mp9c", "tur10", "thermo")
-    every_stand = stands + ("cnc",)          # build and run serve every stand; cnc has no Modbus/grader face yet
+    every_stand = stands + ("cnc",)          # cnc has no serve config, Modbus register face or grader yet
 
     c = sub.add_parser("build", help="write the OpenPLC bundle (.st) and a PLCopen TC6 XML project")
     c.add_argument("stand", choices=every_stand)
@@ -387,20 +387,20 @@ def build_parser() -> argparse.ArgumentParser:
     c.set_defaults(func=_cmd_hmi)
 
     c = sub.add_parser("plant", help="only the plant model, as an OpenPLC PSM I/O server")
-    c.add_argument("stand", choices=stands)
+    c.add_argument("stand", choices=every_stand)
     c.add_argument("--psm", nargs="?", const="127.0.0.1:2605", default="127.0.0.1:2605", metavar="HOST:PORT")
     c.add_argument("--console", default="127.0.0.1:2606", metavar="HOST:PORT",
                    help="the console face (default 127.0.0.1:2606; none = no console face)")
     c.set_defaults(func=_cmd_plant)
 
     c = sub.add_parser("psm-script", help="print an OpenPLC PSM script (core/psm/main.py) running the plant")
-    c.add_argument("stand", choices=stands)
+    c.add_argument("stand", choices=every_stand)
     c.add_argument("--console", default="127.0.0.1:2606", metavar="HOST:PORT",
                    help="where the script serves the console face (default 127.0.0.1:2606)")
     c.set_defaults(func=_cmd_psm_script)
 
     c = sub.add_parser("console", help="operate a stand's console face (switches, SB1) and show it")
-    c.add_argument("stand", choices=stands)
+    c.add_argument("stand", choices=every_stand)
     c.add_argument("where", nargs="?", metavar="HOST:PORT", help="the console face (default 127.0.0.1:2606)")
     c.add_argument("--set", nargs="+", metavar="NAME=V", help="set switches, e.g. SA5=1 SA6=0")
     c.add_argument("--press", nargs="+", metavar="NAME[=SECONDS]",

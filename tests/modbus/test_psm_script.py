@@ -124,6 +124,7 @@ def test_a_failing_plant_in_the_script_freezes_inputs_and_keeps_answering_openpl
 @pytest.mark.parametrize("stand, switch, location, readout", [
     ("tur10", "SB1", 11, 16000),            # %IX1.3; link 1 at 16000 codes
     ("thermo", "DISTURBANCE", 0, 220),      # %IX0.0; 22.0 C
+    ("cnc", "SB1", 0, 0),                   # %IX0.0; the table at X = 0 steps
 ])
 def test_tur10_and_thermo_scripts_run_alone(tmp_path, stand, switch, location, readout):
     face = make_plant(stand).FACE
@@ -151,6 +152,6 @@ def test_psm_script_cli_prints_the_script_for_openplc_s_fixed_port():
     compile(r.stdout, "main.py", "exec")
     assert "PSM = ('127.0.0.1', 2605)" in r.stdout and "CONSOLE = ('127.0.0.1', 2606)" in r.stdout
     assert str(REPO) not in r.stdout
-    assert set(STANDS) == {"mp9c", "tur10", "thermo"}
+    assert set(STANDS) == {"mp9c", "tur10", "thermo", "cnc"}
     with pytest.raises(PlcLabError, match="unknown stand 'kuka'"):
         psm_script("kuka")

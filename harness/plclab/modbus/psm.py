@@ -52,7 +52,7 @@ PSM_BLOCK = 25            # OpenPLC moves words in two blocks of 25
 STOP_REGISTER = 50
 STOP_VALUE = 127          # OpenPLC's KILL_SIGNAL
 ERROR_LIMIT = 10          # psm.cpp's ERROR_LIMIT
-STANDS = ("mp9c", "tur10", "thermo")
+STANDS = ("mp9c", "tur10", "thermo", "cnc")
 
 
 class PsmError(PlcLabError):

@@ -20,7 +20,7 @@ from __future__ import annotations
 from dataclasses import dataclass
 from typing import Any
 
-from plclab.plants.base import PlantError, PlantModel, unsigned16
+from plclab.plants.base import ConsoleFace, PlantError, PlantModel, unsigned16
 
 AXES = ("X", "Y", "Z")
 STEP = {"X": "QX0.0", "Y": "QX0.2", "Z": "QX0.4"}
@@ -42,6 +42,11 @@ LIMIT_LABELS = {("X", -1): "SQ1", ("X", 1): "SQ2", ("Y", -1): "SQ3", ("Y", 1): "
                 ("Z", -1): "SQ5", ("Z", 1): "SQ6"}
 OVERRIDE = "IW0"          # RP1 feed override potentiometer, percent 0..150
 COUNTER = {"X": "IW1", "Y": "IW2", "Z": "IW3"}
+# The console face (docs/openplc.md): coils SB1, SB2, SA1, SB3 (1 = released); lamps HL1, HL2;
+# the table's positions and the missed steps.
+FACE = ConsoleFace(switches=tuple(CONSOLE), lamps=tuple(LAMPS.items()),
+                   readouts=tuple((f"{a}", "table position, steps (16-bit, signed)") for a in AXES)
+                   + (("missed", "steps missed by all drives (16-bit)"),))
 
 
 @dataclass
@@ -61,6 +66,7 @@ class CncTable(PlantModel):
 
     outputs = [STEP[a] for a in AXES] + [DIR[a] for a in AXES] + [ENABLE] + list(LAMPS.values())
     inputs = list(CONSOLE.values()) + list(LIMITS.values()) + [OVERRIDE] + list(COUNTER.values())
+    FACE = FACE
     FAULTS = {
         "slow_drive": "axis=X|Y|Z rate=steps_per_s: that drive's maximum step rate drops (missed steps)",
     }
@@ -139,6 +145,10 @@ class CncTable(PlantModel):
         super().inject(fault, **params)
 
     # --- what the harness reads -------------------------------------------------------------
+
+    def readouts(self) -> list[int]:
+        """The console face's readouts: the positions (steps) and the missed steps."""
+        return [unsigned16(self.axes[a].steps) for a in AXES] + [unsigned16(sum(self.missed().values()))]
 
     def position_mm(self, axis: str) -> float:
         return self.axes[axis].steps * self.step_mm
