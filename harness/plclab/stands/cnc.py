@@ -7,13 +7,13 @@ SB1 and records the table's path, frame by frame; `plclab cnc` and the scenarios
 """
 from __future__ import annotations
 
-import re
 from dataclasses import dataclass, field, replace
 from typing import Callable, Optional
 
 from plclab.cnc.gcode import Frame, parse
 from plclab.scenario import ScenarioFailure, Session
-from plclab.stands import PLC_DIR, Stand, Task, Variant, sources
+from plclab.stands import Stand, Task, Variant
+from plclab.stands.base import Fault, FaultParam, StandSpec
 
 POUS = ("FC_CncArcQuadrant", "FC_CncAngle", "FB_CncEvalLinear", "FB_CncEvalCircular", "FB_CncDdaPulses",
         "FB_CncDdaLinear", "FB_CncIntegLinear", "FB_CncIntegCircular", "FB_CncToolCorner", "FB_CncToolRadius",
@@ -33,19 +33,15 @@ STAND = Stand(
 )
 
 
-def labels() -> dict[str, str]:
-    """Wiring labels -> addresses, read from the GVL (the single source)."""
-    text = (PLC_DIR / "GVL" / "GVL_CNC.st").read_text(encoding="utf-8")
-    return {m.group(1): m.group(2).upper() for m in re.finditer(r"(\w+)\s+AT\s+(%\w+(?:\.\d+)?)", text)}
-
-
 def session(variant: str = "full", program: Optional[list[tuple[str, str]]] = None,
             retain_path=None, step_mm: float = 0.01, **plant_params) -> Session:
-    srcs = program if program is not None else sources(STAND, variant)
-    s = Session(srcs, STAND.make_plant(step_mm=step_mm, **plant_params), labels(), watch=["Frame"],
-                retain_path=retain_path, tick_s=FINE_CYCLE_S, name=f"cnc {variant}")
-    s.plc.write("StepMm", step_mm)
-    return s
+    """A fresh stand (SPEC.session): the table at the machine zero, drives of `step_mm`."""
+    return SPEC.session(variant, program, retain_path, step_mm=step_mm, **plant_params)
+
+
+def _setup(s: Session) -> None:
+    """The PLC's step size is the drives' (GVL_CNC.StepMm)."""
+    s.plc.write("StepMm", s.plant.step_mm)
 
 
 def load_frames(s: Session, frames: list[Frame], method: str = "evalfn", diagonal: bool = False) -> None:
@@ -207,7 +203,7 @@ SCENARIOS: dict[str, Callable[[Session], None]] = {
     "demo": _part(SQUARE, "evalfn"), "square": _part(SQUARE, "evalfn"), "circle": _part(CIRCLE, "evalfn"),
     "star": _part(STAR, "dda"), "pocket": _part(POCKET, "integration", POCKET_TOOLS), "estop": estop,
 }
-PLOT_SIGNALS = ["SB1", "SB3", "HL1", "HL2", "STEP_X", "DIR_X", "STEP_Y", "DIR_Y", "CNT_X", "CNT_Y", "Frame"]
+PLOT_SIGNALS = ("SB1", "SB3", "HL1", "HL2", "STEP_X", "DIR_X", "STEP_Y", "DIR_Y", "CNT_X", "CNT_Y", "Frame")
 
 
 def check_never(s: Session) -> None:
@@ -224,3 +220,17 @@ def timeline(s: Session) -> list[str]:
     rows.append(f"{s.now:8.3f}  table at X {axes['X'].steps * s.plant.step_mm:.3f} "
                 f"Y {axes['Y'].steps * s.plant.step_mm:.3f} Z {axes['Z'].steps * s.plant.step_mm:.3f} mm")
     return rows
+
+
+SPEC = StandSpec(
+    stand=STAND,
+    console=("SB1", "SB2", "SA1", "SB3", "RP1"),
+    lamps=("HL1", "HL2"),
+    sensors=("SQ1", "SQ2", "SQ3", "SQ4", "SQ5", "SQ6", "CNT_X", "CNT_Y", "CNT_Z"),
+    actuators=("STEP_X", "DIR_X", "STEP_Y", "DIR_Y", "STEP_Z", "DIR_Z", "KM1"),
+    faults=(Fault("slow_drive", "that drive's maximum step rate drops: steps beyond it are missed",
+                  (FaultParam("axis", "X|Y|Z"), FaultParam("rate", "steps per second"))),),
+    observables={"Frame": "Frame", "ProgramEnd": "ProgramEnd"},
+    scenarios=SCENARIOS, timeline=timeline, check_never=check_never, plot_signals=PLOT_SIGNALS,
+    setup=_setup,
+)
