@@ -15,7 +15,7 @@ from plclab.handout import HANDOUTS_DIR, handout_files, write_handout
 from plclab.stands import PLC_DIR, SOLUTIONS_DIR, STANDS, bundle, get_stand
 
 DOCS = Path(__file__).resolve().parents[1] / "docs"
-FILES = {"mp9c": "mp9c.st", "tur10": "tur10.st", "thermo": "thermo.st"}
+FILES = {"mp9c": "mp9c.st", "tur10": "tur10.st", "thermo": "thermo.st", "cnc": "cnc.st"}
 
 
 def _solution_only_names() -> set[str]:

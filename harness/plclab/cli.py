@@ -323,7 +323,7 @@ def build_parser() -> argparse.ArgumentParser:
     c.set_defaults(func=_cmd_build)
 
     c = sub.add_parser("handout", help="the student's starting program, I/O map and task sheet (no solution)")
-    c.add_argument("stand", choices=stands)
+    c.add_argument("stand", choices=every_stand)
     c.add_argument("-o", "--output", metavar="DIR", required=True, help="directory to write into")
     c.set_defaults(func=_cmd_handout)
 
