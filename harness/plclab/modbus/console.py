@@ -76,8 +76,8 @@ def start_console_face(host: Any, address: tuple[str, int],
     """Serve the console face of `host` at (HOST, PORT), or warn once and return None: the
     PLC's I/O matters more than the console, so a busy port does not stop the plant."""
     try:
-        return ModbusTcpServer(ConsoleMap(host), address[0], address[1], idle_timeout=None,
-                               max_clients=16, name="console").start()
+        return ModbusTcpServer(ConsoleMap(host), address[0], address[1], max_clients=16,
+                               name="console").start()     # idle clients closed after 60 s
     except ServerError as exc:
         warn(f"warning: no console face: {exc}")
         return None
