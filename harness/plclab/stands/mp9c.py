@@ -8,6 +8,7 @@ from __future__ import annotations
 
 from typing import Callable, Optional
 
+from plclab.plants.mp9c import FACE
 from plclab.scenario import ScenarioFailure, Session
 from plclab.stands import Stand, Task, Variant, gvl_labels
 from plclab.stands.base import Fault, FaultParam, StandSpec
@@ -44,7 +45,7 @@ STAND = Stand(
 
 VALVES = [f"L{i}" for i in range(1, 8)]
 SENSORS = [f"SQ{i}" for i in range(1, 8)]
-CONSOLE = ("SA1", "SA2", "SA3", "SA4", "SA5", "SA6", "I07", "SB1")
+CONSOLE = FACE.switches          # the console face's table (docs/openplc.md) is the one order
 FRAME_PTR = "FramePtr"
 FRAME_COUNT = "FrameCount"
 RUNNING = "Running"
@@ -318,7 +319,7 @@ SCENARIOS: dict[str, Callable[[Session], None]] = {
 PLOT_SIGNALS = ["SB1", "SA1", "I07"] + VALVES + SENSORS + ["HL1", FRAME_PTR]
 
 SPEC = StandSpec(
-    stand=STAND, console=CONSOLE, lamps=("HL1",), sensors=tuple(SENSORS), actuators=tuple(VALVES),
+    stand=STAND, console=CONSOLE, lamps=tuple(label for label, _ in FACE.lamps), sensors=tuple(SENSORS), actuators=tuple(VALVES),
     faults=FAULTS, observables=OBSERVABLES, scenarios=SCENARIOS, timeline=timeline,
     check_never=check_never, plot_signals=tuple(PLOT_SIGNALS))
 session = SPEC.session

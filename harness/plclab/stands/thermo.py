@@ -18,6 +18,7 @@ from plclab.modbus.maps import TwidoMap
 from plclab.modbus.profiles import THERMO
 from plclab.modbus.protocol import ModbusException, Table
 from plclab.plants.base import signed16
+from plclab.plants.thermo import FACE
 from plclab.scenario import ScenarioFailure, Session
 from plclab.stands import Stand, Task, Variant, gvl_labels
 from plclab.stands.base import Fault, StandSpec
@@ -487,7 +488,7 @@ def timeline(s: Session) -> list[str]:
 
 
 SPEC = StandSpec(
-    stand=STAND, console=("DISTURBANCE",), lamps=(), sensors=("TEMP_ADC", "FAN_COUNT"), actuators=("HEATER", "FAN"),
+    stand=STAND, console=FACE.switches, lamps=tuple(label for label, _ in FACE.lamps), sensors=("TEMP_ADC", "FAN_COUNT"), actuators=("HEATER", "FAN"),
     faults=FAULTS, observables=OBSERVABLES, scenarios=SCENARIOS, timeline=timeline, check_never=check_never,
     plot_signals=tuple(PLOT_SIGNALS), setup=attach_scada)
 session = SPEC.session

@@ -9,6 +9,7 @@ from __future__ import annotations
 from typing import Callable, Optional
 
 from plclab.plants.base import signed16
+from plclab.plants.tur10 import FACE
 from plclab.scenario import ScenarioFailure, Session
 from plclab.stands import Stand, Task, Variant, gvl_labels
 from plclab.stands.base import Fault, FaultParam, StandSpec
@@ -47,7 +48,7 @@ STAND = Stand(
 
 AXES = (1, 2, 3, 4, 5)
 DRIVES = [f"DRIVE{k}" for k in AXES]
-CONSOLE = tuple(f"SA{k}_{d}" for k in AXES for d in ("FWD", "BWD")) + ("SA6", "SA7", "I15", "SB1")
+CONSOLE = FACE.switches          # the console face's table (docs/openplc.md) is the one order
 SENSOR_BUS = tuple(f"BUS{n}" for n in range(1, 16))
 READ_ENABLES = tuple(f"RE{k}" for k in AXES)
 FRAME_PTR = "FramePtr"
@@ -280,7 +281,7 @@ def timeline(s: Session) -> list[str]:
 
 
 SPEC = StandSpec(
-    stand=STAND, console=CONSOLE, lamps=("HL1",), sensors=SENSOR_BUS, actuators=tuple(DRIVES) + READ_ENABLES,
+    stand=STAND, console=CONSOLE, lamps=tuple(label for label, _ in FACE.lamps), sensors=SENSOR_BUS, actuators=tuple(DRIVES) + READ_ENABLES,
     faults=FAULTS, observables=OBSERVABLES, scenarios=SCENARIOS, timeline=timeline,
     check_never=check_never, plot_signals=tuple(PLOT_SIGNALS))
 session = SPEC.session
