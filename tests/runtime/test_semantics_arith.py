@@ -82,6 +82,19 @@ def test_mod_and_division_with_negative_operands_truncate_like_c():
     assert sim.plc.state == "RUN"
 
 
+def test_mod_of_the_most_negative_value_by_minus_one_faults_like_the_library_mod():
+    # C's `INT_MIN % -1` traps (SIGFPE on x86: OpenPLC's runtime dies), as MOD(a, b) does
+    for ty, lo in (("DINT", -2**31), ("LINT", -2**63)):
+        for body in ("r := a MOD b;", "r := MOD(a, b);"):
+            sim = once(f"VAR a : {ty} := {lo}; b : {ty} := -1; r : {ty} := 5; END_VAR", body)
+            assert sim.plc.state == "FAULT", (ty, body)
+            assert sim.plc.fault.kind == "division_overflow"
+            assert val(sim, "r") == 5
+    # one above the most negative value is an ordinary remainder
+    sim = once("VAR a : DINT := -2147483647; b : DINT := -1; r : DINT := 5; END_VAR", "r := a MOD b;")
+    assert (sim.plc.state, val(sim, "r")) == ("RUN", 0)
+
+
 def test_mod_by_a_positive_constant_keeps_the_sign_of_the_dividend():
     # the compiler inlines MOD by a positive constant: same C semantics as the general case
     sim = once("VAR a : INT := -7; m1, m2, m3, m4 : INT; d : DINT := -2147483648; m5 : DINT; END_VAR",

@@ -4,7 +4,7 @@ a fault in the middle of a body, EN/ENO, inputs passed by value, and the inline 
 shifts and REAL rounding."""
 from __future__ import annotations
 
-from hypothesis import assume, given, settings, strategies as st
+from hypothesis import assume, example, given, settings, strategies as st
 
 from plclab.errors import CompileError
 from plclab.iec import types as T
@@ -166,6 +166,10 @@ def _wrap(v: int, bits: int, signed: bool) -> int:
     return v - (1 << bits) if signed and v >> (bits - 1) else v
 
 
+class _Trap(Exception):
+    """The C expression traps (the PLC goes to FAULT with division_overflow)."""
+
+
 def _c_eval(node, env, bits, signed):
     """C semantics: operands promoted to int (32-bit) below 32 bits, each result wrapped."""
     cbits, csigned = (32, True) if bits < 32 else (bits, signed)
@@ -176,6 +180,8 @@ def _c_eval(node, env, bits, signed):
     if op == "MOD":
         if b == 0:
             return 0
+        if csigned and b == -1 and a == -(1 << (cbits - 1)):
+            raise _Trap()                  # C's INT_MIN % -1: SIGFPE, the PLC faults
         r = abs(a) % abs(b)
         return _wrap(-r if a < 0 else r, cbits, csigned)
     return _wrap({"+": a + b, "-": a - b, "*": a * b}[op], cbits, csigned)
@@ -194,6 +200,8 @@ _expr = st.recursive(_leaf, lambda inner: st.tuples(st.sampled_from(["+", "-", "
 
 
 @settings(max_examples=120, deadline=None)
+@example(type_name="DINT", tree=("MOD", "a", "b"), values=[-2**31, -1, 0])
+@example(type_name="INT", tree=("MOD", ("*", ("*", "a", "b"), "c"), "b"), values=[-32768, -1, 65536 // 2])
 @given(type_name=st.sampled_from(sorted(_TYPES)), tree=_expr, values=st.lists(st.integers(), min_size=3, max_size=3))
 def test_integer_expressions_wrap_like_c(type_name, tree, values):
     bits, signed = _TYPES[type_name]
@@ -206,7 +214,13 @@ def test_integer_expressions_wrap_like_c(type_name, tree, values):
     for k, v in env.items():
         sim.plc.write(f"main.{k}", v)
     sim.step(1)
-    assert val(sim, "r") == _wrap(_c_eval(tree, env, bits, signed), bits, signed), _st(tree)
+    try:
+        expected = _wrap(_c_eval(tree, env, bits, signed), bits, signed)
+    except _Trap:
+        assert sim.plc.state == "FAULT" and sim.plc.fault.kind == "division_overflow", _st(tree)
+        return
+    assert sim.plc.state == "RUN", _st(tree)
+    assert val(sim, "r") == expected, _st(tree)
 
 
 def test_a_value_written_from_outside_is_stored_as_its_type():

@@ -119,7 +119,7 @@ class Compiler:
         self.out = _Emitter()
         self.const_ids: dict[int, str] = {}
         self.ns: dict[str, Any] = {
-            "_bound": _bound, "_cmod": _cmod, "_store_into": _store_into,
+            "_bound": _bound, "_store_into": _store_into,
             "_f32": T.to_f32, "_copy": T.copy_value, "Ref": Ref, "PlcFault": PlcFault,
             "_StructValue": T.StructValue,
             "_Locals": _Locals, "_NegRef": _NegRef, "_fa": array("f", [0.0]),
@@ -769,7 +769,6 @@ class Compiler:
                     return f"({l} % {divisor})"
                 t = f"_m{next(self.tmp)}"
                 return f"(-(-{t} % {divisor}) if ({t} := {l}) < 0 else {t} % {divisor})"
-            return f"_cmod({l}, {r})"      # |result| < |divisor|: no wrap needed
         if op in ("/", "MOD", "**") or (op == "*" and isinstance(rb, T.ElementaryType) and rb.kind == "time"):
             return f"{self.operator(op, [lt, rt_], rt)}({l}, {r})"
         return self.wrap(f"({l} {op} {r})", rt)
@@ -888,16 +887,6 @@ def _store_into(dst: Any, src: Any) -> None:
             _store_into(cur, v)
         else:
             fields[k] = v
-
-
-def _cmod(a: int, b: int) -> int:
-    """C's `%` as matiec emits MOD: (b == 0) ? 0 : a % b, the sign of the dividend."""
-    if b == 0:
-        return 0
-    r = a % b
-    if r and (a < 0) != (b < 0):
-        r -= b
-    return r
 
 
 def _is_double(e: A.Expr) -> bool:
