@@ -12,6 +12,10 @@ from plclab.runtime.compiler import compile_unit
 from plclab.runtime.plc import PLC
 from plclab.runtime.sim import Simulation
 
+OPTIMIZE = True
+"""Whether load() compiles with the compiler's fast paths; the `compile_mode` fixture
+(tests/runtime/conftest.py) runs each semantics test once each way."""
+
 MS = 1_000_000          # ns per ms
 S = 1_000_000_000       # ns per s
 
@@ -22,7 +26,7 @@ def load(src: str, *, tick_ms: Optional[int] = None, watch: Iterable[str] = (),
     cu = check_sources([(name, src)])
     if tick_ms is not None:
         plc_kwargs["tick_ns"] = tick_ms * MS
-    plc = PLC(compile_unit(cu), **plc_kwargs)
+    plc = PLC(compile_unit(cu, optimize=OPTIMIZE), **plc_kwargs)
     return Simulation(plc, watch=list(watch))
 
 

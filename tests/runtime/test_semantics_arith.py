@@ -10,8 +10,12 @@ call `EQ_TIME`... (`iec_std_lib.h`).
 """
 from __future__ import annotations
 
+import pytest
+
 from plclab.iec.types import to_f32
 from st_helpers import MS, S, once, program, val
+
+pytestmark = pytest.mark.usefixtures("compile_mode")
 
 
 # --------------------------------------------------------------------------- integer wrap

@@ -8,10 +8,14 @@ or after t.
 """
 from __future__ import annotations
 
+import pytest
+
 import struct
 
 from plclab.runtime.sim import InputEvent
 from st_helpers import MS, load
+
+pytestmark = pytest.mark.usefixtures("compile_mode")
 
 
 def config(programs: str, resource: str, globals_: str = "") -> str:

@@ -4,12 +4,16 @@ a fault in the middle of a body, EN/ENO, inputs passed by value, and the inline 
 shifts and REAL rounding."""
 from __future__ import annotations
 
+import pytest
+
 from hypothesis import assume, example, given, settings, strategies as st
 
 from plclab.errors import CompileError
 from plclab.iec import types as T
 from plclab.runtime import stdlib
 from st_helpers import MS, once, program, val
+
+pytestmark = pytest.mark.usefixtures("compile_mode")
 
 BUMP_FB = """
 FUNCTION_BLOCK FB_Bump

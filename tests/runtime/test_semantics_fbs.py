@@ -8,7 +8,11 @@ The facts are collected in docs/openplc-stdlib-notes.md.
 """
 from __future__ import annotations
 
+import pytest
+
 from st_helpers import MS, program, scan_until, val
+
+pytestmark = pytest.mark.usefixtures("compile_mode")
 
 
 # --------------------------------------------------------------------------- bistables

@@ -12,6 +12,8 @@ import pytest
 
 from st_helpers import MS, S, once, val
 
+pytestmark = pytest.mark.usefixtures("compile_mode")
+
 
 # --------------------------------------------------------------------------- conversions
 

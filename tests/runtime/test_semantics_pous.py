@@ -8,6 +8,8 @@ from plclab.errors import CompileError
 from plclab.iec.types import to_f32
 from st_helpers import MS, S, once, program, val
 
+pytestmark = pytest.mark.usefixtures("compile_mode")
+
 COUNTER_FB = """
 FUNCTION_BLOCK Acc
 VAR_INPUT inc : INT; END_VAR

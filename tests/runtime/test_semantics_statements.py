@@ -12,6 +12,8 @@ import pytest
 
 from st_helpers import once, program, val
 
+pytestmark = pytest.mark.usefixtures("compile_mode")
+
 
 # --------------------------------------------------------------------------- IF
 

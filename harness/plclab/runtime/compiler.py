@@ -114,8 +114,24 @@ class _Emitter:
 
 
 class Compiler:
-    def __init__(self, checked: CheckedUnit):
+    """Generates the Python of one checked unit.
+
+    `optimize` switches on every fast path at once; each is guarded by `self.optimize` and
+    the plain path beside it computes the same values the straightforward way (the
+    semantics tests run both ways, so the two cannot drift apart):
+      * ranges: a wrap or narrowing the declared types prove idle is left out
+        (plclab.runtime.ranges), and a chain of + - * is computed exactly and wrapped once;
+      * cached locals: a PROGRAM's / FB's busy variables live in Python locals while its
+        body runs (body_locals);
+      * f32 codes: a REAL stored is rounded through a float array, not a call (assign);
+      * EN types: a FB type no call gives an EN is entered straight, without the EN test;
+      * inline forms: MOD by a positive constant, widening conversions, constant shifts,
+        and array indexes known at compile time to be in range.
+    """
+
+    def __init__(self, checked: CheckedUnit, optimize: bool = True):
         self.cu = checked
+        self.optimize = optimize
         self.out = _Emitter()
         self.const_ids: dict[int, str] = {}
         self.ns: dict[str, Any] = {
@@ -130,7 +146,7 @@ class Compiler:
         self.loop_stack: list[str] = []
         self.local: dict[int, str] = {}     # id(VarDecl) -> its storage while the body runs
         self.ret_code = "None"              # a FUNCTION's result (a local, or _L.RET_)
-        self.ranges = RangeOf()
+        self.ranges = RangeOf() if optimize else _NoRanges()
         self.en_types: set[Any] = set()     # FB types some call gives an EN (see fb_call)
 
     # ------------------------------------------------------------------ helpers
@@ -181,6 +197,11 @@ class Compiler:
                 return self._signed_wrap(code, -(1 << 63), (1 << 63) - 1)
         return code
 
+    def ring(self, e: A.Expr) -> Optional[T.ElementaryType]:
+        """The integer type of a ring operation computed exactly and wrapped once (fast
+        path); None on the plain path, where every operation wraps its own result."""
+        return ring_type(e) if self.optimize else None
+
     def _signed_wrap(self, code: str, lo: int, hi: int) -> str:
         t = f"_w{next(self.tmp)}"
         return f"({t} if {lo} <= ({t} := {code}) <= {hi} else (({t} + {-lo}) & {hi - lo}) + {lo})"
@@ -198,9 +219,7 @@ class Compiler:
                 [p for p in cu.unit.pous if p.kind == "FUNCTION_BLOCK"] + \
                 [p for p in cu.unit.pous if p.kind == "PROGRAM"]
         result = CompiledProgram(cu, self.ns, "", {}, f"<plc-{next(_counter)}>")
-        self.en_types = {_fb_key(c.fb_type) for p in cu.unit.pous for c in A.walk_statements(p.body)
-                         if isinstance(c, A.CallStmt) and c.fb_type is not None
-                         and any(a.key == "EN" and not a.is_output for a in c.args)}
+        self.en_types = self.fb_types_given_en() if self.optimize else set()
         for pou in order:
             if cu.pous.get(pou.key) is not pou:
                 continue
@@ -219,6 +238,12 @@ class Compiler:
         result.source = source
         result.line_map = out.origin
         return result
+
+    def fb_types_given_en(self) -> set[Any]:
+        """The FB types some call gives an EN (the others are entered without the EN test)."""
+        return {_fb_key(c.fb_type) for p in self.cu.unit.pous for c in A.walk_statements(p.body)
+                if isinstance(c, A.CallStmt) and c.fb_type is not None
+                and any(a.key == "EN" and not a.is_output for a in c.args)}
 
     def globals_init(self, result: CompiledProgram) -> None:
         out = self.out
@@ -307,13 +332,13 @@ class Compiler:
             temp = d.section == "VAR_TEMP"
             if d is eno:
                 if use.count[i]:                      # matiec: ENO is TRUE when the body starts
-                    if i in use.by_ref:
+                    if i in use.by_ref or not self.optimize:
                         out.emit(2, "self.ENO = True")
                     else:
                         self.local[i] = "v_ENO"
                         out.emit(2, "v_ENO = True")
                         stores.append(("ENO", "v_ENO"))
-            elif i in use.by_ref or not (temp or use.count[i] >= _LOCAL_MIN_USES):
+            elif i in use.by_ref or not self.optimize or not (temp or use.count[i] >= _LOCAL_MIN_USES):
                 if temp:
                     out.emit(2, f"self.{attr} = {self.var_init(d)}", d)
             else:
@@ -500,7 +525,7 @@ class Compiler:
             # VAR_IN_OUT references and watched elements pointing at the variable)
             self.out.emit(ind, f"_store_into({self.lvalue_get(target)}, {value_code})", node)
             return
-        if isinstance(value_code, F32Code):
+        if isinstance(value_code, F32Code) and self.optimize:
             # rounding to single precision through a float array is the cheapest way Python has
             self.out.emit(ind, f"_fa[0] = {value_code.inner}", node)
             value_code = "_fa[0]"
@@ -561,7 +586,7 @@ class Compiler:
         strides.reverse()
         for ix, (lo, hi), st in zip(e.indexes, arr.dims, strides):
             v = self.cu_const(ix)
-            if isinstance(v, int) and not isinstance(v, bool) and lo <= v <= hi:
+            if self.optimize and isinstance(v, int) and not isinstance(v, bool) and lo <= v <= hi:
                 off = str(v - lo)
             else:
                 off = f"_bound({self.expr(ix)}, {lo}, {hi})"
@@ -609,7 +634,7 @@ class Compiler:
                     continue
                 out.emit(ind, f"{iv}.{key} = {self.expr_as(a.value, ptype)}", a)
         std = isinstance(fb.pou, FBSig)
-        if _fb_key(fb) in self.en_types:
+        if not self.optimize or _fb_key(fb) in self.en_types:
             # some call in the program sets this block type's EN: the body checks it
             if std:
                 out.emit(ind, f"{iv}()", s)          # the library block's EN/ENO handling
@@ -654,7 +679,7 @@ class Compiler:
         """`e` as stored into a variable of type `ty`: a promoted small-integer arithmetic
         result is narrowed here, as the C assignment matiec generates narrows it."""
         b = T.base_of(ty) if ty is not None else None
-        if ring_type(e) is not None and isinstance(b, T.ElementaryType) and b.bits < 32 \
+        if self.ring(e) is not None and isinstance(b, T.ElementaryType) and b.bits < 32 \
                 and b.kind in ("sint", "uint", "bits"):
             return self.narrow(self.raw(e), ty, self.ranges.raw(e))     # the low bits of the exact result
         code = self.expr(e)
@@ -703,9 +728,9 @@ class Compiler:
                 return f"(~({inner}) & {(1 << b.bits) - 1})"
             if b is T.REAL and _is_double(e):
                 return f"(-({inner}))"
-            if ring_type(e) is not None:
+            if self.ring(e) is not None:
                 return self.wrap(self.raw(e), _concrete(e.ty), self.ranges.raw(e))
-            return self.wrap(f"-({inner})", e.ty)
+            return self.wrap(f"-({inner})", _concrete(e.ty))
         if isinstance(e, A.Binary):
             return self.binary(e)
         if isinstance(e, A.Call):
@@ -721,7 +746,7 @@ class Compiler:
 
     def raw(self, e: A.Expr) -> str:
         """Code of `e` without the final wrap when it is an integer ring operation."""
-        b = ring_type(e)
+        b = self.ring(e)
         if b is None:
             return self.expr(e)
         if isinstance(e, A.Unary):
@@ -729,10 +754,10 @@ class Compiler:
         return f"({self._ring_child(e.left, b)} {e.op} {self._ring_child(e.right, b)})"
 
     def _ring_child(self, e: A.Expr, b: T.ElementaryType) -> str:
-        return self.raw(e) if ring_type(e) is b else self.expr(e)
+        return self.raw(e) if self.ring(e) is b else self.expr(e)
 
     def binary(self, e: A.Binary) -> str:
-        if ring_type(e) is not None:
+        if self.ring(e) is not None:
             return self.wrap(self.raw(e), _concrete(e.ty), self.ranges.raw(e))
         l, r = self.expr(e.left), self.expr(e.right)
         op = e.op
@@ -761,7 +786,7 @@ class Compiler:
             lt = rt_ = rt = T.LREAL
         if op == "MOD" and isinstance(rb, T.ElementaryType) and rb.kind in ("sint", "uint"):
             divisor = e.right.value if isinstance(e.right, A.Literal) else None
-            if isinstance(divisor, int) and divisor > 0:
+            if self.optimize and isinstance(divisor, int) and divisor > 0:
                 # C's `%` by a positive constant, inline (a MOD in every scan is common):
                 # the result takes the dividend's sign
                 dividend = self.ranges.value(e.left)
@@ -823,11 +848,12 @@ class Compiler:
         ordered = sorted(zip(names, args), key=lambda na: _param_rank(na[0]))
         types = dict(zip(names, arg_types))
         codes = [self.expr_as(a.value, types.get(n)) for n, a in ordered]
-        inline = _inline_conversion(c.std, arg_types, _concrete(c.ty), codes)
-        if inline is None and c.std in ("SHL", "SHR") and len(ordered) == 2:
-            inline = _inline_shift(c.std, arg_types[0], self.cu_const(ordered[1][1].value), codes[0])
-        if inline is not None:
-            return inline
+        if self.optimize:
+            inline = _inline_conversion(c.std, arg_types, _concrete(c.ty), codes)
+            if inline is None and c.std in ("SHL", "SHR") and len(ordered) == 2:
+                inline = _inline_shift(c.std, arg_types[0], self.cu_const(ordered[1][1].value), codes[0])
+            if inline is not None:
+                return inline
         return f"{fname}({', '.join(codes)})"
 
 
@@ -967,5 +993,17 @@ class _NegRef:
         self.ref.set(not value)
 
 
-def compile_unit(checked: CheckedUnit) -> CompiledProgram:
-    return Compiler(checked).compile()
+class _NoRanges:
+    """The plain path's ranges: nothing is known, so every wrap and narrowing is kept."""
+
+    def value(self, e: A.Expr) -> Optional[Range]:
+        return None
+
+    def raw(self, e: A.Expr) -> Optional[Range]:
+        return None
+
+
+def compile_unit(checked: CheckedUnit, optimize: bool = True) -> CompiledProgram:
+    """Compile a checked unit. `optimize=False` compiles every construct the plain way (no
+    fast path, see Compiler): slower, and meant to compute exactly the same values."""
+    return Compiler(checked, optimize).compile()
