@@ -46,6 +46,8 @@ def _cmd_sim(args: argparse.Namespace) -> int:
     result = run_sim(args.files, duration_s=args.duration, inputs=args.inputs, csv=args.csv, vcd=args.vcd,
                      plot=args.plot, watch=args.watch, tick_s=args.tick)
     print(result.summary)
+    if result.fault is not None and result.fault.internal:
+        return 70                    # the harness's own bug (the summary asks for a report)
     return 0 if result.fault is None else 1
 
 

@@ -88,6 +88,17 @@ def test_sim_fault_is_reported_with_location_and_exit_1(files, capsys):
     assert f"{prog}:5:" in out and "division_by_zero" in out and "in p" in out
 
 
+def test_sim_stopped_by_a_harness_bug_exits_70_asking_for_a_report(files, capsys, monkeypatch):
+    from plclab.runtime import stdfb
+
+    def harness_bug(self):
+        raise AttributeError("'TON' object has no attribute 'PREV'")
+    monkeypatch.setattr(stdfb.TON, "_body", harness_bug)
+    assert main(["sim", str(files["st"]), "--duration", "1"]) == 70
+    out = capsys.readouterr().out
+    assert f"{files['st']}:5:" in out and "internal error of plclab" in out and "please report it" in out
+
+
 def test_bad_duration_is_one_line(files, capsys):
     with pytest.raises(SystemExit) as e:
         main(["sim", str(files["st"]), "--duration", "soon"])

@@ -85,8 +85,9 @@ class Op(ABC, Generic[F]):
         return self.scan + EPS
 
     def _fault(self) -> None:
-        if self.s.fault is not None:
-            raise ScenarioFailure("the PLC stopped with a runtime fault (see G1)")
+        f = self.s.fault
+        if f is not None:
+            raise ScenarioFailure(str(f) if f.internal else "the PLC stopped with a runtime fault (see G1)")
 
     def set(self, **switches: int) -> float:
         """Set console switches now; returns the time they were set."""
@@ -192,7 +193,7 @@ NO_FAULT = Requirement("G1", "The program runs without a PLC fault (division by 
 
 def no_fault(s: Session, c: Checks) -> None:
     f = s.fault
-    if f is None:
+    if f is None or f.internal:     # a bug of the harness is not charged: the rows it stopped say so
         c.ok("G1")
         return
     offset = s.now - s.plc.now_ns / 1e9

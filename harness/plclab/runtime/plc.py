@@ -13,6 +13,7 @@ import math
 import re
 import struct
 import time
+import traceback
 from dataclasses import dataclass
 from typing import Any, Callable, Optional
 
@@ -67,6 +68,13 @@ def _converters(ty: T.Type, bits: int) -> tuple[Callable[[Any], int], Callable[[
 
 
 _AREA_BITS = {"X": 1, "W": 16, "D": 32, "L": 64}
+
+_PROGRAM_FAULTS: dict[type, str] = {
+    ZeroDivisionError: "division_by_zero", RecursionError: "stack_overflow",
+    IndexError: "index_out_of_range", OverflowError: "overflow",
+}
+"""Python errors a program's own arithmetic or nesting raises, as the fault kind it is (the
+compiled code raises PlcFault for the faults it checks itself)."""
 
 
 class ProgramInstance:
@@ -281,8 +289,7 @@ class PLC:
             for period, run in self._schedule:
                 if period == 1 or tick % period == 0:
                     run()
-        except (PlcFault, ZeroDivisionError, OverflowError, RecursionError,
-                IndexError, ValueError, TypeError, AttributeError) as exc:
+        except Exception as exc:         # a program fault, or the harness's own bug (see _enter_fault)
             self._enter_fault(exc)
             return False
         self.write_outputs()
@@ -298,14 +305,21 @@ class PLC:
 
     # ------------------------------------------------------------------ faults
     def _enter_fault(self, exc: BaseException) -> None:
-        kind = getattr(exc, "kind", None) or {
-            ZeroDivisionError: "division_by_zero", RecursionError: "stack_overflow",
-            IndexError: "index_out_of_range", OverflowError: "overflow",
-        }.get(type(exc), "internal")
-        message = getattr(exc, "message", None) or str(exc) or type(exc).__name__
+        """Stop in FAULT. A PlcFault, or one of the Python errors a program's own arithmetic
+        or nesting can raise, is the program's fault; anything else (a TypeError in generated
+        or library code...) is an internal error of the harness, recorded as such."""
+        kind = exc.kind if isinstance(exc, PlcFault) else _PROGRAM_FAULTS.get(type(exc))
+        internal = kind is None
+        if internal:
+            kind = "internal"
+            message = f"{type(exc).__name__}: {exc}"
+        else:
+            message = getattr(exc, "message", None) or str(exc) or type(exc).__name__
         where = self._locate(exc)
         self.fault = FaultRecord(kind, message, where.pou if where else None,
-                                 where.file if where else None, where.line if where else None, self.now_ns)
+                                 where.file if where else None, where.line if where else None, self.now_ns,
+                                 internal=internal,
+                                 detail="".join(traceback.format_exception(exc)) if internal else "")
         self.state = FAULT
         self._safe_outputs()
 
