@@ -146,9 +146,41 @@ def test_300_nested_ifs_are_accepted() -> None:
     assert outcome(nested_ifs(300)) == "ok"
 
 
-def test_500_nested_parentheses_are_a_clean_error() -> None:
-    result = outcome("PROGRAM Main VAR x : INT; END_VAR x := " + "(" * 500 + "1" + ")" * 500 + "; END_PROGRAM")
-    assert "nested more than" in result
+def test_500_nested_parentheses_are_an_error_at_the_one_that_crossed_the_limit() -> None:
+    text = "PROGRAM Main\n  VAR x : INT; END_VAR\n  x := " + "(" * 500 + "1" + ")" * 500 + ";\nEND_PROGRAM\n"
+    # line 3 is `  x := ((((...`: the 201st '(' stands in column 8 + 200
+    assert outcome(text) == "fuzz.st:3:208: error: expressions nested more than 200 levels deep"
+
+
+def test_brackets_in_comments_and_strings_are_not_nesting() -> None:
+    assert outcome("(* " + "(" * 300 + " *)\nPROGRAM Main VAR x : INT; END_VAR x := 1; END_PROGRAM") == "ok"
+    assert outcome("PROGRAM Main VAR s : STRING := '" + "[" * 120 + "'; END_VAR s := '" + "(" * 120 + "';"
+                   " END_PROGRAM") == "ok"
+
+
+def test_nested_comments_get_a_message_about_comments() -> None:
+    result = outcome("(*" * 300 + " note " + "*)" * 300 + "\nPROGRAM Main VAR x : INT; END_VAR x := 1; END_PROGRAM")
+    assert result.startswith("fuzz.st:1:609: error: comments do not nest in OpenPLC: the '(*' at line 1, column 1")
+    assert "nested more than" not in result
+
+
+def test_a_type_chain_too_deep_is_an_error_at_the_declaration_that_crossed_the_limit() -> None:
+    for order in (range(300), reversed(range(300))):
+        decls = "\n".join(f"  T{i} : T{i + 1};" for i in order)
+        text = f"TYPE\n{decls}\n  T300 : INT;\nEND_TYPE\nPROGRAM Main VAR x : T0; END_VAR x := 1; END_PROGRAM\n"
+        line = outcome(text).splitlines()[0]
+        at = int(line.split(":")[1])
+        # the declaration reported is the one 100 steps down the chain, named at its own line
+        assert ": error: type declarations nested more than 100 levels deep" in line
+        name = text.splitlines()[at - 1].split()[0]
+        assert f"'{name}'" in line and name in ("T100", "T200"), line
+    chain = "\n".join(f"  T{i} : T{i + 1};" for i in range(99))
+    assert outcome(f"TYPE\n{chain}\n  T99 : INT;\nEND_TYPE\nPROGRAM Main VAR x : T0; END_VAR x := 1; END_PROGRAM") == "ok"
+
+
+def test_an_initial_value_too_deep_for_the_checker_points_at_it() -> None:
+    result = outcome("PROGRAM Main\n  VAR x : INT := " + " + ".join(["1"] * 5000) + "; END_VAR\n  x := 1;\nEND_PROGRAM\n")
+    assert result.startswith("fuzz.st:2:") and "nested too deeply" in result
 
 
 def test_very_deep_nesting_is_a_clean_error_at_the_statement() -> None:

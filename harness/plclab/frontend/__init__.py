@@ -47,12 +47,27 @@ def check_sources(sources: Iterable[tuple[str, str]]) -> CheckedUnit:
         raise CompileError(diags)
     try:
         checked = check_unit(merged)
-    except RecursionError:   # declarations nested beyond Python's stack (bodies are guarded per statement)
-        raise CompileError([Diagnostic(names[0] if names else "", 1, 1,
-                                       "declarations or initial values nested too deeply")]) from None
+    except RecursionError as e:   # declarations nested beyond Python's stack (bodies are guarded per statement)
+        node = _deepest_node(e)
+        where = (node.file, node.line, node.col) if node is not None else (names[0] if names else "", 1, 1)
+        raise CompileError([Diagnostic(*where, "declarations or initial values nested too deeply")]) from None
     if checked.diagnostics:
         raise CompileError(checked.diagnostics)
     return checked
+
+
+def _deepest_node(exc: BaseException) -> A.Node | None:
+    """The innermost AST node with a position that a frame of `exc`'s traceback was working
+    on: where a recursion crossed the limit."""
+    found = None
+    tb = exc.__traceback__
+    while tb is not None:
+        for value in tb.tb_frame.f_locals.values():
+            if isinstance(value, A.Node) and getattr(value, "line", 0) and getattr(value, "file", ""):
+                found = value
+                break
+        tb = tb.tb_next
+    return found
 
 
 def read_sources(paths: Iterable[str | Path]) -> list[tuple[str, str]]:

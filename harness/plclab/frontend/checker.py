@@ -67,6 +67,11 @@ class CheckedUnit:
     scope_count: int = 1     # global scopes (several GVL files of different stands, no CONFIGURATION)
 
 
+MAX_TYPE_NESTING = 100
+"""A type defined through more named types than this (an alias of an alias ..., a STRUCT of a
+STRUCT ...) is refused at the declaration that crosses the limit, before Python's stack does."""
+
+
 class _Scope:
     """Names visible inside one POU."""
 
@@ -88,6 +93,7 @@ class Checker:
         self.fb_types: dict[str, T.FBType] = {}
         self.globals: dict[str, A.VarDecl] = {}
         self._resolving: set[str] = set()
+        self._unresolvable: set[str] = set()
 
     # ------------------------------------------------------------------ reporting
     def error(self, node: Any, message: str) -> None:
@@ -167,8 +173,14 @@ class Checker:
     def _resolve_type_decl(self, td: A.TypeDecl) -> Optional[T.Type]:
         if td.key in self.types:
             return self.types[td.key]
+        if td.key in self._unresolvable:       # reported once, where it went wrong
+            return None
         if td.key in self._resolving:
             self.error(td, f"type '{td.name}' is defined in terms of itself")
+            return None
+        if len(self._resolving) >= MAX_TYPE_NESTING:
+            self.error(td, f"type declarations nested more than {MAX_TYPE_NESTING} levels deep "
+                           f"('{td.name}' is reached through a chain of that many other types)")
             return None
         self._resolving.add(td.key)
         try:
@@ -178,6 +190,8 @@ class Checker:
         if ty is not None:
             self.types[td.key] = ty
             td.ty = ty
+        else:
+            self._unresolvable.add(td.key)
         return ty
 
     def resolve_type(self, ref: A.TypeRef, scope: Optional[_Scope] = None) -> Optional[T.Type]:
@@ -195,6 +209,13 @@ class Checker:
                 return base
             if isinstance(base, T.FBType):
                 self.error(ref, f"a TYPE cannot be a function block ('{ref.name}')")
+                return None
+            depth, b = 1, base
+            while isinstance(b, T.AliasType):
+                depth, b = depth + 1, b.base
+            if depth > MAX_TYPE_NESTING:
+                self.error(ref, f"type declarations nested more than {MAX_TYPE_NESTING} levels deep "
+                                f"('{name}' is an alias of an alias ... {depth} times)")
                 return None
             alias = T.AliasType(name, base, None)
             if init is not None:

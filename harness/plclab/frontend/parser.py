@@ -652,16 +652,27 @@ def _token_text(tok: Token) -> str:
     return f"'{tok}'"
 
 
-def _nesting_depth(text: str) -> int:
-    depth = best = 0
-    for ch in text:
-        if ch in "([":
+_SCAN = re.compile(r"'[^'$\n]*(?:\$[^\n][^'$\n]*)*'|\"[^\"$\n]*(?:\$[^\n][^\"$\n]*)*\"|\(\*.*?\*\)|\(\*", re.S)
+"""String literals and comments (an unterminated comment: its opener), in source order."""
+_NEST_SCAN = re.compile(_SCAN.pattern + r"|[()\[\]]", re.S)
+
+
+def _too_deep(text: str) -> tuple[int, int] | None:
+    """Where brackets in the code (not in comments or strings) first nest deeper than
+    MAX_NESTING: the (line, column) of the '(' or '[' that crossed the limit."""
+    depth = 0
+    for m in _NEST_SCAN.finditer(text):
+        tok = m.group(0)
+        if tok == "(*":                  # an unterminated comment: the rest is comment
+            return None
+        if tok in ("(", "["):
             depth += 1
-            if depth > best:
-                best = depth
-        elif ch in ")]":
+            if depth > MAX_NESTING:
+                pos = m.start()
+                return text.count("\n", 0, pos) + 1, pos - (text.rfind("\n", 0, pos) + 1) + 1
+        elif tok in (")", "]"):
             depth -= 1
-    return best
+    return None
 
 
 def parse_source(text: str, file: str) -> tuple[A.Unit | None, list[Diagnostic]]:
@@ -671,8 +682,9 @@ def parse_source(text: str, file: str) -> tuple[A.Unit | None, list[Diagnostic]]
     if "\x00" in text:
         line = text.count("\n", 0, text.index("\x00")) + 1
         return None, [Diagnostic(file, line, 1, "binary data (NUL byte) in ST source")]
-    if _nesting_depth(text) > MAX_NESTING:
-        return None, [Diagnostic(file, 1, 1, f"expressions nested more than {MAX_NESTING} levels deep")]
+    deep = _too_deep(text)
+    if deep:
+        return None, [Diagnostic(file, *deep, f"expressions nested more than {MAX_NESTING} levels deep")]
     comment = _unterminated_comment(text)
     if comment:
         return None, [Diagnostic(file, *comment, "unterminated comment: '(*' without '*)'")]
@@ -727,7 +739,6 @@ _OPENERS = {"IF": "END_IF", "CASE": "END_CASE", "FOR": "END_FOR", "WHILE": "END_
             "CONFIGURATION": "END_CONFIGURATION", "RESOURCE": "END_RESOURCE"}
 _VAR_OPENERS = {"VAR", "VAR_INPUT", "VAR_OUTPUT", "VAR_IN_OUT", "VAR_EXTERNAL", "VAR_GLOBAL", "VAR_TEMP"}
 _CLOSERS = set(_OPENERS.values()) | {"END_VAR"}
-_SCAN = re.compile(r"'[^'$\n]*(?:\$[^\n][^'$\n]*)*'|\"[^\"$\n]*(?:\$[^\n][^\"$\n]*)*\"|\(\*.*?\*\)|\(\*", re.S)
 
 
 def _unterminated_comment(text: str) -> tuple[int, int] | None:
