@@ -16,7 +16,11 @@ from plclab.errors import CompileError, PlcLabError
 def _cmd_check(args: argparse.Namespace) -> int:
     from plclab.frontend import load_files
 
-    load_files(args.files)
+    checked = load_files(args.files)
+    if args.emit_python:
+        from plclab.runtime.compiler import compile_unit
+        print(compile_unit(checked, optimize=not args.plain).annotated_source(), end="")
+        return 0
     print(f"ok: {len(args.files)} file(s) checked")
     return 0
 
@@ -300,6 +304,9 @@ def build_parser() -> argparse.ArgumentParser:
 
     c = sub.add_parser("check", help="parse and type-check ST files (one compilation unit)")
     c.add_argument("files", nargs="+", metavar="FILE.st")
+    c.add_argument("--emit-python", action="store_true",
+                   help="print the Python the program compiles to, each line with its ST file:line")
+    c.add_argument("--plain", action="store_true", help="with --emit-python: without the compiler's fast paths")
     c.set_defaults(func=_cmd_check)
 
     c = sub.add_parser("sim", help="run any ST program in virtual time with scripted inputs; write traces")

@@ -26,7 +26,9 @@ and line without any cost on the hot path.
 from __future__ import annotations
 
 import itertools
+import linecache
 import math
+import weakref
 from array import array
 from dataclasses import dataclass, field
 from typing import Any, Optional
@@ -90,6 +92,18 @@ class CompiledProgram:
 
     def where(self, py_line: int) -> Optional[LineInfo]:
         return self.line_map.get(py_line)
+
+    def annotated_source(self) -> str:
+        """The generated Python, each line that comes from ST ending in `# FILE:LINE POU`:
+        what `plclab check --emit-python` prints, and what a traceback through the compiled
+        code shows (it is registered with linecache under `filename`)."""
+        lines = self.source.splitlines()
+        width = max((len(line) for line in lines), default=0)
+        out = []
+        for n, line in enumerate(lines, start=1):
+            info = self.line_map.get(n)
+            out.append(f"{line:<{width}}  # {info.file}:{info.line} {info.pou}" if info else line)
+        return "\n".join(out) + "\n"
 
 
 _counter = itertools.count()
@@ -237,6 +251,7 @@ class Compiler:
         exec(code, self.ns)
         result.source = source
         result.line_map = out.origin
+        _register_source(result)
         return result
 
     def fb_types_given_en(self) -> set[Any]:
@@ -913,6 +928,15 @@ def _store_into(dst: Any, src: Any) -> None:
             _store_into(cur, v)
         else:
             fields[k] = v
+
+
+def _register_source(program: CompiledProgram) -> None:
+    """Put the annotated source in linecache (with no mtime, so checkcache keeps it) while the
+    program lives: a Python traceback through compiled code shows the generated line and the
+    ST file:line it comes from."""
+    lines = program.annotated_source().splitlines(keepends=True)
+    linecache.cache[program.filename] = (sum(map(len, lines)), None, lines, program.filename)
+    weakref.finalize(program, linecache.cache.pop, program.filename, None)
 
 
 def _is_double(e: A.Expr) -> bool:
