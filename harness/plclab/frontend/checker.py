@@ -14,7 +14,8 @@ from typing import Any, Optional
 
 from plclab.errors import Diagnostic
 from plclab.frontend import ast as A
-from plclab.frontend.stdsigs import FUNCTION_BLOCKS, FUNCTIONS, NO_BOOL_OVERLOAD, RESERVED_NAMES, FBSig, FuncSig
+from plclab.frontend.stdsigs import FUNCTION_BLOCKS, FUNCTIONS, LIBRARY_VARIABLES, NO_BOOL_OVERLOAD, RESERVED_NAMES, \
+    FBSig, FuncSig
 from plclab.iec import types as T
 
 # Pseudo-types of untyped literals: they become a concrete type where they are used.
@@ -70,6 +71,15 @@ class CheckedUnit:
 MAX_TYPE_NESTING = 100
 """A type defined through more named types than this (an alias of an alias ..., a STRUCT of a
 STRUCT ...) is refused at the declaration that crosses the limit, before Python's stack does."""
+
+
+def _library_variable_message(name: str, what: str) -> str:
+    """Why a TYPE or POU cannot take the name of a variable of OpenPLC's library
+    (stdsigs.LIBRARY_VARIABLES)."""
+    pou = LIBRARY_VARIABLES[name.upper()]
+    return (f"'{name}' is a variable name inside OpenPLC's standard library ({pou} declares it), and "
+            f"OpenPLC's compiler reads its library with the program's type and POU names in scope: "
+            f"a {what} named '{name}' makes it fail on its own library; choose another name")
 
 
 class _Scope:
@@ -160,6 +170,9 @@ class Checker:
             return False
         if key in RESERVED_WORDS:
             self.error(node, f"'{name}' is a reserved word of OpenPLC's compiler; it cannot name a {what}")
+            return False
+        if key in LIBRARY_VARIABLES:
+            self.error(node, _library_variable_message(name, what))
             return False
         if key in T.ELEMENTARY or key in T.GENERICS:
             self.error(node, f"'{name}' is a type name; it cannot name a {what}")
@@ -1683,6 +1696,8 @@ class Checker:
 
     # ------------------------------------------------------------------ configuration
     def _check_config(self, config: A.Configuration) -> None:
+        if config.name.upper() in LIBRARY_VARIABLES:
+            self.error(config, _library_variable_message(config.name, "configuration"))
         seen_tasks: dict[str, A.TaskDecl] = {}
         seen_progs: set[str] = set()
         for res in config.resources:

@@ -8,6 +8,7 @@ a result of 'T' is that type.
 from __future__ import annotations
 
 from dataclasses import dataclass, field
+from pathlib import Path
 
 from plclab.iec import types as T
 
@@ -164,10 +165,38 @@ FUNCTION_BLOCKS: dict[str, FBSig] = {s.name: s for s in [
 OPENPLC_EXTRA_FBS = frozenset("""DERIVATIVE HYSTERESIS INTEGRAL PID RAMP RTC SEMA TCP_CONNECT TCP_SEND
 TCP_RECEIVE TCP_CLOSE""".split())
 
+
+
+def _library_names() -> tuple[frozenset[str], dict[str, str]]:
+    """The [functions] and [variables] sections of openplc_library_names.txt (which says why
+    a program cannot reuse them)."""
+    text = (Path(__file__).with_name("openplc_library_names.txt")).read_text(encoding="utf-8")
+    functions: set[str] = set()
+    variables: dict[str, str] = {}
+    section = ""
+    for line in text.splitlines():
+        line = line.strip()
+        if not line or line.startswith("#"):
+            continue
+        if line.startswith("["):
+            section = line
+        elif section == "[functions]":
+            functions.add(line)
+        elif section == "[variables]":
+            name, pou = line.split()
+            variables[name] = pou
+    return frozenset(functions), variables
+
+
+LIBRARY_FUNCTIONS, LIBRARY_VARIABLES = _library_names()
+"""The typed functions of OpenPLC's library (ADD_INT, INT_TO_INT ...: unavailable as any name)
+and its POUs' variable names, each with the library POU declaring it (unavailable as the
+name of a TYPE, FUNCTION, FUNCTION_BLOCK, PROGRAM or CONFIGURATION)."""
+
 # Names that matiec's library makes unavailable as identifiers.
 # CONCAT_DAT_TOD: so spelled in matiec's list of standard function names (not callable here).
 RESERVED_NAMES: frozenset[str] = frozenset(FUNCTIONS) | frozenset(FUNCTION_BLOCKS) | OPENPLC_EXTRA_FBS | \
-    frozenset({"CONCAT_DAT_TOD"})
+    frozenset({"CONCAT_DAT_TOD"}) | LIBRARY_FUNCTIONS
 
 
 def type_by_name(name: str) -> T.Type:
