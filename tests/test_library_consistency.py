@@ -58,17 +58,17 @@ def test_conversions_compiled_inline_give_what_the_library_gives(src):
     decls = "\n".join(f"    y_{dst} : {dst};" for dst in pairs)
     for literal in SAMPLES[src]:
         body = "\n".join(f"y_{dst} := {src}_TO_{dst}(x);" for dst in pairs)
-        src_text = f"PROGRAM p\nVAR\n    x : {src} := {literal};\n{decls}\nEND_VAR\n{body}\nEND_PROGRAM\n"
+        src_text = f"PROGRAM prg\nVAR\n    x : {src} := {literal};\n{decls}\nEND_VAR\n{body}\nEND_PROGRAM\n"
         plc = PLC(compile_unit(check_sources([("conv.st", src_text)])))
         plc.scan()
-        x = plc.read("p.x")
+        x = plc.read("prg.x")
         for dst in pairs:
             expected = stdlib.lookup(f"{src}_TO_{dst}", [T.ELEMENTARY[src]], T.ELEMENTARY[dst])(x)
-            assert plc.read(f"p.y_{dst}") == expected, f"{src}_TO_{dst}({x})"
+            assert plc.read(f"prg.y_{dst}") == expected, f"{src}_TO_{dst}({x})"
 
 
 def test_bcd_conversions_encode_and_decode():
-    src = """PROGRAM p
+    src = """PROGRAM prg
 VAR u : USINT := 42; b : BYTE; w : WORD; back : UINT; END_VAR
 b := USINT_TO_BCD(u);
 w := UINT_TO_BCD(UINT#1234);
@@ -77,4 +77,4 @@ END_PROGRAM
 """
     plc = PLC(compile_unit(check_sources([("bcd.st", src)])))
     plc.scan()
-    assert plc.read("p.b") == 0x42 and plc.read("p.w") == 0x1234 and plc.read("p.back") == 1234
+    assert plc.read("prg.b") == 0x42 and plc.read("prg.w") == 0x1234 and plc.read("prg.back") == 1234

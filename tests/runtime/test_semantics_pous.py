@@ -113,14 +113,14 @@ def test_in_out_whole_array_is_modified_in_place():
 
 def test_in_out_struct_field_and_function_in_out():
     extra = INOUT_FB + """
-TYPE Pt : STRUCT x : INT; y : INT; END_STRUCT; END_TYPE
+TYPE Point : STRUCT x : INT; y : INT; END_STRUCT; END_TYPE
 FUNCTION Twice : BOOL
 VAR_IN_OUT n : INT; END_VAR
 n := n * 2;
 Twice := n > 10;
 END_FUNCTION
 """
-    sim = once("VAR p : Pt := (x := 3, y := 7); b : Bump; big : BOOL; END_VAR",
+    sim = once("VAR p : Point := (x := 3, y := 7); b : Bump; big : BOOL; END_VAR",
                "b(v := p.y, amount := 1); big := Twice(p.x); big := Twice(p.x);", extra)
     assert val(sim, "p.y") == 8
     assert val(sim, "p.x") == 12
@@ -131,7 +131,7 @@ END_FUNCTION
 
 def test_var_temp_is_reinitialised_on_every_call():
     extra = """
-FUNCTION_BLOCK T
+FUNCTION_BLOCK FB_Temp
 VAR_OUTPUT t_out : INT; v_out : INT; END_VAR
 VAR_TEMP t : INT; END_VAR
 VAR v : INT := 5; END_VAR
@@ -139,7 +139,7 @@ t := t + 1; v := v + 1;
 t_out := t; v_out := v;
 END_FUNCTION_BLOCK
 """
-    sim = program("VAR f : T; END_VAR", "f(); f();", extra)
+    sim = program("VAR f : FB_Temp; END_VAR", "f(); f();", extra)
     sim.step(2)
     assert val(sim, "f.t_out") == 1            # VAR_TEMP starts from 0 on each call (matiec: no initial value)
     assert val(sim, "f.v_out") == 9            # VAR keeps its value

@@ -74,18 +74,18 @@ def test_sim_reports_bad_input_script_in_one_line(files, capsys):
 
 def test_sim_on_a_program_with_a_compile_error_prints_checker_lines(files, capsys):
     broken = files["dir"] / "broken.st"
-    broken.write_text("PROGRAM p\nVAR x : INT; END_VAR\nx := y;\nEND_PROGRAM\n")
+    broken.write_text("PROGRAM prog\nVAR x : INT; END_VAR\nx := y;\nEND_PROGRAM\n")
     assert main(["sim", str(broken), "--duration", "1"]) == 1
     assert capsys.readouterr().err.strip() == f"{broken}:3:6: error: undeclared identifier 'y'"
 
 
 def test_sim_fault_is_reported_with_location_and_exit_1(files, capsys):
     prog = files["dir"] / "div.st"
-    prog.write_text("PROGRAM p\nVAR q AT %QX0.0 : BOOL; END_VAR\nVAR d : INT; r : INT; END_VAR\nq := TRUE;\n"
+    prog.write_text("PROGRAM prog\nVAR q AT %QX0.0 : BOOL; END_VAR\nVAR d : INT; r : INT; END_VAR\nq := TRUE;\n"
                     "r := 10 / d;\nEND_PROGRAM\n")
     assert main(["sim", str(prog), "--duration", "1"]) == 1
     out = capsys.readouterr().out
-    assert f"{prog}:5:" in out and "division_by_zero" in out and "in p" in out
+    assert f"{prog}:5:" in out and "division_by_zero" in out and "in prog" in out
 
 
 def test_sim_stopped_by_a_harness_bug_exits_70_asking_for_a_report(files, capsys, monkeypatch):
