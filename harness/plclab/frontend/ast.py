@@ -123,6 +123,7 @@ class Call(Expr):
     pou: Any = None           # user FUNCTION PouDecl
     std: Optional[str] = None  # standard function name
     arg_types: Any = None      # standard function: the chosen argument types
+    bound_params: Optional[list[str]] = None   # checker: standard function: the parameter each arg binds
 
     def __post_init__(self) -> None:
         self.key = self.name.upper()
@@ -316,6 +317,8 @@ class VarDecl(Node):
     ty: Any = None                   # resolved Type (checker)
     init_value: Any = None           # initial value in runtime representation (checker)
     global_decl: Any = None          # VAR_EXTERNAL: the VarDecl of the VAR_GLOBAL it names
+    fb_init: Optional[dict] = None   # checker: a FB instance's initial values, by member path
+    group_size: int = 1              # how many names its declaration line declares (`a, b : INT`)
 
     def __post_init__(self) -> None:
         self.key = self.name.upper()
@@ -327,6 +330,7 @@ class VarBlock(Node):
     constant: bool
     retain: bool
     decls: list[VarDecl]
+    qualifiers: list[str] = field(default_factory=list)   # CONSTANT / RETAIN / NON_RETAIN as written
 
 
 @dataclass(eq=False)
@@ -357,6 +361,8 @@ class PouDecl(Node):
     key: str = ""
     ret_ty: Any = None               # FUNCTION: resolved return type
     symbols: Any = None              # checker: upper-case name -> VarDecl
+    ret_decl: Optional["VarDecl"] = None   # checker: FUNCTION: the variable named like it (its result)
+    eno_decl: Optional["VarDecl"] = None   # checker: the implicit ENO, when the body or a call uses it
 
     def __post_init__(self) -> None:
         self.key = self.name.upper()

@@ -9,26 +9,14 @@ variables; an untyped literal takes the type its context needs if its value fits
 from __future__ import annotations
 
 import math
-from dataclasses import dataclass, field
 from typing import Any, Optional
 
 from plclab.errors import Diagnostic
 from plclab.frontend import ast as A
+from plclab.frontend.checked import BIT_LIT, INT_LIT, REAL_LIT, CheckedUnit, EnumValue, LiteralType
 from plclab.frontend.stdsigs import FUNCTION_BLOCKS, FUNCTIONS, LIBRARY_VARIABLES, NO_BOOL_OVERLOAD, RESERVED_NAMES, \
     FBSig, FuncSig
 from plclab.iec import types as T
-
-# Pseudo-types of untyped literals: they become a concrete type where they are used.
-
-
-@dataclass(frozen=True, eq=False)
-class _LitType(T.Type):
-    kind: str = "int"   # 'int' | 'real'
-
-
-INT_LIT = _LitType("integer literal", "int")
-REAL_LIT = _LitType("real literal", "real")
-BIT_LIT = _LitType("0/1 literal", "int")
 
 LOCATED_AREAS = {"IX": "IX", "QX": "QX", "IW": "IW", "QW": "QW", "MW": "MW", "MD": "MD", "ML": "ML"}
 LOCATED_TYPES = {
@@ -45,27 +33,6 @@ INITIAL_STEP STEP END_STEP READ_WRITE READ_ONLY REF DREF REF_TO NULL""".split())
 DEFAULT_INT = T.DINT
 DEFAULT_REAL = T.LREAL
 _GENERIC_RESULT_DEFAULT = {"ANY_INT": T.DINT, "ANY_NBIT": T.DWORD}
-
-
-@dataclass(eq=False)
-class EnumValue:
-    """A symbol for an enumerated value (`RUN` of `E_Mode`)."""
-
-    name: str
-    ty: T.EnumType
-
-
-@dataclass
-class CheckedUnit:
-    """The result: the annotated AST plus the tables the compiler needs."""
-
-    unit: A.Unit
-    types: dict[str, T.Type]
-    pous: dict[str, A.PouDecl]
-    globals: dict[str, A.VarDecl]
-    config: Optional[A.Configuration]
-    diagnostics: list[Diagnostic] = field(default_factory=list)
-    scope_count: int = 1     # global scopes (several GVL files of different stands, no CONFIGURATION)
 
 
 MAX_TYPE_NESTING = 100
@@ -521,7 +488,7 @@ class Checker:
 
     # ------------------------------------------------------------------ declarations
     def _check_block_rules(self, block: A.VarBlock, pou: Optional[A.PouDecl]) -> None:
-        quals = getattr(block, "qualifiers", [])
+        quals = block.qualifiers
         for q in set(quals):
             if quals.count(q) > 1:
                 self.error(block, f"{q} given twice")
@@ -640,11 +607,11 @@ class Checker:
             v = self._init_value(fval, p[1])
             if v is not None:
                 values[fname.upper()] = v
-        d.fb_init = values  # type: ignore[attr-defined]
+        d.fb_init = values
 
     def _check_location(self, d: A.VarDecl, pou: Optional[A.PouDecl]) -> None:
         loc = d.location
-        group = getattr(d, "group_size", 1)
+        group = d.group_size
         if group > 1:
             self.error(d, "only one variable can be located at an address")
         if pou is not None and pou.kind != "PROGRAM":
@@ -683,7 +650,7 @@ class Checker:
                                    f"{' or '.join(sorted(LOCATED_TYPES[loc.size]))}, not {ty.name}")
 
     def _check_external(self, d: A.VarDecl) -> None:
-        if getattr(d, "group_size", 1) > 1:
+        if d.group_size > 1:
             self.error(d, "a VAR_EXTERNAL declaration names one variable ('A, B : BOOL' is rejected "
                           "by OpenPLC's compiler); declare each on its own line")
         if d.init is not None:
@@ -757,7 +724,7 @@ class Checker:
             ret.ty = pou.ret_ty
             ret.init_value = T.default_value(pou.ret_ty)
             names[pou.key] = ret
-            pou.ret_decl = ret  # type: ignore[attr-defined]
+            pou.ret_decl = ret
         if pou.kind != "PROGRAM" and "ENO" not in names:
             # matiec adds EN and ENO to every function and FB; the body may read and write ENO
             # (a BOOL output, TRUE when the call starts). It is in `symbols`, not in `blocks`.
@@ -766,7 +733,7 @@ class Checker:
                             section="VAR_OUTPUT")
             eno.ty, eno.init_value = T.BOOL, True
             names["ENO"] = eno
-            pou.eno_decl = eno  # type: ignore[attr-defined]
+            pou.eno_decl = eno
         pou.symbols = names
 
     # ------------------------------------------------------------------ bodies
@@ -1184,10 +1151,10 @@ class Checker:
             if t is None:
                 return None
             raw.append((a, t, g))
-            if not isinstance(t, _LitType) and gen_t is None:
+            if not isinstance(t, LiteralType) and gen_t is None:
                 gen_t = t
         if gen_args and gen_t is None:
-            if sig.result == "T" and expected is not None and not isinstance(expected, _LitType):
+            if sig.result == "T" and expected is not None and not isinstance(expected, LiteralType):
                 gen_t = expected
             else:
                 kinds = {t.kind for _a, t, _g in raw}
@@ -1215,12 +1182,12 @@ class Checker:
                     self.error(a.value, f"{sig.name} argument '{pn}' must be {g}, not {self._tname(t)}")
                     return None
         c.arg_types = [a.value.ty for _pn, _g, a in bound]
-        c.bound_params = [pn for pn, _g, _a in bound]  # type: ignore[attr-defined]
+        c.bound_params = [pn for pn, _g, _a in bound]
         if sig.result == "T":
             return gen_t
         if sig.result in T.GENERICS:
             # TRUNC, UINT_TO_BCD...: the result type comes from where the call is used
-            if expected is not None and not isinstance(expected, _LitType) and T.in_generic(expected, sig.result):
+            if expected is not None and not isinstance(expected, LiteralType) and T.in_generic(expected, sig.result):
                 return expected
             return _GENERIC_RESULT_DEFAULT[sig.result]
         return T.ELEMENTARY[sig.result]
@@ -1289,12 +1256,11 @@ class Checker:
 
     # ------------------------------------------------------------------ expressions
     def expr(self, e: A.Expr, scope: _Scope, expected: Optional[T.Type], allow_fb: bool = False) -> Optional[T.Type]:
-        """Type of `e`; untyped literals may stay _LitType until settled by their context."""
+        """Type of `e`; untyped literals may stay LiteralType until settled by their context."""
         t = self._expr(e, scope, expected)
         if t is not None and isinstance(t, T.FBType) and not allow_fb and not isinstance(e, A.Call):
-            if not getattr(scope, "_allow_fb_value", False):
-                self.error(e, f"'{self._path_text(e)}' is a function block instance, not a value")
-                return None
+            self.error(e, f"'{self._path_text(e)}' is a function block instance, not a value")
+            return None
         e.ty = t
         return t
 
@@ -1363,9 +1329,9 @@ class Checker:
                 t = self.expr(e.operand, scope, expected)
                 if t is None:
                     return None
-                if isinstance(t, _LitType):
+                if isinstance(t, LiteralType):
                     # `w AND NOT 16#0F`: the literal takes the bit-string type the context needs
-                    if expected is not None and not isinstance(expected, _LitType) and \
+                    if expected is not None and not isinstance(expected, LiteralType) and \
                             T.in_generic(expected, "ANY_BIT"):
                         return expected if self.assignable(expected, e.operand, t, what="operand of NOT") else None
                     self.error(e, "NOT needs a BOOL or bit-string operand, not an untyped number")
@@ -1377,7 +1343,7 @@ class Checker:
             t = self.expr(e.operand, scope, expected)
             if t is None:
                 return None
-            if isinstance(t, _LitType):
+            if isinstance(t, LiteralType):
                 return t
             b = T.base_of(t)
             if b is T.TIME:
@@ -1508,7 +1474,7 @@ class Checker:
             rt = self.expr(e.right, scope, None)
             if lt is None or rt is None:
                 return None
-            if isinstance(lt, _LitType):
+            if isinstance(lt, LiteralType):
                 lt = self.settle(e.left, lt, hint if hint is not None and T.in_generic(hint, "ANY_REAL") else DEFAULT_REAL)
             rt = self.settle(e.right, rt)
             if not T.in_generic(lt, "ANY_REAL"):
@@ -1523,7 +1489,7 @@ class Checker:
         if lt is None or rt is None:
             return None
         # an untyped literal takes the other side's type
-        if isinstance(lt, _LitType) and isinstance(rt, _LitType):
+        if isinstance(lt, LiteralType) and isinstance(rt, LiteralType):
             if op in self._CMP:
                 kind = "real" if "real" in (lt.kind, rt.kind) else "int"
                 common = DEFAULT_REAL if kind == "real" else DEFAULT_INT
@@ -1535,11 +1501,11 @@ class Checker:
                 self.error(e, f"'{op}' needs BOOL or bit-string operands, not untyped numbers")
                 return None
             return REAL_LIT if "real" in (lt.kind, rt.kind) else INT_LIT
-        if isinstance(lt, _LitType):
+        if isinstance(lt, LiteralType):
             lt = self._adopt(e.left, lt, rt, op)
             if lt is None:
                 return None
-        elif isinstance(rt, _LitType):
+        elif isinstance(rt, LiteralType):
             rt = self._adopt(e.right, rt, lt, op)
             if rt is None:
                 return None
@@ -1595,7 +1561,7 @@ class Checker:
                       + ("" if self._same(lt, rt) else " (IEC has no implicit conversion: convert one side)"))
         return None
 
-    def _adopt(self, lit_e: A.Expr, lit_t: _LitType, other: T.Type, op: str) -> Optional[T.Type]:
+    def _adopt(self, lit_e: A.Expr, lit_t: LiteralType, other: T.Type, op: str) -> Optional[T.Type]:
         """An untyped literal operand takes the type of the other operand."""
         ob = T.base_of(other)
         if isinstance(ob, T.ElementaryType) and ob.kind == "time" and op in ("*", "/"):
@@ -1612,7 +1578,7 @@ class Checker:
 
     def settle(self, e: A.Expr, t: T.Type, target: Optional[T.Type] = None) -> T.Type:
         """Give an untyped literal expression its final type (default DINT / LREAL)."""
-        if not isinstance(t, _LitType):
+        if not isinstance(t, LiteralType):
             return t
         if target is None:
             target = DEFAULT_REAL if t.kind == "real" else DEFAULT_INT
@@ -1620,7 +1586,7 @@ class Checker:
         return target
 
     def _set_lit_type(self, e: A.Expr, target: T.Type) -> None:
-        if isinstance(e.ty, _LitType) or e.ty is None:
+        if isinstance(e.ty, LiteralType) or e.ty is None:
             e.ty = target
         if isinstance(e, A.Binary):
             e.operand_ty = target
@@ -1634,7 +1600,7 @@ class Checker:
     def assignable(self, target: T.Type, e: A.Expr, t: T.Type, what: str = "assignment") -> bool:
         """Can a value of type `t` (expression `e`) be stored in `target`? Reports why not."""
         tb = T.base_of(target)
-        if isinstance(t, _LitType):
+        if isinstance(t, LiteralType):
             v = self.const_value(e)
             if isinstance(tb, T.ElementaryType):
                 if t.kind == "int" and (tb.is_integer or tb.kind == "bits"):
@@ -1710,7 +1676,7 @@ class Checker:
                 if task.interval is not None:
                     t = self.expr(task.interval, sc, T.TIME)
                     if t is not None and T.base_of(t) is not T.TIME:
-                        what = f"an {t.name}" if isinstance(t, _LitType) else self._tname(t)
+                        what = f"an {t.name}" if isinstance(t, LiteralType) else self._tname(t)
                         self.error(task.interval, f"INTERVAL must be a TIME (e.g. T#20ms), not {what}")
                     else:
                         v = self.const_value(task.interval)

@@ -221,7 +221,7 @@ class _Builder(Transformer):
         for d in decls:
             d.section, d.constant, d.retain = section, constant, retain
         block = A.VarBlock(**self._tok(first), section=section, constant=constant, retain=retain, decls=decls)
-        block.qualifiers = quals  # type: ignore[attr-defined]
+        block.qualifiers = quals
         return block
 
     def var_decl(self, children):
@@ -250,7 +250,7 @@ class _Builder(Transformer):
         decls = [A.VarDecl(**self._tok(n), name=str(n), type_ref=type_ref, init=init, location=location,
                            edge=edge) for n in names]
         for d in decls:
-            d.group_size = len(names)  # type: ignore[attr-defined]
+            d.group_size = len(names)
         return decls
 
     def anon_located(self, children):
@@ -259,7 +259,7 @@ class _Builder(Transformer):
         init = w[2] if len(w) > 2 else None
         d = A.VarDecl(**self._tok(loc_tok), name="", type_ref=type_ref, init=init,
                       location=self._location(loc_tok))
-        d.group_size = 1  # type: ignore[attr-defined]
+        d.group_size = 1
         return [d]
 
     def _location(self, tok: Token) -> A.Location:

@@ -17,7 +17,8 @@ from plclab.frontend.checker import CheckedUnit
 # fields that say where a node is, or that the checker filled in (see frontend/ast.py)
 _SKIP = {"line", "col", "file", "key", "ty", "sym", "pou", "std", "arg_types", "fb_type", "call", "param",
          "lo_value", "hi_value", "operand_ty", "init_value", "global_decl", "ret_ty", "symbols", "end_line",
-         "interval_ns", "task_decl"}
+         "interval_ns", "task_decl", "fb_init", "ret_decl", "eno_decl", "bound_params",
+         "group_size"}     # group_size: `a, b : INT` is layout (TC6 lists one variable each)
 
 _TYPE_ALIASES = {"TIME_OF_DAY": "TOD", "DATE_AND_TIME": "DT"}
 

@@ -34,7 +34,7 @@ from dataclasses import dataclass, field
 from typing import Any, Optional
 
 from plclab.frontend import ast as A
-from plclab.frontend.checker import CheckedUnit, EnumValue, _LitType
+from plclab.frontend.checked import CheckedUnit, EnumValue, LiteralType
 from plclab.frontend.stdsigs import FBSig
 from plclab.iec import types as T
 from plclab.runtime import stdfb, stdlib
@@ -193,7 +193,7 @@ class Compiler:
         """Normalise an arithmetic result to the C type of `ty`; nothing to do when its range
         `rng` (plclab.runtime.ranges) shows it cannot leave the type."""
         b = T.base_of(ty) if ty is not None else None
-        if isinstance(b, _LitType) or b is None:
+        if isinstance(b, LiteralType) or b is None:
             return code
         if isinstance(b, T.ElementaryType):
             if b.kind in ("sint", "uint", "bits"):
@@ -285,7 +285,7 @@ class Compiler:
         return self.init_code(d.init_value if d.init_value is not None else T.default_value(ty))
 
     def fb_new(self, ty: T.FBType, d: Optional[A.VarDecl]) -> str:
-        inits = getattr(d, "fb_init", None) if d is not None else None
+        inits = d.fb_init if d is not None else None
         if isinstance(ty.pou, FBSig):
             cls = self.bind(getattr(stdfb, ty.pou.name), "_std")
             code = f"{cls}(_rt.scan_clock)"
@@ -303,7 +303,7 @@ class Compiler:
         name = _pyname("FB" if pou.kind == "FUNCTION_BLOCK" else "PRG", pou.name)
         decls = [d for d in pou.decls if d.name]
         located = [d for d in pou.decls if d.location is not None]
-        eno = getattr(pou, "eno_decl", None)
+        eno = pou.eno_decl
         attrs = [d.key for d in decls] + [located_attr(d) for d in located if not d.name] + \
             (["ENO"] if eno is not None else []) + (["EN"] if pou.kind == "FUNCTION_BLOCK" else [])
         out.emit(0, f"class {name}:")
@@ -374,8 +374,8 @@ class Compiler:
         self.in_function = True
         use = body_use(pou.body)
         params = _params(pou)
-        ret = getattr(pou, "ret_decl", None)
-        eno = getattr(pou, "eno_decl", None)
+        ret = pou.ret_decl
+        eno = pou.eno_decl
         boxed = lambda d: id(d) in use.by_ref   # noqa: E731
         self.local = {}
         for d in pou.decls:
@@ -854,7 +854,7 @@ class Compiler:
 
     def std_call(self, c: A.Call) -> str:
         args = [a for a in c.args if a.key not in ("EN", "ENO")]
-        names = getattr(c, "bound_params", [a.key for a in args])
+        names = c.bound_params if c.bound_params is not None else [a.key for a in args]
         arg_types = list(c.arg_types or [a.value.ty for a in args])
         arg_types = [_concrete(t) for t in arg_types]
         fn = stdlib.lookup(c.std, [_lib_type(t) for t in arg_types], _lib_type(c.ty))

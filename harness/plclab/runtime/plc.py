@@ -19,7 +19,7 @@ from typing import Any, Callable, Optional
 
 from plclab.errors import PlcLabError
 from plclab.frontend import ast as A
-from plclab.frontend.checker import CheckedUnit
+from plclab.frontend.checked import CheckedUnit
 from plclab.iec import types as T
 from plclab.runtime.compiler import CompiledProgram, compile_unit, located_attr
 from plclab.runtime.faults import FaultRecord, PlcFault

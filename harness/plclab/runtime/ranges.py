@@ -15,7 +15,7 @@ from __future__ import annotations
 from typing import Optional
 
 from plclab.frontend import ast as A
-from plclab.frontend.checker import _LitType
+from plclab.frontend.checked import LiteralType
 from plclab.iec import types as T
 
 Range = tuple[int, int]
@@ -25,7 +25,7 @@ _C_INT: Range = (-(1 << 31), (1 << 31) - 1)
 
 def concrete(t: Optional[T.Type]) -> Optional[T.Type]:
     """A literal's type as C sees it: an untyped integer literal is a DINT, a real an LREAL."""
-    if isinstance(t, _LitType):
+    if isinstance(t, LiteralType):
         return T.DINT if t.kind == "int" else T.LREAL
     return t
 
