@@ -206,6 +206,14 @@ def _cmd_console(args: argparse.Namespace) -> int:
     return 0
 
 
+def _cmd_lab(args: argparse.Namespace) -> int:
+    from plclab.lab import open_lab, serve_lab
+
+    server = open_lab(args.stand, program=args.program, variant=args.variant, bind=args.bind, port=args.port,
+                      speed=args.speed, modbus_port=args.modbus_port)
+    return serve_lab(server)
+
+
 def _cmd_build(args: argparse.Namespace) -> int:
     from plclab.build import write_build
 
@@ -383,6 +391,17 @@ def build_parser() -> argparse.ArgumentParser:
     c.add_argument("--console", default="127.0.0.1:2606", metavar="HOST:PORT",
                    help="the console face of an in-process plant (default 127.0.0.1:2606; none = off)")
     c.set_defaults(func=_cmd_serve)
+
+    c = sub.add_parser("lab", help="the virtual lab in the browser: mimic, console, trends, grade")
+    c.add_argument("stand", choices=stands)
+    c.add_argument("--program", nargs="+", metavar="FILE.st", help="run these ST files instead of the variant")
+    c.add_argument("--variant", choices=("baseline", "task1", "task2", "task3", "full"), default="full")
+    c.add_argument("--port", type=_port, default=8080, metavar="P", help="web page port (default 8080; 0: any free)")
+    c.add_argument("--bind", default="127.0.0.1", metavar="ADDR", help="address to listen on (default 127.0.0.1)")
+    c.add_argument("--speed", type=float, default=1.0, metavar="X", help="x1 (real time) .. x50")
+    c.add_argument("--modbus-port", type=_port, default=5020, metavar="P",
+                   help="thermo: port of the Twido Modbus face for an external SCADA client (default 5020)")
+    c.set_defaults(func=_cmd_lab)
 
     c = sub.add_parser("hmi", help="the reference SCADA HMI of a stand (thermo): a Modbus TCP client")
     c.add_argument("stand", choices=("thermo",))

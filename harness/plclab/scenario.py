@@ -227,6 +227,17 @@ class Session:
         self._start_plc()
         self.log("PLC restarted")
 
+    def load_program(self, sources: Sequence[tuple[str, str]], checked: Any = None) -> None:
+        """Download another program to the controller (the virtual lab's "load"): the PLC
+        stops (retain flushed), the plant stays where it is, the new program starts cold in
+        the same trace time. `checked` is the front end's result for `sources`, if known."""
+        checked = checked if checked is not None else check_sources(sources)
+        self.plc.stop()
+        self._offset_ns += self.plc.now_ns
+        self.sources, self.checked = list(sources), checked
+        self._start_plc()
+        self.log("program loaded")
+
     def plc_was_off(self, t: float) -> bool:
         """Whether plant time `t` falls in a power-off of the PLC (restart_plc with off_time):
         what the plant saw then is no doing of the program."""

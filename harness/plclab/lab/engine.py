@@ -1,0 +1,463 @@
+"""The virtual lab's engine: one stand's `Session` (the same PLC, plant and trace as
+`plclab run`) advanced in virtual time paced by the wall clock, x1..x50, in a thread of its
+own.
+
+Everything that touches the session happens in that thread, between scans: the web server
+posts commands (`call`) and gets a future back, and receives a state snapshot after each batch
+of scans (`listen`). So the page is a view of the session, never a second simulator, and a
+console change from any page is seen by the next scan.
+
+Pacing: scans run when their virtual time is due on the wall clock times the speed; after each
+batch a snapshot is published, so at x1 what the page shows is at most one scan behind the
+plant. When the machine cannot keep up with the speed asked, the engine runs what it can and
+reports the speed it reached instead of piling up a backlog.
+"""
+from __future__ import annotations
+
+import concurrent.futures
+import math
+import queue
+import tempfile
+import threading
+import time
+from pathlib import Path
+from typing import Any, Callable, Optional, Sequence
+
+from plclab.errors import CompileError, PlcLabError
+from plclab.lab.panels import PANELS, Panel
+from plclab.plants.base import PlantError
+from plclab.scenario import Session
+from plclab.trace import Trace
+
+SPEEDS = (1, 2, 5, 10, 20, 50)
+MIN_BATCH_S = 0.01          # wall seconds between snapshots at most speeds (100 per second at most)
+MAX_BEHIND_S = 0.25         # wall seconds of backlog after which the engine stops catching up
+TREND_WINDOW_S = 60.0       # virtual seconds of trend history a page gets when it connects
+
+
+class LabError(PlcLabError):
+    """A command the lab refuses: one line for the page."""
+
+
+class Lab:
+    """One stand, its program and its plant, run for the browser page(s)."""
+
+    def __init__(self, stand: str, sources: Optional[Sequence[tuple[str, str]]] = None,
+                 variant: str = "full", program_files: Sequence[str] = (), speed: float = 1.0,
+                 work_dir: Optional[Path] = None):
+        from plclab.runner import stand_module
+
+        self.stand = stand
+        self.module = stand_module(stand)
+        self.panel: Panel = PANELS[stand]
+        self.variant = variant
+        self.program_files = list(program_files)      # where --program came from (reload re-reads them)
+        self._tmp = None
+        if work_dir is None:
+            self._tmp = tempfile.TemporaryDirectory(prefix=f"plclab-lab-{stand}-")
+            work_dir = Path(self._tmp.name)
+        self.work_dir = Path(work_dir)
+        self.retain_path = self.work_dir / f"{stand}.retain.json"
+        from plclab.stands import sources as variant_sources
+        srcs = list(sources) if sources is not None else variant_sources(self.module.STAND, variant)
+        self.program_name = ", ".join(Path(n).name for n, _t in srcs if not n.startswith("<")) \
+            if sources is not None else f"{variant} (shipped)"
+        self.session: Session = self.module.session(variant, program=list(sources) if sources is not None else None,
+                                                    retain_path=self.retain_path, watch_internals=False)
+        self.speed = self._check_speed(speed)
+        self.paused = False
+        self.actual_speed = 0.0
+        self.trend_names: list[str] = list(self.panel.trends)
+        self.extras = Trace()                        # trended variables the session does not record
+        self._extra_unknown: dict[str, str] = {}
+        self._trend_sent: dict[str, int] = {}
+        self._events_sent = 0
+        self._actions_sent = 0
+        self._listeners: list[Callable[[dict], None]] = []
+        self._commands: "queue.SimpleQueue[tuple[Callable[[], Any], concurrent.futures.Future, bool]]" = \
+            queue.SimpleQueue()
+        self._wake = threading.Event()
+        self._stop = threading.Event()
+        self._thread: Optional[threading.Thread] = None
+        self.seq = 0
+        self.scans_run = 0
+
+    # ------------------------------------------------------------------ life cycle
+    def start(self) -> "Lab":
+        self.session.run(self.session.tick)          # the first scan (t = 0): power-up outputs
+        self._thread = threading.Thread(target=self._loop, name=f"lab-{self.stand}", daemon=True)
+        self._thread.start()
+        return self
+
+    def stop(self) -> None:
+        self._stop.set()
+        self._wake.set()
+        if self._thread is not None:
+            self._thread.join(5)
+        self.session.plc.stop()                      # retain flushed
+        if self._tmp is not None:
+            self._tmp.cleanup()
+
+    def listen(self, fn: Callable[[dict], None]) -> None:
+        """`fn(snapshot)` after every batch of scans (called in the engine's thread)."""
+        self._listeners.append(fn)
+
+    # ------------------------------------------------------------------ commands
+    def call(self, fn: Callable[[], Any], console: bool = False) -> concurrent.futures.Future:
+        """Run `fn()` in the engine's thread between scans; its result (or exception) in the
+        future. Console changes (`console=True`) are applied one per scan while running, so a
+        press and its release are both seen by the PLC however quickly they come."""
+        fut: concurrent.futures.Future = concurrent.futures.Future()
+        self._commands.put((fn, fut, console))
+        self._wake.set()
+        return fut
+
+    def _drain(self) -> None:
+        while True:
+            try:
+                fn, fut, console = self._commands.get_nowait()
+            except queue.Empty:
+                return
+            if fut.set_running_or_notify_cancel():
+                try:
+                    fut.set_result(fn())
+                except BaseException as e:   # noqa: BLE001 - the caller gets it through the future
+                    fut.set_exception(e)
+            if console and not self.paused:
+                return
+
+    # the commands themselves (each runs in the engine's thread through `call`)
+    def set_control(self, label: str, value: int) -> None:
+        control = self._control(label)
+        self.session.plant.set_switch(control.input, int(bool(value)))
+        self.session.log(f"{label}={int(bool(value))}")
+
+    def press(self, label: str, down: bool) -> None:
+        control = self._control(label)
+        if down:
+            self.session.console.hold(control.input)
+        else:
+            self.session.console.release(control.input)
+
+    def _control(self, label: str):
+        try:
+            return self.panel.control(label)
+        except KeyError:
+            raise LabError(f"{self.stand} has no console control '{label}' "
+                           f"(one of {', '.join(c.label for c in self.panel.controls)})") from None
+
+    def set_speed(self, speed: float) -> None:
+        self.speed = self._check_speed(speed)
+        self._rebase = True
+
+    def set_paused(self, paused: bool) -> None:
+        self.paused = bool(paused)
+        self._rebase = True
+
+    def single_scan(self) -> None:
+        if not self.paused:
+            raise LabError("single scan: pause first")
+        self._run_scans(1)
+
+    def restart_plc(self) -> None:
+        """Power-cycle the controller: retained variables kept, the plant stays."""
+        self.session.restart_plc()
+        self._rebase = True
+
+    def load_program(self, sources: Sequence[tuple[str, str]], checked: Any, name: str) -> None:
+        self.session.load_program(sources, checked)
+        self.program_name = name
+        self._extra_unknown.clear()
+        self._rebase = True
+
+    def inject(self, fault: str, params: dict[str, str]) -> None:
+        spec = {f.name: f for f in self.panel.faults}.get(fault)
+        if spec is None:
+            raise LabError(f"{self.stand} has no fault '{fault}' (one of {', '.join(f.name for f in self.panel.faults)})")
+        values: dict[str, Any] = {}
+        for p in spec.params:
+            text = str(params.get(p.name, p.default)).strip()
+            if text == "":
+                continue
+            if p.choices:
+                if text not in p.choices:
+                    raise LabError(f"{fault}: {p.name} must be one of {', '.join(p.choices)}, not '{text}'")
+                values[p.name] = int(text) if text.isdigit() else text
+            else:
+                try:
+                    number = float(text)
+                except ValueError:
+                    raise LabError(f"{fault}: {p.name} must be a number, not '{text}'") from None
+                if not math.isfinite(number):
+                    raise LabError(f"{fault}: {p.name} must be a finite number, not '{text}'")
+                values[p.name] = int(number) if number.is_integer() and p.name in ("value", "axis") else number
+        try:
+            self.session.inject(fault, **values)
+        except PlantError as e:
+            raise LabError(str(e)) from None
+
+    def clear_faults(self) -> None:
+        self.session.clear_faults()
+
+    def set_trends(self, names: Sequence[str]) -> list[str]:
+        """Choose the trended signals; an unknown name is refused (one line), the rest kept."""
+        clean = []
+        for n in names:
+            n = str(n).strip()
+            if n and n not in clean:
+                clean.append(n)
+        if len(clean) > 16:
+            raise LabError(f"at most 16 trended signals ({len(clean)} asked)")
+        for n in clean:
+            if n not in self.session.trace and n not in self.session.labels:
+                try:
+                    self._read_extra(n)
+                except LabError:
+                    raise
+        self.trend_names = clean
+        self._trend_sent = {}
+        return clean
+
+    def _read_extra(self, name: str) -> Any:
+        try:
+            value = self.session.value(name)
+        except Exception:        # noqa: BLE001 - any lookup failure is an unknown name for the user
+            raise LabError(f"'{name}' is neither a located address (%IX0.1), a label of the stand nor a "
+                           f"variable of the program (e.g. Main.Cp.Count)") from None
+        if isinstance(value, (list, tuple, dict)) or not isinstance(value, (bool, int, float, str)):
+            raise LabError(f"'{name}' is not an elementary variable: trend one of its elements or fields")
+        return value
+
+    # ------------------------------------------------------------------ the loop
+    _rebase = True
+
+    def _loop(self) -> None:
+        s = self.session
+        base_wall = base_virt = 0.0
+        rate_wall, rate_virt = time.monotonic(), s.now
+        while not self._stop.is_set():
+            self._drain()
+            if self._rebase:
+                self._rebase = False
+                base_wall, base_virt = time.monotonic(), s.now
+            if self.paused:
+                self.actual_speed = 0.0
+                self._publish()
+                self._wake.wait(0.2)
+                self._wake.clear()
+                continue
+            tick = s.tick
+            now = time.monotonic()
+            target = base_virt + (now - base_wall) * self.speed
+            due = math.floor((target - s.now) / tick + 1e-9) + 1     # scans at or before `target`
+            if due <= 0:
+                wait = (s.now - target) / self.speed
+                self._wake.wait(max(0.0, min(wait, 0.2)))
+                self._wake.clear()
+                continue
+            if (due - 1) * tick / self.speed > MAX_BEHIND_S:   # cannot keep up: run a slice, rebase
+                due = max(1, int(MAX_BEHIND_S * self.speed / tick))
+                self._rebase = True
+            console_waiting = not self._commands.empty()
+            self._run_scans(1 if console_waiting else due)
+            if now - rate_wall >= 1.0:
+                self.actual_speed = (s.now - rate_virt) / (now - rate_wall)
+                rate_wall, rate_virt = now, s.now
+            self._publish()
+            # at least MIN_BATCH_S between batches (unless one scan takes longer at this speed)
+            pause = min(MIN_BATCH_S, tick / self.speed) - (time.monotonic() - now)
+            if pause > 0 and self._commands.empty():
+                self._wake.wait(pause)
+                self._wake.clear()
+
+    def _run_scans(self, n: int) -> None:
+        s = self.session
+        extras = [name for name in self.trend_names
+                  if name not in s.trace and name not in s.labels and name not in self._extra_unknown]
+        if not extras:
+            s.run(n * s.tick)
+        else:
+            for _ in range(n):                 # trended variables the trace lacks: sampled every scan
+                s.run(s.tick)
+                self._sample_extras(extras)
+        self.scans_run += n
+
+    def _sample_extras(self, names: list[str]) -> None:
+        t_ns = round((self.session.now - self.session.tick) * 1e9)
+        for name in names:
+            try:
+                value = self._read_extra(name)
+            except LabError as e:
+                self._extra_unknown[name] = str(e)
+                continue
+            if isinstance(value, bool):
+                kind = "bool"
+            elif isinstance(value, int):
+                kind = "int"
+            elif isinstance(value, float):
+                kind = "real"
+            else:
+                kind = "str"
+            if name not in self.extras:
+                self.extras.declare(name, kind, value, t_ns, width=64 if kind == "int" else None)
+            else:
+                self.extras.change(t_ns, name, value)
+
+    # ------------------------------------------------------------------ snapshots
+    def _publish(self) -> None:
+        if not self._listeners:
+            return
+        snap = self.snapshot()
+        for fn in list(self._listeners):
+            fn(snap)
+
+    def snapshot(self, full: bool = False) -> dict[str, Any]:
+        """The state a page shows. `full` (a page connecting) carries the whole history of
+        events and the last minute of every trend instead of only what is new."""
+        s = self.session
+        plc = s.plc
+        self.seq += 1
+        fault = plc.fault
+        snap: dict[str, Any] = {
+            "type": "state", "seq": self.seq, "t": round(s.now - s.tick, 6), "tick": s.tick,
+            "speed": self.speed, "paused": self.paused, "actual_speed": round(self.actual_speed, 2),
+            "program": self.program_name,
+            "plc": {"state": plc.state, "fault": str(fault) if fault else None,
+                    "pou": fault.pou if fault else None, "file": fault.file if fault else None,
+                    "line": fault.line if fault else None},
+            "io": self._io(),
+            "mimic": self.panel.mimic(s),
+        }
+        events = s.plant.events
+        start = 0 if full else self._events_sent
+        snap["events"] = [{"t": round(e.time, 3), "kind": e.kind, "detail": e.detail} for e in events[start:]]
+        if not full:
+            self._events_sent = len(events)
+        start = 0 if full else self._actions_sent
+        snap["actions"] = [{"t": round(a.time, 3), "text": a.text} for a in s.actions[start:]][-200:]
+        if not full:
+            self._actions_sent = len(s.actions)
+        snap["trends"] = self._trend_changes(full)
+        snap["trend_errors"] = {n: self._extra_unknown[n] for n in self.trend_names if n in self._extra_unknown}
+        if self.stand == "thermo":
+            snap["registers"] = self.registers()
+        return snap
+
+    def _io(self) -> dict[str, int]:
+        s = self.session
+        io = {}
+        for c in self.panel.controls:
+            io[c.label] = int(bool(s.value(c.signal)))
+        for lamp in self.panel.lamps:
+            io[lamp.label] = int(bool(s.value(lamp.label)))
+        return io
+
+    def _trend_changes(self, full: bool) -> dict[str, list]:
+        s = self.session
+        out: dict[str, list] = {}
+        horizon_ns = round((s.now - TREND_WINDOW_S) * 1e9)
+        for name in self.trend_names:
+            trace = s.trace if name in s.trace else self.extras if name in self.extras else None
+            if trace is None:
+                continue
+            count = trace.change_count(name)
+            if full:
+                changes = trace.changes(name)
+                recent = [c for c in changes if c[0] >= horizon_ns]
+                earlier = [c for c in changes if c[0] < horizon_ns]
+                points = (earlier[-1:] + recent)
+            else:
+                start = max(0, self._trend_sent.get(name, 0) - 1)
+                points = trace.changes_from(name, start)
+                self._trend_sent[name] = count
+            out[name] = [[t / 1e9, _plain(v)] for t, v in points]
+        return out
+
+    # ------------------------------------------------------------------ thermo registers
+    def registers(self) -> list[dict[str, Any]]:
+        from plclab.modbus.profiles import THERMO
+        image = self.session.plc.image
+        raw = image.snapshot("MW", 0, max(r.address for r in THERMO.registers) + 1)
+        return [{"address": r.address, "name": r.name, "access": r.access.value,
+                 "valid": str(r.valid) if r.valid is not None else "",
+                 "rule": f"writable only when {r.writable_when}" if r.writable_when else "",
+                 "description": r.description, "value": r.as_value(raw[r.address])} for r in THERMO.registers]
+
+    def twido_map(self):
+        """The Twido face's register map on whichever PLC runs now (a restart or a program
+        load makes a new process image; the map follows it)."""
+        from plclab.modbus.maps import TwidoMap
+        from plclab.modbus.profiles import THERMO
+        return TwidoMap(_CurrentImage(self), THERMO)
+
+    def write_register(self, address: int, value: int) -> None:
+        from plclab.modbus.protocol import ModbusException, Table
+        try:
+            self.twido_map().write(Table.HOLDING_REGISTERS, int(address), (int(value) & 0xFFFF,))
+        except ModbusException as e:
+            from plclab.hmi import EXCEPTION_NAMES
+            code = int(e.code)
+            raise LabError(f"%MW{address} = {value} refused: exception {code:02d} "
+                           f"({EXCEPTION_NAMES.get(code, 'unknown')}): {e.reason}") from None
+        self.session.log(f"SCADA %MW{address}={value}")
+
+    # ------------------------------------------------------------------ downloads
+    def trace_for_download(self) -> Trace:
+        """The session's trace plus the trended variables it does not record."""
+        s = self.session
+        if not self.extras.signals():
+            return s.trace
+        out = Trace()
+        for src in (s.trace, self.extras):
+            for name in src.signals():
+                info = src.info(name)
+                changes = src.changes(name)
+                out.declare(name, info.kind, changes[0][1], changes[0][0], width=info.width)
+                for t, v in changes[1:]:
+                    out.change(t, name, v)
+        out.advance(s.trace.end_ns)
+        return out
+
+    @staticmethod
+    def _check_speed(speed: float) -> float:
+        try:
+            speed = float(speed)
+        except (TypeError, ValueError):
+            raise LabError(f"speed must be a number (x1..x50), not '{speed}'") from None
+        if not 0.1 <= speed <= 50 or not math.isfinite(speed):
+            raise LabError(f"speed x{speed:g}: from x0.1 to x50")
+        return speed
+
+
+class _CurrentImage:
+    """The process image of the PLC the lab runs now (ImageLike for the Modbus maps)."""
+
+    def __init__(self, lab: Lab):
+        self._lab = lab
+
+    def snapshot(self, area: str, start: int, count: int) -> list[int]:
+        return self._lab.session.plc.image.snapshot(area, start, count)
+
+    def queue_write(self, area: str, start: int, values: list[int]) -> None:
+        self._lab.session.plc.image.queue_write(area, start, values)
+
+
+def _plain(value: Any) -> Any:
+    if isinstance(value, bool):
+        return int(value)
+    if isinstance(value, float) and not math.isfinite(value):
+        return None
+    return value
+
+
+def check_program(sources: Sequence[tuple[str, str]]):
+    """The front end's verdict on an uploaded program: (checked, []) or (None, diagnostics)."""
+    from plclab.frontend import check_sources
+    try:
+        checked = check_sources(sources)
+    except CompileError as e:
+        return None, [str(d) for d in e.diagnostics]
+    if checked.config is None:
+        return None, [f"{sources[-1][0]}:1:1: error: no CONFIGURATION: load the complete program (the bundle "
+                      f"from `plclab build`, with its CONFIGURATION Config0 and TASKs)"]
+    return checked, []

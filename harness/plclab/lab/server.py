@@ -1,0 +1,509 @@
+"""The virtual lab's web server (aiohttp): the page, its WebSocket and a few HTTP endpoints.
+
+    GET  /                 the page (static/index.html, shipped in the package; no CDN)
+    GET  /ws               WebSocket: state pushed after every batch of scans; commands in
+    POST /api/program      load ST files (multipart), checked first: `file:line:col: ...`
+    POST /api/reload       load the program again (re-read from disk when it came from there)
+    POST /api/grade        {"task": "task1"}: the grader on the loaded program, as a table
+    GET  /grade/RUN/FILE   a grade run's trace files
+    GET  /trace.csv|.vcd   the recorded trace so far
+
+Every page sees the same stand: a console change from any of them is applied in arrival
+order (last writer wins) and every page shows the result. A page that goes away releases
+the push buttons it was holding. Bad requests get one line back; the server keeps running.
+"""
+from __future__ import annotations
+
+import asyncio
+import io
+import json
+import threading
+from pathlib import Path
+from typing import Any, Optional
+
+from aiohttp import BodyPartReader, WSMsgType, web
+
+from plclab.errors import PlcLabError
+from plclab.lab.engine import SPEEDS, Lab, LabError, check_program
+
+STATIC = Path(__file__).resolve().parent / "static"
+MAX_UPLOAD = 1024 * 1024          # bytes of ST per upload: a lab program is a few tens of kB
+MAX_FILES = 32
+MAX_MESSAGE = 64 * 1024           # bytes of one WebSocket message from a page
+
+
+class _Client:
+    """One connected page: what it has not been sent yet and the buttons it holds."""
+
+    def __init__(self, ws: web.WebSocketResponse):
+        self.ws = ws
+        self.pending: Optional[dict] = None
+        self.ready = asyncio.Event()
+        self.held: set[str] = set()
+
+
+def _merge(old: dict, new: dict) -> dict:
+    """Two snapshots a slow page has not received yet, as one: the newest state with the
+    events, actions and trend points of both."""
+    out = dict(new)
+    for key in ("events", "actions"):
+        out[key] = old.get(key, []) + new.get(key, [])
+    trends = {k: list(v) for k, v in old.get("trends", {}).items()}
+    for name, points in new.get("trends", {}).items():
+        trends.setdefault(name, []).extend(points)
+    out["trends"] = trends
+    return out
+
+
+class LabServer:
+    """Serves one `Lab` on bind:port (0: any free port); for thermo also the Twido Modbus
+    face on bind:modbus_port, on the same process image the page edits."""
+
+    def __init__(self, lab: Lab, bind: str = "127.0.0.1", port: int = 8080,
+                 modbus_port: Optional[int] = None):
+        self.lab = lab
+        self.bind = bind
+        self.port = port
+        self.modbus_port = modbus_port
+        self.modbus = None
+        self.clients: set[_Client] = set()
+        self.loop: Optional[asyncio.AbstractEventLoop] = None
+        self._runner: Optional[web.AppRunner] = None
+        self._grade_lock: Optional[asyncio.Lock] = None
+        self._grade_runs = 0
+        self.grade_files: dict[str, Path] = {}
+
+    # ------------------------------------------------------------------ life cycle
+    def app(self) -> web.Application:
+        app = web.Application(client_max_size=MAX_UPLOAD + 64 * 1024, middlewares=[_one_line_errors])
+        app.router.add_get("/", self.index)
+        app.router.add_get("/ws", self.websocket)
+        app.router.add_post("/api/program", self.upload)
+        app.router.add_post("/api/reload", self.reload)
+        app.router.add_post("/api/grade", self.grade)
+        app.router.add_get("/grade/{run}/{file}", self.grade_file)
+        app.router.add_get("/trace.csv", self.trace_csv)
+        app.router.add_get("/trace.vcd", self.trace_vcd)
+        app.router.add_static("/static/", STATIC, show_index=False)
+        return app
+
+    async def start(self) -> str:
+        """Listen; returns the page's URL. The engine starts too."""
+        self.loop = asyncio.get_running_loop()
+        self._grade_lock = asyncio.Lock()
+        if self.lab.stand == "thermo" and self.modbus_port is not None:
+            self._start_modbus()
+        self._runner = web.AppRunner(self.app(), access_log=None, handle_signals=False)
+        await self._runner.setup()
+        site = web.TCPSite(self._runner, self.bind, self.port)
+        try:
+            await site.start()
+        except OSError as e:
+            await self._runner.cleanup()
+            self._stop_modbus()
+            raise LabError(f"lab: cannot listen on {self.bind}:{self.port} ({e.strerror or e})") from None
+        self.port = site._server.sockets[0].getsockname()[1]     # the real port when 0 was asked
+        self.lab.listen(self._on_snapshot)
+        if self.lab._thread is None:
+            self.lab.start()
+        return self.url
+
+    @property
+    def url(self) -> str:
+        host = f"[{self.bind}]" if ":" in self.bind else self.bind
+        return f"http://{host}:{self.port}/"
+
+    def _start_modbus(self) -> None:
+        from plclab.modbus.server import ModbusTcpServer
+        try:
+            self.modbus = ModbusTcpServer(self.lab.twido_map(), self.bind, self.modbus_port, name="twido").start()
+        except (OSError, PlcLabError) as e:
+            raise LabError(f"lab: the Twido Modbus face cannot listen on {self.bind}:{self.modbus_port} "
+                           f"({getattr(e, 'strerror', None) or e}); choose another --modbus-port") from None
+
+    def _stop_modbus(self) -> None:
+        if self.modbus is not None:
+            self.modbus.stop()
+            self.modbus = None
+
+    async def stop(self) -> None:
+        for c in list(self.clients):
+            await c.ws.close()
+        if self._runner is not None:
+            await self._runner.cleanup()
+        self._stop_modbus()
+        self.lab.stop()
+
+    # ------------------------------------------------------------------ pushing state
+    def _on_snapshot(self, snap: dict) -> None:
+        """Engine thread: hand the snapshot to the event loop."""
+        loop = self.loop
+        if loop is not None and not loop.is_closed():
+            try:
+                loop.call_soon_threadsafe(self._fanout, snap)
+            except RuntimeError:          # the loop is closing
+                pass
+
+    def _fanout(self, snap: dict) -> None:
+        for c in self.clients:
+            c.pending = snap if c.pending is None else _merge(c.pending, snap)
+            c.ready.set()
+
+    def _broadcast(self, message: dict) -> None:
+        text = json.dumps(message)
+        for c in self.clients:
+            if not c.ws.closed:
+                asyncio.ensure_future(self._send(c, text))
+
+    @staticmethod
+    async def _send(c: _Client, text: str) -> None:
+        try:
+            await c.ws.send_str(text)
+        except (ConnectionError, RuntimeError):
+            pass
+
+    async def _sender(self, c: _Client) -> None:
+        while not c.ws.closed:
+            await c.ready.wait()
+            c.ready.clear()
+            snap, c.pending = c.pending, None
+            if snap is None:
+                continue
+            try:
+                await c.ws.send_str(json.dumps(snap))
+            except (ConnectionError, RuntimeError):
+                return
+
+    # ------------------------------------------------------------------ the page
+    async def index(self, request: web.Request) -> web.StreamResponse:
+        return web.FileResponse(STATIC / "index.html", headers={"Cache-Control": "no-cache"})
+
+    def hello(self) -> dict:
+        from plclab.grader import tasks
+        lab = self.lab
+        try:
+            grade_tasks = tasks(lab.stand)
+        except PlcLabError:
+            grade_tasks = []
+        twido = None
+        if self.modbus is not None:
+            twido = f"{self.bind}:{self.modbus.port}"
+        return {"type": "hello", "stand": lab.stand, "title": lab.module.STAND.title, "panel": lab.panel.describe(),
+                "speeds": list(SPEEDS), "tasks": grade_tasks, "twido": twido, "pages": len(self.clients) + 1,
+                "trend_names": lab.trend_names, "can_reload": True}
+
+    async def websocket(self, request: web.Request) -> web.StreamResponse:
+        ws = web.WebSocketResponse(heartbeat=20.0, max_msg_size=MAX_MESSAGE)
+        await ws.prepare(request)
+        client = _Client(ws)
+        await ws.send_str(json.dumps(self.hello()))
+        loop = asyncio.get_running_loop()
+
+        def first_state() -> None:
+            # in the engine thread: the full snapshot, then register the page for what follows
+            # (both through the event loop, in this order: no change is lost or doubled)
+            snap = self.lab.snapshot(full=True)
+            loop.call_soon_threadsafe(self._join, client, snap)
+        await asyncio.wrap_future(self.lab.call(first_state))
+        sender = asyncio.ensure_future(self._sender(client))
+        try:
+            async for msg in ws:
+                if msg.type == WSMsgType.TEXT:
+                    reply = await self._command(client, msg.data)
+                    if reply is not None and not ws.closed:
+                        await ws.send_str(json.dumps(reply))
+                elif msg.type == WSMsgType.ERROR:
+                    break
+        finally:
+            self.clients.discard(client)
+            client.ready.set()
+            sender.cancel()
+            for label in list(client.held):          # a page that goes away lets go of its buttons
+                self.lab.call(lambda label=label: self.lab.press(label, False), console=True)
+            self._broadcast({"type": "pages", "pages": len(self.clients)})
+        return ws
+
+    def _join(self, client: _Client, snap: dict) -> None:
+        self.clients.add(client)
+        client.pending = snap
+        client.ready.set()
+        self._broadcast({"type": "pages", "pages": len(self.clients)})
+
+    async def _command(self, client: _Client, text: str) -> Optional[dict]:
+        """One command from a page; the reply says whether it was done, or why not."""
+        try:
+            msg = json.loads(text)
+            if not isinstance(msg, dict):
+                raise ValueError
+        except ValueError:
+            return {"type": "reply", "ok": False, "message": "not a command (a JSON object was expected)"}
+        op, mid = msg.get("op"), msg.get("id")
+        lab = self.lab
+        try:
+            if op == "set":
+                await asyncio.wrap_future(lab.call(lambda: lab.set_control(str(msg["label"]), int(msg["value"])),
+                                                   console=True))
+            elif op in ("press", "release"):
+                label = str(msg["label"])
+                await asyncio.wrap_future(lab.call(lambda: lab.press(label, op == "press"), console=True))
+                (client.held.add if op == "press" else client.held.discard)(label)
+            elif op == "speed":
+                await asyncio.wrap_future(lab.call(lambda: lab.set_speed(msg["value"])))
+            elif op in ("pause", "run"):
+                await asyncio.wrap_future(lab.call(lambda: lab.set_paused(op == "pause")))
+            elif op == "scan":
+                await asyncio.wrap_future(lab.call(lab.single_scan))
+            elif op == "restart":
+                await asyncio.wrap_future(lab.call(lab.restart_plc))
+                self._broadcast({"type": "notice", "text": "PLC restarted (power cycle, retained variables kept)"})
+            elif op == "inject":
+                params = msg.get("params") or {}
+                if not isinstance(params, dict):
+                    raise LabError("fault parameters must be name: value pairs")
+                await asyncio.wrap_future(lab.call(lambda: lab.inject(str(msg["fault"]), params)))
+            elif op == "clear":
+                await asyncio.wrap_future(lab.call(lab.clear_faults))
+            elif op == "trends":
+                names = msg.get("names")
+                if not isinstance(names, list):
+                    raise LabError("trends: a list of signal names was expected")
+                chosen = await asyncio.wrap_future(lab.call(lambda: lab.set_trends(names)))
+                full = await asyncio.wrap_future(lab.call(lambda: lab.snapshot(full=True)))
+                self._broadcast({"type": "trends", "names": chosen, "trends": full["trends"]})
+            elif op == "register":
+                await asyncio.wrap_future(lab.call(lambda: lab.write_register(int(msg["address"]), int(msg["value"]))))
+            else:
+                raise LabError(f"unknown command '{op}'")
+        except (LabError, PlcLabError) as e:
+            return {"type": "reply", "id": mid, "op": op, "ok": False, "message": str(e)}
+        except (KeyError, TypeError, ValueError) as e:
+            return {"type": "reply", "id": mid, "op": op, "ok": False,
+                    "message": f"{op}: bad or missing value ({type(e).__name__}: {e})"}
+        return {"type": "reply", "id": mid, "op": op, "ok": True}
+
+    # ------------------------------------------------------------------ program
+    async def upload(self, request: web.Request) -> web.Response:
+        if request.content_length is not None and request.content_length > MAX_UPLOAD + 64 * 1024:
+            return _refuse(f"upload too large ({request.content_length} bytes): at most {MAX_UPLOAD // 1024} KiB of ST")
+        try:
+            reader = await request.multipart()
+        except (AssertionError, ValueError, KeyError):
+            return _refuse("upload: send the ST files as multipart/form-data (the page's file picker does)")
+        files: list[tuple[str, str]] = []
+        total = 0
+        try:
+            while True:
+                part = await reader.next()
+                if part is None:
+                    break
+                if not isinstance(part, BodyPartReader) or not part.filename:
+                    continue
+                name = Path(part.filename.replace("\\", "/")).name or "program.st"
+                data = bytearray()
+                while True:
+                    chunk = await part.read_chunk(65536)
+                    if not chunk:
+                        break
+                    total += len(chunk)
+                    if total > MAX_UPLOAD:
+                        return _refuse(f"upload too large: at most {MAX_UPLOAD // 1024} KiB of ST in one load")
+                    data += chunk
+                if len(files) >= MAX_FILES:
+                    return _refuse(f"upload: at most {MAX_FILES} files in one load")
+                files.append((name, _decode(name, bytes(data))))
+        except _NotText as e:
+            return _refuse(str(e), errors=[{"text": str(e), "line": None, "source": None}])
+        except (ValueError, AssertionError) as e:
+            return _refuse(f"upload: the request could not be read ({e})")
+        if not files:
+            return _refuse("upload: no file in the request (choose one or more .st files)")
+        return await self._load(files, ", ".join(n for n, _ in files))
+
+    async def _load(self, files: list[tuple[str, str]], name: str) -> web.Response:
+        loop = asyncio.get_running_loop()
+        checked, errors = await loop.run_in_executor(None, check_program, files)
+        if errors:
+            return _refuse(f"the program does not pass the check ({len(errors)} error(s)); the PLC keeps the "
+                           f"program it runs", errors=[_located(e, files) for e in errors])
+        await asyncio.wrap_future(self.lab.call(lambda: self.lab.load_program(files, checked, name)))
+        self._broadcast({"type": "notice", "text": f"program loaded: {name}"})
+        return web.json_response({"ok": True, "message": f"program loaded: {name}", "errors": []})
+
+    async def reload(self, request: web.Request) -> web.Response:
+        lab = self.lab
+        if lab.program_files:
+            from plclab.frontend import read_sources
+            try:
+                files = read_sources(lab.program_files)
+            except PlcLabError as e:
+                return _refuse(str(e))
+            name = ", ".join(Path(n).name for n, _ in files)
+        else:
+            files = list(lab.session.sources)
+            if any(n.startswith("<") for n, _t in files):     # a shipped variant: read plc/ again
+                from plclab.stands import sources
+                files = sources(lab.module.STAND, lab.variant)
+            name = lab.program_name
+        return await self._load(files, name)
+
+    # ------------------------------------------------------------------ grade
+    async def grade(self, request: web.Request) -> web.Response:
+        from plclab.grader import grade_sources
+        try:
+            body = await request.json()
+            task = str(body["task"])
+        except (ValueError, KeyError, TypeError):
+            return _refuse('grade: send {"task": "task1"}')
+        assert self._grade_lock is not None
+        if self._grade_lock.locked():
+            return _refuse("grade: a grade is already running; wait for its table")
+        async with self._grade_lock:
+            sources = await asyncio.wrap_future(self.lab.call(lambda: list(self.lab.session.sources)))
+            self._grade_runs += 1
+            run = f"{self._grade_runs}-{task}"
+            out_dir = self.lab.work_dir / "grade" / run
+            loop = asyncio.get_running_loop()
+            try:
+                report = await loop.run_in_executor(None, grade_sources, self.lab.stand, task, sources, str(out_dir))
+            except PlcLabError as e:
+                return _refuse(str(e))
+        links: dict[str, list[dict]] = {}
+        for scenario, paths in report.traces.items():
+            links[scenario] = []
+            for p in paths:
+                self.grade_files[f"{run}/{p.name}"] = p
+                links[scenario].append({"name": p.name, "url": f"/grade/{run}/{p.name}"})
+        rows = [{"id": r.id, "text": r.text, "result": r.result, "expected": r.expected, "observed": r.observed,
+                 "time": r.time, "scenario": r.scenario, "traces": links.get(r.scenario, [])} for r in report.rows]
+        n_pass = sum(r.passed for r in report.rows)
+        summary = (f"{n_pass} of {len(report.rows)} requirements passed: {'PASS' if report.passed else 'FAIL'}"
+                   if not report.errors else "the program does not compile: FAIL")
+        return web.json_response({"ok": True, "title": report.title, "task": task, "passed": report.passed,
+                                  "errors": report.errors, "rows": rows, "summary": summary})
+
+    async def grade_file(self, request: web.Request) -> web.StreamResponse:
+        key = f"{request.match_info['run']}/{request.match_info['file']}"
+        path = self.grade_files.get(key)
+        if path is None or not path.exists():
+            raise web.HTTPNotFound(text=f"no grade trace {key}")
+        return web.FileResponse(path, headers={"Content-Disposition": f'attachment; filename="{path.name}"'})
+
+    # ------------------------------------------------------------------ traces
+    async def trace_csv(self, request: web.Request) -> web.Response:
+        from plclab.trace import csv_text
+        text = await asyncio.wrap_future(self.lab.call(lambda: csv_text(self.lab.trace_for_download())))
+        return _attachment(text, f"{self.lab.stand}-lab.csv", "text/csv")
+
+    async def trace_vcd(self, request: web.Request) -> web.Response:
+        from plclab.trace import write_vcd
+
+        def vcd() -> str:
+            buf = io.StringIO()
+            write_vcd(self.lab.trace_for_download(), buf)
+            return buf.getvalue()
+        text = await asyncio.wrap_future(self.lab.call(vcd))
+        return _attachment(text, f"{self.lab.stand}-lab.vcd", "text/plain")
+
+
+@web.middleware
+async def _one_line_errors(request: web.Request, handler):
+    """A bug of ours in a request: one line back to the page (the server goes on)."""
+    try:
+        return await handler(request)
+    except web.HTTPException:
+        raise
+    except Exception as e:      # noqa: BLE001 - the page gets a line, the log the traceback
+        import logging
+        logging.getLogger("plclab.lab").exception("request %s failed", request.path)
+        return _refuse(f"internal error of the lab ({type(e).__name__}: {e}); please report it", status=500)
+
+
+class _NotText(LabError):
+    pass
+
+
+def _decode(name: str, data: bytes) -> str:
+    """UTF-8 text (a BOM is dropped), or one line saying where the first bad byte is."""
+    try:
+        text = data.decode("utf-8")
+    except UnicodeDecodeError as e:
+        before = data[:e.start]
+        line = before.count(b"\n") + 1
+        col = e.start - (before.rfind(b"\n") + 1) + 1
+        raise _NotText(f"{name}:{line}:{col}: error: not UTF-8 text (byte 0x{data[e.start]:02X}); save the file "
+                       f"as UTF-8") from None
+    if "\x00" in text:
+        raise _NotText(f"{name}:1:1: error: a binary file, not ST text")
+    return text.lstrip("\ufeff")
+
+
+def _located(error: str, files: list[tuple[str, str]]) -> dict[str, Any]:
+    """A diagnostic with the source line it points at (for the page to show)."""
+    texts = dict(files)
+    name, _, rest = error.partition(":")
+    line_no, _, _rest = rest.partition(":")
+    source = None
+    line: Optional[int] = None
+    if line_no.isdigit() and name in texts:
+        line = int(line_no)
+        lines = texts[name].splitlines()
+        if 1 <= line <= len(lines):
+            source = lines[line - 1]
+    return {"text": error, "file": name if name in texts else None, "line": line, "source": source}
+
+
+def _refuse(message: str, errors: Optional[list] = None, status: int = 200) -> web.Response:
+    return web.json_response({"ok": False, "message": message, "errors": errors or []}, status=status)
+
+
+def _attachment(text: str, filename: str, content_type: str) -> web.Response:
+    return web.Response(text=text, content_type=content_type,
+                        headers={"Content-Disposition": f'attachment; filename="{filename}"'})
+
+
+class LabThread:
+    """The server on an event loop of its own thread (tests, `plclab bench`): `start()` returns
+    the URL once it listens; `stop()` ends it."""
+
+    def __init__(self, server: LabServer):
+        self.server = server
+        self._loop = asyncio.new_event_loop()
+        self._thread = threading.Thread(target=self._loop.run_forever, name="lab-web", daemon=True)
+
+    def start(self) -> str:
+        self._thread.start()
+        return asyncio.run_coroutine_threadsafe(self.server.start(), self._loop).result(30)
+
+    def stop(self) -> None:
+        try:
+            asyncio.run_coroutine_threadsafe(self.server.stop(), self._loop).result(30)
+        finally:
+            self._loop.call_soon_threadsafe(self._loop.stop)
+            self._thread.join(10)
+            self._loop.close()
+
+
+def serve_lab(server: LabServer, report=print) -> int:
+    """The CLI's `plclab lab`: serve until Ctrl-C / SIGTERM."""
+    import signal
+
+    async def main() -> None:
+        url = await server.start()
+        lab = server.lab
+        twido = f"; Twido Modbus face on {server.bind}:{server.modbus.port}" if server.modbus else ""
+        report(f"virtual lab: {lab.module.STAND.title}, program {lab.program_name}, x{lab.speed:g}{twido}")
+        report(f"open {url} in a browser; Ctrl-C stops")
+        stop = asyncio.Event()
+        loop = asyncio.get_running_loop()
+        for sig in (signal.SIGINT, signal.SIGTERM):
+            try:
+                loop.add_signal_handler(sig, stop.set)
+            except (NotImplementedError, RuntimeError):
+                pass
+        try:
+            await stop.wait()
+        finally:
+            await server.stop()
+    asyncio.run(main())
+    report("lab stopped")
+    return 0

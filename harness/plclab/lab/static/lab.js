@@ -1,0 +1,461 @@
+// The virtual lab page: a view of the stand the server runs. State comes over the WebSocket;
+// every control sends a command and shows what the server answered. Plain JS, no library.
+"use strict";
+
+const $ = (sel) => document.querySelector(sel);
+const el = (tag, attrs = {}, ...children) => {
+  const e = document.createElement(tag);
+  for (const [k, v] of Object.entries(attrs)) {
+    if (k === "text") e.textContent = v;
+    else if (k.startsWith("on")) e.addEventListener(k.slice(2), v);
+    else e.setAttribute(k, v);
+  }
+  for (const c of children) e.append(c);
+  return e;
+};
+
+const TREND_WINDOW = 60;
+const lab = {
+  ws: null, hello: null, state: null, nextId: 1, pending: new Map(),
+  trends: new Map(),          // name -> [[t, v], ...]
+  trendNames: [], events: [], actions: [], retry: 0,
+};
+
+// ------------------------------------------------------------------ connection
+function connect() {
+  const proto = location.protocol === "https:" ? "wss" : "ws";
+  const ws = new WebSocket(`${proto}://${location.host}/ws`);
+  lab.ws = ws;
+  ws.onopen = () => { lab.retry = 0; $("#conn").textContent = ""; };
+  ws.onmessage = (ev) => {
+    let msg;
+    try { msg = JSON.parse(ev.data); } catch (e) { return; }
+    if (msg.type === "hello") onHello(msg);
+    else if (msg.type === "state") onState(msg);
+    else if (msg.type === "reply") onReply(msg);
+    else if (msg.type === "notice") notice(msg.text);
+    else if (msg.type === "pages") showPages(msg.pages);
+    else if (msg.type === "trends") setTrends(msg.names, msg.trends);
+  };
+  ws.onclose = () => {
+    $("#conn").textContent = "connection to the lab lost: reconnecting...";
+    for (const [, p] of lab.pending) p.reject(new Error("connection lost"));
+    lab.pending.clear();
+    const delay = Math.min(5000, 250 * 2 ** lab.retry++);
+    setTimeout(connect, delay);
+  };
+}
+
+function send(op, fields = {}) {
+  return new Promise((resolve, reject) => {
+    if (!lab.ws || lab.ws.readyState !== WebSocket.OPEN) {
+      reject(new Error("not connected to the lab"));
+      return;
+    }
+    const id = lab.nextId++;
+    lab.pending.set(id, { resolve, reject });
+    lab.ws.send(JSON.stringify({ op, id, ...fields }));
+  });
+}
+
+function onReply(msg) {
+  const p = lab.pending.get(msg.id);
+  if (!p) { if (!msg.ok) notice(msg.message); return; }
+  lab.pending.delete(msg.id);
+  if (msg.ok) p.resolve(msg); else p.reject(new Error(msg.message));
+}
+
+function notice(text) {
+  lab.actions.push({ t: lab.state ? lab.state.t : 0, text: "(lab) " + text });
+  renderActions();
+}
+
+function showPages(n) { $("#pages").textContent = n > 1 ? `${n} pages open` : ""; }
+
+function say(target, text, ok) {
+  const t = $(target);
+  t.textContent = text;
+  t.className = ok ? "good" : "bad";
+}
+
+// ------------------------------------------------------------------ building the page
+function onHello(h) {
+  lab.hello = h;
+  document.title = `PLC Lab: ${h.title}`;
+  $("#title").textContent = h.title;
+  showPages(h.pages);
+  buildControls(h.panel);
+  buildRun(h);
+  buildFaults(h.panel);
+  buildGrade(h);
+  $("#registers").hidden = h.stand !== "thermo";
+  $("#twido").textContent = h.twido ? `The Twido Modbus face answers at ${h.twido} (holding register n = %MWn) for an external SCADA client.` : "";
+  Mimic.build($("#mimic"), h.stand, h.panel);
+  const placed = Mimic.placed();
+  const lamps = $("#lamps");
+  lamps.replaceChildren();
+  for (const lamp of h.panel.lamps) {
+    if (placed.has(lamp.label)) continue;
+    lamps.append(el("span", { class: "lamp", role: "img", "aria-label": lamp.label, "data-state": "off", title: lamp.hint },
+      el("span", { class: "bulb" }), el("span", { text: lamp.label })));
+  }
+  lab.trends.clear();
+  lab.trendNames = h.trend_names.slice();
+  lab.events = []; lab.actions = [];
+  buildTrendList();
+}
+
+function buildControls(panel) {
+  const box = $("#controls");
+  box.replaceChildren();
+  for (const c of panel.controls) {
+    let b;
+    if (c.kind === "switch") {
+      b = el("button", { type: "button", role: "switch", "aria-checked": "false", "aria-label": c.label, "data-label": c.label },
+        el("span", { text: c.label }));
+      b.addEventListener("click", () => {
+        const on = b.getAttribute("aria-checked") !== "true";
+        send("set", { label: c.label, value: on ? 1 : 0 }).catch((e) => notice(e.message));
+      });
+    } else {
+      b = el("button", { type: "button", class: "push", "aria-pressed": "false", "aria-label": c.label, "data-label": c.label },
+        el("span", { text: c.label }));
+      pushButton(b, c.label);
+    }
+    const hint = el("small", { id: `hint-${c.label.replace(/\W/g, "_")}`, text: c.hint });
+    b.setAttribute("aria-describedby", hint.id);
+    box.append(el("div", { class: "control" }, b, hint));
+  }
+}
+
+// A push button stays pressed while the pointer or the space / enter key holds it.
+function pushButton(b, label) {
+  let down = false;
+  const press = () => {
+    if (down) return;
+    down = true;
+    b.classList.add("held");
+    b.setAttribute("aria-pressed", "true");
+    send("press", { label }).catch((e) => notice(e.message));
+  };
+  const release = () => {
+    if (!down) return;
+    down = false;
+    b.classList.remove("held");
+    b.setAttribute("aria-pressed", "false");
+    send("release", { label }).catch((e) => notice(e.message));
+  };
+  b.addEventListener("pointerdown", (e) => { b.setPointerCapture(e.pointerId); press(); e.preventDefault(); });
+  b.addEventListener("pointerup", release);
+  b.addEventListener("pointercancel", release);
+  b.addEventListener("lostpointercapture", release);
+  b.addEventListener("keydown", (e) => {
+    if ((e.key === " " || e.key === "Enter") && !e.repeat) { press(); e.preventDefault(); }
+  });
+  b.addEventListener("keyup", (e) => { if (e.key === " " || e.key === "Enter") { release(); e.preventDefault(); } });
+  b.addEventListener("blur", release);
+  b.addEventListener("click", (e) => e.preventDefault());
+}
+
+function buildRun(h) {
+  const speed = $("#speed");
+  speed.replaceChildren(...h.speeds.map((s) => el("option", { value: String(s), text: `x${s}` })));
+  speed.onchange = () => send("speed", { value: Number(speed.value) }).catch((e) => notice(e.message));
+  $("#pause").onclick = () => {
+    const paused = lab.state && lab.state.paused;
+    send(paused ? "run" : "pause").catch((e) => notice(e.message));
+  };
+  $("#scan").onclick = () => send("scan").catch((e) => notice(e.message));
+  $("#restart").onclick = () => send("restart").catch((e) => notice(e.message));
+  $("#reload").onclick = () => postProgram("/api/reload", null);
+  const input = $("#program-files");
+  input.onchange = () => { if (input.files.length) uploadFiles(input.files); input.value = ""; };
+  const drop = $("#drop");
+  drop.ondragover = (e) => { e.preventDefault(); drop.classList.add("over"); };
+  drop.ondragleave = () => drop.classList.remove("over");
+  drop.ondrop = (e) => {
+    e.preventDefault();
+    drop.classList.remove("over");
+    if (e.dataTransfer.files.length) uploadFiles(e.dataTransfer.files);
+  };
+}
+
+function uploadFiles(files) {
+  const form = new FormData();
+  for (const f of files) form.append("files", f, f.name);
+  postProgram("/api/program", form);
+}
+
+async function postProgram(url, body) {
+  say("#program-message", "checking...", true);
+  $("#program-errors").replaceChildren();
+  let answer;
+  try {
+    const r = await fetch(url, { method: "POST", body });
+    answer = r.headers.get("content-type")?.includes("json") ? await r.json()
+      : { ok: false, message: `${r.status} ${r.statusText}: ${(await r.text()).slice(0, 200)}` };
+  } catch (e) {
+    answer = { ok: false, message: `the lab did not answer (${e.message})` };
+  }
+  say("#program-message", answer.message, answer.ok);
+  const list = $("#program-errors");
+  for (const err of answer.errors || []) {
+    const li = el("li", { text: err.text });
+    if (err.source !== null && err.source !== undefined) li.append(el("pre", { text: `${String(err.line).padStart(4)} | ${err.source}` }));
+    list.append(li);
+  }
+}
+
+function buildFaults(panel) {
+  const sel = $("#fault-name");
+  sel.replaceChildren(...panel.faults.map((f) => el("option", { value: f.name, text: `${f.name}: ${f.text}` })));
+  const params = () => {
+    const f = panel.faults.find((x) => x.name === sel.value);
+    const box = $("#fault-params");
+    box.replaceChildren();
+    for (const p of (f ? f.params : [])) {
+      const id = `fault-param-${p.name}`;
+      box.append(el("label", { for: id, text: p.name }));
+      if (p.choices.length) {
+        const s = el("select", { id, "data-param": p.name });
+        s.append(...p.choices.map((c) => el("option", { value: c, text: c })));
+        s.value = p.default;
+        box.append(s);
+      } else {
+        box.append(el("input", { id, "data-param": p.name, value: p.default, size: "6" }));
+      }
+    }
+  };
+  sel.onchange = params;
+  params();
+  $("#inject").onclick = () => {
+    const values = {};
+    for (const x of document.querySelectorAll("#fault-params [data-param]")) values[x.dataset.param] = x.value;
+    send("inject", { fault: sel.value, params: values })
+      .then(() => say("#fault-message", `${sel.value} injected`, true))
+      .catch((e) => say("#fault-message", e.message, false));
+  };
+  $("#clear").onclick = () => send("clear").then(() => say("#fault-message", "faults cleared", true))
+    .catch((e) => say("#fault-message", e.message, false));
+}
+
+function buildGrade(h) {
+  const box = $("#grade-buttons");
+  box.replaceChildren();
+  if (!h.tasks.length) box.append(el("span", { text: "no graded tasks for this stand (its SCADA tasks are done in the registers table)" }));
+  for (const task of h.tasks) {
+    box.append(el("button", { type: "button", text: `Grade ${task}`, onclick: () => grade(task) }));
+  }
+}
+
+async function grade(task) {
+  say("#grade-message", `grading ${task} (runs the task's scenarios on the loaded program)...`, true);
+  $("#grade-result").replaceChildren();
+  let r;
+  try {
+    const resp = await fetch("/api/grade", { method: "POST", headers: { "content-type": "application/json" }, body: JSON.stringify({ task }) });
+    r = await resp.json();
+  } catch (e) {
+    r = { ok: false, message: `the lab did not answer (${e.message})` };
+  }
+  if (!r.ok) { say("#grade-message", r.message, false); return; }
+  say("#grade-message", `${r.title}: ${r.summary}`, r.passed);
+  const out = $("#grade-result");
+  if (r.errors.length) {
+    out.append(el("ol", {}, ...r.errors.map((e) => el("li", { class: "bad", text: e }))));
+    return;
+  }
+  const table = el("table", { "aria-label": `grade ${task}` },
+    el("thead", {}, el("tr", {}, ...["id", "requirement", "result", "why", "trace"].map((x) => el("th", { text: x })))));
+  const body = el("tbody");
+  for (const row of r.rows) {
+    const why = row.result === "FAIL"
+      ? [row.expected && `expected: ${row.expected}`, row.observed && `observed: ${row.observed}`,
+         row.time !== null && row.time !== undefined ? `at t = ${row.time.toFixed(2)} s` : ""].filter(Boolean).join("; ")
+      : "";
+    const links = el("td");
+    if (row.result === "FAIL") {
+      for (const t of row.traces) links.append(el("a", { href: t.url, download: t.name, text: t.name }), " ");
+    }
+    body.append(el("tr", {}, el("td", { text: row.id }), el("td", { text: row.text }),
+      el("td", { class: row.result, text: row.result }), el("td", { text: why }), links));
+  }
+  table.append(body);
+  out.append(table);
+}
+
+// ------------------------------------------------------------------ state
+// Data is taken as it comes; the page is drawn once per animation frame with the newest.
+let drawScheduled = false;
+function onState(s) {
+  lab.state = s;
+  if (s.events.length) lab.events.push(...s.events);
+  if (s.actions.length) lab.actions.push(...s.actions);
+  for (const [name, points] of Object.entries(s.trends)) addPoints(name, points);
+  lab.dirtyEvents ||= s.events.length > 0;
+  lab.dirtyActions ||= s.actions.length > 0;
+  if (!drawScheduled) {
+    drawScheduled = true;
+    requestAnimationFrame(() => { drawScheduled = false; render(lab.state); });
+  }
+}
+
+function render(s) {
+  const badge = $("#plc-state");
+  badge.textContent = s.plc.state;
+  badge.dataset.state = s.plc.state;
+  const fd = $("#fault-detail");
+  if (s.plc.fault) {
+    fd.hidden = false;
+    fd.textContent = s.plc.fault;
+  } else fd.hidden = true;
+  $("#clock").textContent = `t = ${s.t.toFixed(2)} s`;
+  $("#speed-shown").textContent = s.paused ? "paused" : `x${s.speed}` + (s.actual_speed && s.actual_speed < s.speed * 0.9 ? ` (reaching x${s.actual_speed})` : "");
+  $("#pause").textContent = s.paused ? "Run" : "Pause";
+  $("#pause").setAttribute("aria-pressed", s.paused ? "true" : "false");
+  $("#scan").disabled = !s.paused;
+  const speed = $("#speed");
+  if (document.activeElement !== speed) speed.value = String(s.speed);
+  $("#program-name").textContent = s.program;
+  for (const [label, v] of Object.entries(s.io)) {
+    for (const node of document.querySelectorAll(`[aria-label="${CSS.escape(label)}"]`)) {
+      if (node.getAttribute("role") === "switch") node.setAttribute("aria-checked", v ? "true" : "false");
+      else if (node.dataset.state !== undefined) node.dataset.state = v ? "on" : "off";
+    }
+  }
+  Mimic.update(s);
+  if (lab.dirtyEvents) { lab.dirtyEvents = false; renderEvents(); }
+  if (lab.dirtyActions) { lab.dirtyActions = false; renderActions(); }
+  for (const [name, why] of Object.entries(s.trend_errors || {})) say("#trend-message", why, false);
+  if (s.registers) renderRegisters(s.registers);
+  drawTrends();
+}
+
+function renderEvents() {
+  const list = $("#events");
+  lab.events = lab.events.slice(-300);
+  list.replaceChildren(...lab.events.map((e) => el("li", {
+    class: e.kind === "fault_cleared" || e.kind === "out_of_range" ? "" : "fault",
+    text: `t=${e.t.toFixed(2)} s ${e.kind.replace(/_/g, " ")}: ${e.detail}`,
+  })));
+  list.scrollTop = list.scrollHeight;
+}
+
+function renderActions() {
+  const list = $("#actions");
+  lab.actions = lab.actions.slice(-200);
+  list.replaceChildren(...lab.actions.map((a) => el("li", { text: `t=${a.t.toFixed(2)} s ${a.text}` })));
+  list.scrollTop = list.scrollHeight;
+}
+
+// ------------------------------------------------------------------ trends
+function buildTrendList() {
+  const list = $("#trend-list");
+  list.replaceChildren();
+  for (const name of lab.trendNames) {
+    const canvas = el("canvas", { width: "600", height: "44", "aria-label": `trend of ${name}`, "data-trend": name });
+    const remove = el("button", { type: "button", "aria-label": `remove trend ${name}`, text: "x",
+      onclick: () => chooseTrends(lab.trendNames.filter((n) => n !== name)) });
+    list.append(el("div", { class: "trend" }, el("span", { class: "name", title: name, text: name }), canvas, remove));
+  }
+  $("#trend-add-button").onclick = () => {
+    const name = $("#trend-add").value.trim();
+    if (name) chooseTrends(lab.trendNames.concat([name]));
+  };
+  $("#trend-add").onkeydown = (e) => { if (e.key === "Enter") $("#trend-add-button").click(); };
+}
+
+function chooseTrends(names) {
+  send("trends", { names }).then(() => { say("#trend-message", "", true); $("#trend-add").value = ""; })
+    .catch((e) => say("#trend-message", e.message, false));
+}
+
+function setTrends(names, trends) {
+  lab.trendNames = names;
+  lab.trends.clear();
+  for (const [name, points] of Object.entries(trends)) addPoints(name, points);
+  buildTrendList();
+}
+
+function addPoints(name, points) {
+  let arr = lab.trends.get(name);
+  if (!arr) { arr = []; lab.trends.set(name, arr); }
+  for (const p of points) {
+    if (arr.length && arr[arr.length - 1][0] >= p[0]) {
+      while (arr.length && arr[arr.length - 1][0] > p[0]) arr.pop();   // resent: keep the newest
+      if (arr.length && arr[arr.length - 1][0] === p[0]) arr.pop();
+    }
+    arr.push(p);
+  }
+  const now = lab.state ? lab.state.t : 0;
+  let cut = 0;
+  while (cut < arr.length - 1 && arr[cut + 1][0] < now - TREND_WINDOW) cut++;
+  if (cut) arr.splice(0, cut);
+}
+
+function drawTrends() {
+  if (!lab.state) return;
+  const now = lab.state.t, from = now - TREND_WINDOW;
+  for (const canvas of document.querySelectorAll("canvas[data-trend]")) {
+    const name = canvas.dataset.trend;
+    const pts = lab.trends.get(name) || [];
+    const ctx = canvas.getContext("2d");
+    const w = canvas.width, h = canvas.height;
+    ctx.clearRect(0, 0, w, h);
+    if (!pts.length) continue;
+    const nums = pts.map((p) => Number(p[1])).filter((v) => Number.isFinite(v));
+    let lo = Math.min(...nums), hi = Math.max(...nums);
+    if (nums.every((v) => v === 0 || v === 1)) { lo = 0; hi = 1; }      // a bit: low and high
+    else if (hi - lo < 1e-9) { lo -= 1; hi += 1; }
+    const x = (t) => ((Math.max(t, from) - from) / TREND_WINDOW) * w;
+    const y = (v) => h - 4 - ((v - lo) / (hi - lo)) * (h - 8);
+    ctx.strokeStyle = "#1d4ed8";
+    ctx.lineWidth = 1.5;
+    ctx.beginPath();
+    let last = null;
+    for (const [t, v] of pts) {
+      const vy = y(Number(v));
+      if (last === null) ctx.moveTo(x(t), vy);
+      else { ctx.lineTo(x(t), last); ctx.lineTo(x(t), vy); }
+      last = vy;
+    }
+    ctx.lineTo(w, last);
+    ctx.stroke();
+    ctx.fillStyle = "#111";
+    ctx.font = "11px sans-serif";
+    const current = pts[pts.length - 1][1];
+    ctx.fillText(`${current}`, w - 60, h / 2 + 4);
+    ctx.fillStyle = "#6b7280";
+    ctx.fillText(`${hi}`, 2, 10);
+    ctx.fillText(`${lo}`, 2, h - 2);
+  }
+}
+
+// ------------------------------------------------------------------ thermo registers
+function renderRegisters(regs) {
+  const body = $("#register-table tbody");
+  if (body.children.length !== regs.length) {
+    body.replaceChildren();
+    for (const r of regs) {
+      const write = el("td");
+      if (r.access === "read/write") {
+        const input = el("input", { type: "number", "aria-label": `new value of %MW${r.address}` });
+        const b = el("button", { type: "button", text: "Write", "aria-label": `write %MW${r.address}` });
+        b.onclick = () => send("register", { address: r.address, value: Number(input.value) })
+          .then(() => say("#register-message", `%MW${r.address} = ${input.value} written`, true))
+          .catch((e) => say("#register-message", e.message, false));
+        input.onkeydown = (e) => { if (e.key === "Enter") b.click(); };
+        write.append(input, b);
+      }
+      body.append(el("tr", {}, el("td", { text: `%MW${r.address}` }), el("td", { text: r.name, title: r.description }),
+        el("td", { "aria-label": `value of %MW${r.address}`, "data-register": String(r.address) }),
+        el("td", { text: r.access }), el("td", { text: r.valid }), el("td", { text: r.rule }), write));
+    }
+  }
+  for (const r of regs) {
+    const cell = body.querySelector(`[data-register="${r.address}"]`);
+    if (cell) cell.textContent = String(r.value);
+  }
+}
+
+connect();

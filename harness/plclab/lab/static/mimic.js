@@ -1,0 +1,201 @@
+// The mimic drawings of the three stands (SVG), moved by the plant state the server sends.
+// Limit switches and valve coils drawn here carry aria-label = their label and data-state.
+"use strict";
+
+const Mimic = (() => {
+  const NS = "http://www.w3.org/2000/svg";
+  let svg = null, stand = null, parts = {}, placedLabels = new Set(), fanAngle = 0, lastT = null;
+
+  function s(tag, attrs = {}, parent = svg) {
+    const e = document.createElementNS(NS, tag);
+    for (const [k, v] of Object.entries(attrs)) {
+      if (k === "text") e.textContent = v; else e.setAttribute(k, v);
+    }
+    if (parent) parent.append(e);
+    return e;
+  }
+
+  // a limit switch or coil: a labelled group whose data-state the page updates
+  function indicator(kind, label, x, y, hint) {
+    const g = s("g", { class: kind, role: "img", "aria-label": label, "data-state": "off", transform: `translate(${x},${y})` });
+    s("title", { text: `${label}: ${hint || ""}` }, g);
+    if (kind === "sensor") s("circle", { r: 7 }, g);
+    else s("rect", { x: -9, y: -7, width: 18, height: 14, rx: 2 }, g);
+    s("text", { class: "mimic-small", x: 10, y: 4, text: label }, g);
+    placedLabels.add(label);
+    return g;
+  }
+
+  function build(svgEl, standName, panel) {
+    svg = svgEl;
+    stand = standName;
+    parts = {};
+    placedLabels = new Set();
+    svg.replaceChildren();
+    const hints = {};
+    for (const l of panel.lamps) hints[l.label] = l.hint;
+    if (stand === "mp9c") buildMp9c(hints);
+    else if (stand === "tur10") buildTur10();
+    else if (stand === "thermo") buildThermo();
+    parts.faults = s("text", { class: "fault-mark", x: 10, y: 312, text: "" });
+  }
+
+  // ---------------------------------------------------------------- MP-9C
+  function buildMp9c(h) {
+    s("text", { class: "mimic-text", x: 10, y: 18, text: "side view: lift, extension, gripper" });
+    s("text", { class: "mimic-text", x: 400, y: 18, text: "top view: rotation" });
+    s("rect", { class: "metal", x: 60, y: 270, width: 120, height: 14 });            // base
+    parts.column = s("rect", { class: "metal", x: 100, y: 50, width: 24, height: 222 }); // lift cylinder
+    parts.carriage = s("g", { id: "mimic-lift" });
+    parts.liftBody = s("rect", { class: "metal", x: 92, y: -14, width: 40, height: 28, rx: 3 }, parts.carriage);
+    parts.extBarrel = s("rect", { class: "metal", x: 132, y: -8, width: 90, height: 16 }, parts.carriage);
+    parts.rod = s("rect", { class: "metal", x: 222, y: -4, width: 80, height: 8 }, parts.carriage);
+    parts.hand = s("g", {}, parts.carriage);
+    parts.gripBody = s("rect", { class: "metal", x: 0, y: -12, width: 10, height: 24 }, parts.hand);
+    parts.jawTop = s("rect", { class: "metal", x: 10, y: -14, width: 22, height: 5 }, parts.hand);
+    parts.jawBottom = s("rect", { class: "metal", x: 10, y: 9, width: 22, height: 5 }, parts.hand);
+    // limit switches where the reed switches sit
+    indicator("sensor", "SQ1", 72, 92, h.SQ1);        // lift up
+    indicator("sensor", "SQ2", 72, 212, h.SQ2);       // lift down
+    indicator("sensor", "SQ7", 150, 40, h.SQ7);       // extension backward
+    indicator("sensor", "SQ6", 280, 40, h.SQ6);       // extension forward
+    parts.sq3 = indicator("sensor", "SQ3", 0, 0, h.SQ3);   // gripper released (moves with the hand)
+    // valve coils beside their cylinders
+    indicator("coil", "L2", 20, 120, h.L2);
+    indicator("coil", "L3", 20, 180, h.L3);
+    indicator("coil", "L7", 150, 295, h.L7);
+    indicator("coil", "L6", 220, 295, h.L6);
+    indicator("coil", "L1", 290, 295, h.L1);
+    // top view
+    s("circle", { class: "metal", cx: 480, cy: 170, r: 26 });
+    s("path", { d: "M 480 170 m -99 -57 A 114 114 0 0 1 579 113", fill: "none", stroke: "#cbd5e1", "stroke-dasharray": "4 4" });
+    parts.topArm = s("g", { id: "mimic-rotation" });
+    s("rect", { class: "metal", x: -6, y: -110, width: 12, height: 90 }, parts.topArm);
+    parts.topRod = s("rect", { class: "metal", x: -3, y: -150, width: 6, height: 40 }, parts.topArm);
+    indicator("sensor", "SQ4", 380, 100, h.SQ4);      // rotated left
+    indicator("sensor", "SQ5", 570, 100, h.SQ5);      // rotated right
+    indicator("coil", "L4", 400, 260, h.L4);
+    indicator("coil", "L5", 540, 260, h.L5);
+    parts.conflict = s("text", { class: "fault-mark", x: 330, y: 240, text: "" });
+  }
+
+  function updateMp9c(m) {
+    const y = 92 + m.lift * 120;                    // 0 up .. 1 down
+    const ext = m.extension * 60;                   // rod out
+    parts.carriage.setAttribute("transform", `translate(0,${y})`);
+    parts.rod.setAttribute("width", String(30 + ext));
+    parts.hand.setAttribute("transform", `translate(${252 + ext},0)`);
+    const open = 1 - m.gripper;
+    parts.jawTop.setAttribute("y", String(-9 - 6 * open));
+    parts.jawBottom.setAttribute("y", String(4 + 6 * open));
+    parts.sq3.setAttribute("transform", `translate(${290 + ext},${y - 26})`);
+    const angle = -30 + 60 * m.rotation;           // 0 left .. 1 right
+    parts.topArm.setAttribute("transform", `translate(480,170) rotate(${angle})`);
+    parts.topRod.setAttribute("y", String(-110 - 10 - ext * 0.6));
+    parts.topRod.setAttribute("height", String(10 + ext * 0.6));
+    const conflict = new Set(m.conflict);
+    parts.column.classList.toggle("link-conflict", conflict.has("lift"));
+    parts.extBarrel.classList.toggle("link-conflict", conflict.has("extension"));
+    parts.topArm.firstChild.classList.toggle("link-conflict", conflict.has("rotation"));
+    parts.conflict.textContent = m.conflict.length ? `valve conflict: ${m.conflict.join(", ")}` : "";
+  }
+
+  // ---------------------------------------------------------------- TUR-10
+  const AXES = ["shoulder", "raceme rotation", "raceme inclination", "platform rotation", "hand"];
+  function buildTur10() {
+    s("text", { class: "mimic-text", x: 10, y: 18, text: "links: position code (sensor), target of the frame (triangle), DAC reference (bar)" });
+    parts.links = [];
+    for (let k = 0; k < 5; k++) {
+      const y0 = 40 + k * 52;
+      const g = s("g", { transform: `translate(0,${y0})` });
+      s("text", { class: "mimic-text", x: 10, y: 14, text: `${k + 1} ${AXES[k]}` }, g);
+      const track = s("rect", { x: 150, y: 4, width: 360, height: 14, fill: "#e5e7eb", stroke: "#9ca3af" }, g);
+      const working = s("rect", { x: 150, y: 4, width: 0, height: 14, fill: "#d1fae5" }, g);
+      const target = s("path", { d: "M0,0 l-6,-8 h12 z", fill: "#7c3aed", visibility: "hidden" }, g);
+      const marker = s("rect", { x: 150, y: 0, width: 4, height: 22, fill: "#1d4ed8" }, g);
+      const code = s("text", { id: `code-${k + 1}`, class: "mimic-small", x: 520, y: 15, text: "" }, g);
+      const bus = s("text", { class: "mimic-small", x: 150, y: 46, text: "" }, g);
+      s("rect", { x: 150, y: 26, width: 360, height: 8, fill: "#f1f5f9", stroke: "#cbd5e1" }, g);
+      s("line", { x1: 330, x2: 330, y1: 24, y2: 36, stroke: "#64748b" }, g);
+      const ref = s("rect", { x: 330, y: 26, width: 0, height: 8, fill: "#f59e0b" }, g);
+      const refText = s("text", { id: `dac-${k + 1}`, class: "mimic-small", x: 520, y: 34, text: "" }, g);
+      parts.links.push({ track, working, target, marker, code, ref, refText, bus });
+    }
+    parts.busLine = s("text", { class: "mimic-text", x: 10, y: 300, text: "" });
+  }
+
+  function updateTur10(m) {
+    const [lo, hi] = m.stops;
+    const sx = (v) => 150 + ((v - lo) / (hi - lo)) * 360;
+    m.links.forEach((l, i) => {
+      const p = parts.links[i];
+      p.working.setAttribute("x", String(sx(m.working[0])));
+      p.working.setAttribute("width", String(sx(m.working[1]) - sx(m.working[0])));
+      p.marker.setAttribute("x", String(sx(l.position) - 2));
+      p.marker.setAttribute("fill", l.at_stop ? "#b91c1c" : "#1d4ed8");
+      // no target (the program has none, or none set yet: outside the travel)
+      if (l.target === null || l.target === undefined || l.target < lo || l.target > hi) p.target.setAttribute("visibility", "hidden");
+      else {
+        p.target.setAttribute("visibility", "visible");
+        p.target.setAttribute("transform", `translate(${sx(l.target)},4)`);
+      }
+      const full = 2 * m.dac_limit;
+      const w = Math.max(-180, Math.min(180, (l.reference / full) * 180));
+      p.ref.setAttribute("x", String(w < 0 ? 330 + w : 330));
+      p.ref.setAttribute("width", String(Math.abs(w)));
+      p.ref.setAttribute("fill", l.tripped || Math.abs(l.reference) > m.dac_limit ? "#b91c1c" : "#f59e0b");
+      const onBus = m.selected.includes(l.axis);
+      p.code.textContent = `code ${l.code}` + (l.at_stop ? " COLLISION" : "");
+      p.refText.textContent = `DAC ${l.reference}` + (l.tripped ? " TRIPPED" : "");
+      p.bus.textContent = onBus ? `sensor ${l.axis} on the bus` : "";
+      p.track.setAttribute("stroke", onBus ? "#16a34a" : "#9ca3af");
+      p.track.setAttribute("stroke-width", onBus ? "3" : "1");
+    });
+    const sel = m.selected.length ? m.selected.join(", ") : "none";
+    parts.busLine.textContent = `sensor bus: ${m.bus} (enabled: ${sel})` + (m.selected.length > 1 ? "  BUS CONTENTION" : "");
+  }
+
+  // ---------------------------------------------------------------- thermo
+  function buildThermo() {
+    s("text", { class: "mimic-text", x: 10, y: 18, text: "heat sink with heater, fan and temperature sensor" });
+    parts.sink = s("g", {});
+    parts.sinkBody = s("rect", { x: 160, y: 110, width: 240, height: 40, fill: "#94a3b8", stroke: "#334155" }, parts.sink);
+    for (let i = 0; i < 9; i++) s("rect", { x: 166 + i * 26, y: 150, width: 10, height: 70, fill: "#94a3b8", stroke: "#334155" }, parts.sink);
+    parts.heater = s("rect", { x: 200, y: 80, width: 160, height: 30, fill: "#7f1d1d", stroke: "#111" });
+    s("text", { class: "mimic-text", x: 210, y: 100, text: "heater", fill: "#fff" });
+    parts.heaterText = s("text", { class: "mimic-text", x: 370, y: 100, text: "" });
+    parts.temp = s("text", { class: "mimic-text", x: 420, y: 136, text: "", "font-size": "20" });
+    s("circle", { cx: 410, cy: 130, r: 5, fill: "#111" });
+    parts.sensorFault = s("text", { class: "fault-mark", x: 420, y: 160, text: "" });
+    parts.fan = s("g", { transform: "translate(280,270)" });
+    s("circle", { r: 36, fill: "#e2e8f0", stroke: "#334155" }, parts.fan);
+    parts.blades = s("g", {}, parts.fan);
+    for (let i = 0; i < 4; i++) s("ellipse", { rx: 8, ry: 28, fill: "#64748b", transform: `rotate(${i * 90}) translate(0,-16)` }, parts.blades);
+    parts.fanText = s("text", { class: "mimic-text", x: 330, y: 275, text: "" });
+  }
+
+  function updateThermo(m, t) {
+    const frac = Math.max(0, Math.min(1, (m.temperature - 20) / 60));
+    const r = Math.round(80 + 175 * frac), b = Math.round(200 - 170 * frac);
+    parts.sinkBody.setAttribute("fill", `rgb(${r},120,${b})`);
+    parts.heater.setAttribute("fill-opacity", String(0.25 + 0.75 * (m.heater_w / m.heater_max_w)));
+    parts.heaterText.textContent = `${m.heater_w.toFixed(1)} W (command ${m.heater_command})` + (m.faults.includes("heater_dead") ? " DEAD" : "");
+    parts.temp.textContent = `${m.temperature.toFixed(1)} \u00b0C`;
+    parts.sensorFault.textContent = m.faults.includes("sensor_open") ? "sensor open circuit" : "";
+    if (lastT !== null && t > lastT) fanAngle = (fanAngle + (m.fan_rpm / 60) * 360 * Math.min(t - lastT, 0.05)) % 360;
+    parts.blades.setAttribute("transform", `rotate(${fanAngle})`);
+    parts.fanText.textContent = `fan ${Math.round(m.fan_rpm)} rpm (command ${m.fan_command})` + (m.faults.includes("fan_stalled") ? " STALLED" : "");
+  }
+
+  function update(state) {
+    if (!svg) return;
+    const m = state.mimic;
+    if (stand === "mp9c") updateMp9c(m);
+    else if (stand === "tur10") updateTur10(m);
+    else if (stand === "thermo") updateThermo(m, state.t);
+    lastT = state.t;
+    parts.faults.textContent = m.faults && m.faults.length ? `injected: ${m.faults.join(", ")}` : "";
+  }
+
+  return { build, update, placed: () => placedLabels };
+})();

@@ -1,0 +1,80 @@
+"""The virtual lab in a real headless Chromium (Debian's `chromium`, driven by playwright).
+
+`scripts/setup` installs chromium where it is missing; without it these tests fail with
+that instruction (they are never skipped). Labs run in-process on an ephemeral loopback port,
+faster than real time; tests wait on states the page shows, never on wall-clock durations.
+Screenshots go to `tmp_path`, or to $PLCLAB_LAB_SHOTS (scripts/lab-screenshots: docs/img).
+"""
+from __future__ import annotations
+
+import os
+import shutil
+from pathlib import Path
+from typing import Iterator
+
+import pytest
+
+from plclab.lab import LabThread, open_lab
+
+CHROMIUM = os.environ.get("PLCLAB_CHROMIUM") or shutil.which("chromium") or "/usr/bin/chromium"
+
+
+@pytest.fixture(scope="session")
+def browser() -> Iterator:
+    from playwright.sync_api import sync_playwright
+
+    if not Path(CHROMIUM).exists():
+        pytest.fail(f"the lab's browser tests need Debian's chromium at {CHROMIUM}: run `bash scripts/setup` "
+                    f"as root (it runs apt-get install chromium) or set PLCLAB_CHROMIUM")
+    with sync_playwright() as p:
+        b = p.chromium.launch(executable_path=CHROMIUM, args=["--no-sandbox", "--disable-gpu"])
+        yield b
+        b.close()
+
+
+class LabPage:
+    """One running lab and a browser page on it."""
+
+    def __init__(self, browser, stand: str, speed: float, program=None, variant: str = "full"):
+        self.server = open_lab(stand, program=program, variant=variant, port=0, speed=speed, modbus_port=0)
+        self.thread = LabThread(self.server)
+        self.url = self.thread.start()
+        self.context = browser.new_context(viewport={"width": 1400, "height": 1000})
+        self.page = self.open()
+
+    def open(self):
+        page = self.context.new_page()
+        page.set_default_timeout(20_000)
+        page.goto(self.url)
+        page.wait_for_selector("#plc-state[data-state='RUN']")
+        return page
+
+    @property
+    def lab(self):
+        return self.server.lab
+
+    def close(self) -> None:
+        self.context.close()
+        self.thread.stop()
+
+
+@pytest.fixture
+def lab_page(browser):
+    opened: list[LabPage] = []
+
+    def make(stand: str, speed: float = 5.0, **kw) -> LabPage:
+        lp = LabPage(browser, stand, speed, **kw)
+        opened.append(lp)
+        return lp
+    yield make
+    for lp in opened:
+        lp.close()
+
+
+@pytest.fixture
+def shots(tmp_path) -> Path:
+    """Where the tests' screenshots go."""
+    target = os.environ.get("PLCLAB_LAB_SHOTS")
+    path = Path(target) if target else tmp_path
+    path.mkdir(parents=True, exist_ok=True)
+    return path
