@@ -14,9 +14,9 @@ reports the speed it reached instead of piling up a backlog.
 """
 from __future__ import annotations
 
+import collections
 import concurrent.futures
 import math
-import queue
 import tempfile
 import threading
 import time
@@ -74,8 +74,9 @@ class Lab:
         self._events_sent = 0
         self._actions_sent = 0
         self._listeners: list[Callable[[dict], None]] = []
-        self._commands: "queue.SimpleQueue[tuple[Callable[[], Any], concurrent.futures.Future, bool]]" = \
-            queue.SimpleQueue()
+        self._commands: "collections.deque[tuple[Callable[[], Any], concurrent.futures.Future, bool]]" = \
+            collections.deque()
+        self._console_since_scan = False             # a console change waits for the PLC to see it
         self._wake = threading.Event()
         self._stop = threading.Event()
         self._thread: Optional[threading.Thread] = None
@@ -108,23 +109,24 @@ class Lab:
         future. Console changes (`console=True`) are applied one per scan while running, so a
         press and its release are both seen by the PLC however quickly they come."""
         fut: concurrent.futures.Future = concurrent.futures.Future()
-        self._commands.put((fn, fut, console))
+        self._commands.append((fn, fut, console))
         self._wake.set()
         return fut
 
     def _drain(self) -> None:
-        while True:
-            try:
-                fn, fut, console = self._commands.get_nowait()
-            except queue.Empty:
+        """Run the commands waiting; a console change waits until a scan has seen the one
+        before it (while running: paused, they all apply at once)."""
+        while self._commands:
+            fn, fut, console = self._commands[0]
+            if console and self._console_since_scan and not self.paused:
                 return
+            self._commands.popleft()
             if fut.set_running_or_notify_cancel():
                 try:
                     fut.set_result(fn())
                 except BaseException as e:   # noqa: BLE001 - the caller gets it through the future
                     fut.set_exception(e)
-            if console and not self.paused:
-                return
+            self._console_since_scan |= console
 
     # the commands themselves (each runs in the engine's thread through `call`)
     def set_control(self, label: str, value: int) -> None:
@@ -258,20 +260,24 @@ class Lab:
             if (due - 1) * tick / self.speed > MAX_BEHIND_S:   # cannot keep up: run a slice, rebase
                 due = max(1, int(MAX_BEHIND_S * self.speed / tick))
                 self._rebase = True
-            console_waiting = not self._commands.empty()
-            self._run_scans(1 if console_waiting else due)
+            self._run_scans(1 if self._commands else due)     # a command waits: one scan, then it
             if now - rate_wall >= 1.0:
                 self.actual_speed = (s.now - rate_virt) / (now - rate_wall)
                 rate_wall, rate_virt = now, s.now
             self._publish()
             # at least MIN_BATCH_S between batches (unless one scan takes longer at this speed)
             pause = min(MIN_BATCH_S, tick / self.speed) - (time.monotonic() - now)
-            if pause > 0 and self._commands.empty():
+            if pause > 0 and not self._commands:
                 self._wake.wait(pause)
                 self._wake.clear()
 
+    def advance(self, seconds: float) -> None:
+        """Run `seconds` of plant time now (whole scans), as the loop does (tests, paused use)."""
+        self._run_scans(max(1, math.ceil(round(seconds / self.session.tick, 6))))
+
     def _run_scans(self, n: int) -> None:
         s = self.session
+        self._console_since_scan = False
         extras = [name for name in self.trend_names
                   if name not in s.trace and name not in s.labels and name not in self._extra_unknown]
         if not extras:
