@@ -3,7 +3,8 @@
 Goals (issues 2, 3, 4): parse + check of a 5,000-line program under 0.5 s; a 10 ms-tick
 program of about 300 statements at least 500 times faster than real time in virtual time;
 Modbus requests per second and latency for 1 and 10 clients, and scan jitter under that load.
-Also reported: each stand's memory (loaded, and trace growth per simulated hour).
+Also reported: each stand's memory (loaded, and trace growth per simulated hour), and the
+virtual lab's page update rate, lag and server CPU per page (plclab.lab.bench).
 """
 from __future__ import annotations
 
@@ -160,6 +161,8 @@ def run_bench(report: Callable[[str], None] = print, quick: bool = False,
                        f"p99 {value['p99_ms']:.2f} ms, {value['errors']} errors")
     except ImportError:
         report("modbus: benchmark not available")
+    from plclab.lab.bench import report_lab
+    results["lab"] = report_lab(report, quick=quick)
     rt = bench_realtime(3.0 if quick else 10.0)
     results["realtime"] = rt
     report(f"real time: {rt['tick_ms']:g} ms task for {rt['seconds']:g} s under {rt['modbus_requests']} Modbus "

@@ -19,8 +19,10 @@ from plclab.lab import LabThread, open_lab
 CHROMIUM = os.environ.get("PLCLAB_CHROMIUM") or shutil.which("chromium") or "/usr/bin/chromium"
 
 
-@pytest.fixture(scope="session")
+@pytest.fixture(scope="module")
 def browser() -> Iterator:
+    """One Chromium for the tests of a module (closed after it: playwright's sync API keeps an
+    event loop running in this thread, which other tests' asyncio.run must not meet)."""
     from playwright.sync_api import sync_playwright
 
     if not Path(CHROMIUM).exists():

@@ -222,7 +222,7 @@ def test_grade_shows_a_table(lab_page):
 
 # --------------------------------------------------------------------------- thermo SCADA
 
-def test_thermo_registers_refuse_like_the_twido_face_which_stays_up(lab_page):
+def test_thermo_registers_refuse_like_the_twido_face_which_stays_up(lab_page, shots):
     lp = lab_page("thermo", speed=10)
     page = lp.page
     page.get_by_role("combobox", name="speed").select_option("10")
@@ -249,14 +249,7 @@ def test_thermo_registers_refuse_like_the_twido_face_which_stays_up(lab_page):
     expect(page.get_by_label("value of %MW3", exact=True)).to_have_text("100", timeout=WAIT)
     expect(page.locator("#mimic")).to_contain_text("sensor open circuit")
     expect(page.get_by_label("value of %MW2", exact=True)).to_have_text("0", timeout=WAIT)        # heater off
-    page.screenshot(path=str(page_shot(lp)))
-
-
-def page_shot(lp):
-    import os
-    from pathlib import Path
-    target = os.environ.get("PLCLAB_LAB_SHOTS")
-    return (Path(target) if target else lp.lab.work_dir) / "lab-thermo.png"
+    page.screenshot(path=str(shots / "lab-thermo.png"), full_page=True)
 
 
 # --------------------------------------------------------------------------- two pages

@@ -167,3 +167,12 @@ def test_cli_serves_the_page_until_stopped(tmp_path):
         out, err = proc.communicate(timeout=20)
     assert proc.returncode == 0, err
     assert "lab stopped" in out and "Traceback" not in err
+
+
+def test_bench_lab_reports_what_a_page_receives():
+    from plclab.lab.bench import bench_lab
+
+    (r,) = bench_lab("mp9c", speeds=(2,), seconds=1.0, pages=2)
+    assert r["speed"] == 2 and r["pages"] == 2
+    assert r["updates_per_s"] > 0
+    assert r["lag_p50_scans"] >= 0 and r["lag_max_scans"] >= r["lag_p99_scans"] >= r["lag_p50_scans"]

@@ -15,14 +15,16 @@ from plclab.lab.server import LabServer, LabThread, serve_lab
 __all__ = ["Lab", "LabError", "LabServer", "LabThread", "open_lab", "serve_lab"]
 
 
-def open_lab(stand: str, program: Optional[Sequence[str]] = None, variant: str = "full", bind: str = "127.0.0.1",
+def open_lab(stand: str, program: Optional[Sequence[str]] = None, variant: Optional[str] = None, bind: str = "127.0.0.1",
              port: int = 8080, speed: float = 1.0, modbus_port: Optional[int] = 5020) -> LabServer:
     """A lab server for `stand` running the ST files `program` (else the shipped `variant`),
-    not yet listening. A program that fails the check is refused here, with its diagnostics."""
+    not yet listening. A program that fails the check is refused here, with its diagnostics.
+    Without a variant: the most complete program there is (`full` in a checkout)."""
     from plclab.frontend import read_sources
     from plclab.lab.engine import check_program
     from plclab.stands import get_stand
 
+    variant = variant or get_stand(stand).richest_variant
     get_stand(stand).variant(variant)
     sources = None
     if program:

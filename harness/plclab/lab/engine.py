@@ -43,13 +43,14 @@ class Lab:
     """One stand, its program and its plant, run for the browser page(s)."""
 
     def __init__(self, stand: str, sources: Optional[Sequence[tuple[str, str]]] = None,
-                 variant: str = "full", program_files: Sequence[str] = (), speed: float = 1.0,
+                 variant: Optional[str] = None, program_files: Sequence[str] = (), speed: float = 1.0,
                  work_dir: Optional[Path] = None):
         from plclab.runner import stand_module
 
         self.stand = stand
         self.module = stand_module(stand)
         self.panel: Panel = PANELS[stand]
+        variant = variant or self.module.STAND.richest_variant
         self.variant = variant
         self.program_files = list(program_files)      # where --program came from (reload re-reads them)
         self._tmp = None
@@ -74,6 +75,7 @@ class Lab:
         self._events_sent = 0
         self._actions_sent = 0
         self._listeners: list[Callable[[dict], None]] = []
+        self.viewers = 0                             # pages connected (no page: no snapshot to make)
         self._commands: "collections.deque[tuple[Callable[[], Any], concurrent.futures.Future, bool]]" = \
             collections.deque()
         self._console_since_scan = False             # a console change waits for the PLC to see it
@@ -82,6 +84,7 @@ class Lab:
         self._thread: Optional[threading.Thread] = None
         self.seq = 0
         self.scans_run = 0
+        self._pace = (0.0, 1.0, 0.0)                 # (wall, speed, virtual): where the pacing stands
 
     # ------------------------------------------------------------------ life cycle
     def start(self) -> "Lab":
@@ -234,6 +237,17 @@ class Lab:
     _rebase = True
 
     def _loop(self) -> None:
+        while not self._stop.is_set():
+            try:
+                self._run_paced()
+            except Exception as e:    # noqa: BLE001 - a bug of ours: the clock stops, the pages say why
+                import logging
+                logging.getLogger("plclab.lab").exception("lab engine")
+                self.paused = True
+                self.session.log(f"the lab paused: internal error ({type(e).__name__}: {e}); please report it")
+                self._stop.wait(0.5)
+
+    def _run_paced(self) -> None:
         s = self.session
         base_wall = base_virt = 0.0
         rate_wall, rate_virt = time.monotonic(), s.now
@@ -241,7 +255,8 @@ class Lab:
             self._drain()
             if self._rebase:
                 self._rebase = False
-                base_wall, base_virt = time.monotonic(), s.now
+                base_wall, base_virt = time.monotonic(), s.now - s.tick
+            self._pace = (base_wall, self.speed, base_virt)
             if self.paused:
                 self.actual_speed = 0.0
                 self._publish()
@@ -311,7 +326,7 @@ class Lab:
 
     # ------------------------------------------------------------------ snapshots
     def _publish(self) -> None:
-        if not self._listeners:
+        if not self._listeners or not self.viewers:
             return
         snap = self.snapshot()
         for fn in list(self._listeners):
@@ -328,26 +343,36 @@ class Lab:
             "type": "state", "seq": self.seq, "t": round(s.now - s.tick, 6), "tick": s.tick,
             "speed": self.speed, "paused": self.paused, "actual_speed": round(self.actual_speed, 2),
             "program": self.program_name,
+            "paced": self.paced_now(),          # where the plant should be now: t + the lag
+            "wall": time.monotonic(),           # when (CLOCK_MONOTONIC, the same in every process here)
             "plc": {"state": plc.state, "fault": str(fault) if fault else None,
                     "pou": fault.pou if fault else None, "file": fault.file if fault else None,
                     "line": fault.line if fault else None},
             "io": self._io(),
             "mimic": self.panel.mimic(s),
         }
+        # what is new since the last snapshot; a full one (a page connecting) has it all, and
+        # what follows it starts from it (with pages open the counts are current anyway)
         events = s.plant.events
         start = 0 if full else self._events_sent
         snap["events"] = [{"t": round(e.time, 3), "kind": e.kind, "detail": e.detail} for e in events[start:]]
-        if not full:
-            self._events_sent = len(events)
+        self._events_sent = len(events)
         start = 0 if full else self._actions_sent
         snap["actions"] = [{"t": round(a.time, 3), "text": a.text} for a in s.actions[start:]][-200:]
-        if not full:
-            self._actions_sent = len(s.actions)
+        self._actions_sent = len(s.actions)
         snap["trends"] = self._trend_changes(full)
         snap["trend_errors"] = {n: self._extra_unknown[n] for n in self.trend_names if n in self._extra_unknown}
         if self.stand == "thermo":
             snap["registers"] = self.registers()
         return snap
+
+    def paced_now(self) -> float:
+        """The plant time the wall clock says it is now (the last scan's time when paused):
+        what the page's state lags behind. A page compares it with `t` (`plclab bench`)."""
+        if self.paused:
+            return round(self.session.now - self.session.tick, 6)
+        wall, speed, virt = self._pace
+        return virt + (time.monotonic() - wall) * speed
 
     def _io(self) -> dict[str, int]:
         s = self.session
@@ -375,7 +400,7 @@ class Lab:
             else:
                 start = max(0, self._trend_sent.get(name, 0) - 1)
                 points = trace.changes_from(name, start)
-                self._trend_sent[name] = count
+            self._trend_sent[name] = count
             out[name] = [[t / 1e9, _plain(v)] for t, v in points]
         return out
 

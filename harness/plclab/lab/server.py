@@ -216,6 +216,7 @@ class LabServer:
                     break
         finally:
             self.clients.discard(client)
+            self.lab.viewers = len(self.clients)
             client.ready.set()
             sender.cancel()
             for label in list(client.held):          # a page that goes away lets go of its buttons
@@ -225,6 +226,7 @@ class LabServer:
 
     def _join(self, client: _Client, snap: dict) -> None:
         self.clients.add(client)
+        self.lab.viewers = len(self.clients)
         client.pending = snap
         client.ready.set()
         self._broadcast({"type": "pages", "pages": len(self.clients)})
