@@ -30,7 +30,7 @@ from plclab.scenario import Session
 from plclab.trace import Trace
 
 SPEEDS = (1, 2, 5, 10, 20, 50)
-MIN_BATCH_S = 0.01          # wall seconds between snapshots at most speeds (100 per second at most)
+MIN_BATCH_S = 0.01          # wall seconds between batches faster than real time (100 snapshots/s at most)
 MAX_BEHIND_S = 0.25         # wall seconds of backlog after which the engine stops catching up
 TREND_WINDOW_S = 60.0       # virtual seconds of trend history a page gets when it connects
 
@@ -280,8 +280,12 @@ class Lab:
                 self.actual_speed = (s.now - rate_virt) / (now - rate_wall)
                 rate_wall, rate_virt = now, s.now
             self._publish()
-            # at least MIN_BATCH_S between batches (unless one scan takes longer at this speed)
-            pause = min(MIN_BATCH_S, tick / self.speed) - (time.monotonic() - now)
+            # sleep until the next scan is due (at x1: wake on time, so the page is at most one
+            # scan behind); faster than real time, batches at least MIN_BATCH_S apart
+            wake = base_wall + (s.now - base_virt) / self.speed
+            if self.speed > 1:
+                wake = max(wake, now + MIN_BATCH_S)
+            pause = wake - time.monotonic()
             if pause > 0 and not self._commands:
                 self._wake.wait(pause)
                 self._wake.clear()
