@@ -208,6 +208,36 @@ def test_program_with_a_syntax_error_shows_its_line(lab_page):
     expect(page.locator("#program-name")).to_have_text("full (shipped)")
 
 
+FAULTY = """PROGRAM Faulty
+VAR n : INT; d : INT; END_VAR
+n := n + 1;
+IF n > 20 THEN n := 10 / d; END_IF;
+END_PROGRAM
+CONFIGURATION Config0
+    RESOURCE Res0 ON PLC
+        TASK t (INTERVAL := T#10ms, PRIORITY := 0);
+        PROGRAM Main WITH t : Faulty;
+    END_RESOURCE
+END_CONFIGURATION
+"""
+
+
+def test_a_program_that_faults_shows_fault_with_its_pou_file_and_line(lab_page):
+    page = lab_page("mp9c", speed=2).page
+    page.get_by_label("Load ST files").set_input_files(
+        files=[{"name": "faulty.st", "mimeType": "text/plain", "buffer": FAULTY.encode()}])
+    expect(page.locator("#program-message")).to_have_text("program loaded: faulty.st", timeout=WAIT)
+    expect(page.locator("#plc-state")).to_have_text("FAULT", timeout=WAIT)
+    detail = page.locator("#fault-detail")
+    expect(detail).to_contain_text("faulty.st:4: PLC FAULT (division_by_zero) in Faulty")
+    for label in ("L2", "L4", "L7", "HL1"):               # a faulted PLC: every output off
+        off(lamp(page, label))
+    page.get_by_role("button", name="Restart PLC").click()      # runs again, faults again 20 scans later
+    expect(page.locator("#actions")).to_contain_text("PLC restarted", timeout=WAIT)
+    expect(page.locator("#plc-state")).to_have_text("FAULT", timeout=WAIT)
+    expect(detail).to_contain_text("faulty.st:4: PLC FAULT (division_by_zero) in Faulty at t=0.2 s")
+
+
 def test_grade_shows_a_table(lab_page):
     page = lab_page("mp9c", speed=2, variant="baseline").page
     page.get_by_role("button", name="Grade task1").click()
