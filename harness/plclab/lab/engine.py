@@ -45,7 +45,7 @@ class Lab:
     def __init__(self, stand: str, sources: Optional[Sequence[tuple[str, str]]] = None,
                  variant: Optional[str] = None, program_files: Sequence[str] = (), speed: float = 1.0,
                  work_dir: Optional[Path] = None):
-        from plclab.runner import stand_module
+        from plclab.stands import stand_module
 
         self.stand = stand
         self.module = stand_module(stand)
