@@ -112,7 +112,7 @@ def test_uploads_too_large_or_not_st_are_refused_and_a_good_one_loads(running, t
     binary = asyncio.run(_post(url + "api/program", _files(("x.st", b"PROGRAM\x00"))))
     assert binary["message"] == "x.st:1:1: error: a binary file, not ST text"
     no_config = asyncio.run(_post(url + "api/program", _files(
-        ("p.st", b"PROGRAM P VAR x : BOOL; END_VAR x := NOT x; END_PROGRAM\n"))))
+        ("p.st", b"PROGRAM Blinker VAR x : BOOL; END_VAR x := NOT x; END_PROGRAM\n"))))
     assert no_config["errors"][0]["text"].startswith("p.st:1:1: error: no CONFIGURATION")
     assert server.lab.program_name == "full (shipped)"                    # the PLC kept its program
     # the baseline bundle, as `plclab build` writes it, loads
@@ -144,7 +144,7 @@ def test_a_trended_program_variable_is_in_the_downloads(running):
 
 def test_cli_refuses_a_program_that_fails_the_check(tmp_path, capsys):
     bad = tmp_path / "bad.st"
-    bad.write_text("PROGRAM P\nVAR x : BOOL; END_VAR\nx := \nEND_PROGRAM\n")
+    bad.write_text("PROGRAM Broken\nVAR x : BOOL; END_VAR\nx := \nEND_PROGRAM\n")
     assert main(["lab", "mp9c", "--program", str(bad), "--port", "0"]) == 1
     err = capsys.readouterr().err
     assert re.search(rf"{re.escape(str(bad))}:4:1: error: ", err), err
