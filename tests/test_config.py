@@ -75,7 +75,7 @@ watchdog_ms = 0
 @pytest.mark.parametrize("text, message", [
     ("[modbus]\nprot = 502\n",
      "openplc.conf: [modbus] prot = '502': unknown key (allowed: enabled, bind, port, unit_id, "
-     "idle_timeout_s, max_clients)"),
+     "idle_timeout_s, first_request_timeout_s, max_clients)"),
     ("[plc]\n",
      "openplc.conf: [plc]: unknown section (allowed: runtime, modbus, mp9c, tur10, thermo)"),
     ("[modbus]\nport = 70000\n",

@@ -132,6 +132,7 @@ def _cmd_serve(args: argparse.Namespace) -> int:
 
     conf = _load_config(args.config)
     stand_cfg = conf.stand(args.stand)
+    stand_cfg.check_paths(conf.path.name if conf.path is not None else "")   # a retain_file that can never be written
     modbus = conf.modbus
     if args.port is not None:
         modbus = dataclasses.replace(modbus, port=args.port)

@@ -50,6 +50,7 @@ class ModbusConfig:
     unit_ids: frozenset[int] | None      # None: answer any unit id
     idle_timeout_s: float | None         # None: never close idle clients
     max_clients: int
+    first_request_timeout_s: float | None = 5.0   # None: the idle timeout applies from the start
 
     @property
     def client_host(self) -> str:
@@ -81,6 +82,18 @@ class StandConfig:
     retain_file: Path
     retain_period_ms: int
     watchdog_ms: int                     # 0: no watchdog
+    retain_save_error: str = "continue"  # "continue" (report once, retry) | "fault"
+
+    def check_paths(self, source: str = "") -> None:
+        """Refuse, before anything runs, a retain_file that can never be written: an existing
+        directory, link or device, or a path through a file. (A full disk or a permission
+        that changes later is reported while running, and the PLC goes on.)"""
+        from plclab.errors import PlcLabError
+        from plclab.fileio import check_output
+        try:
+            check_output(self.retain_file)
+        except PlcLabError as exc:
+            raise ConfigError(f"{_where(source)}[{self.name}] retain_file: {exc}") from None
 
 
 @dataclass(frozen=True)
@@ -211,6 +224,7 @@ _MODBUS_KEYS: dict[str, tuple[Callable[[str], Any], str]] = {
     "port": (_port, "5020"),
     "unit_id": (_unit_ids, "any"),
     "idle_timeout_s": (_idle, "60"),
+    "first_request_timeout_s": (_idle, "5"),
     "max_clients": (_int_range(1, 1000), "100"),
 }
 
@@ -230,6 +244,7 @@ def _stand_keys(stand: str) -> dict[str, tuple[Callable[[str], Any], str]]:
         "retain_file": (_path, f"out/retain/{stand}.retain"),
         "retain_period_ms": (_int_range(10, 3600000, "milliseconds"), "1000"),
         "watchdog_ms": (_int_range(0, 60000, "milliseconds, 0 = off"), "500"),
+        "retain_save_error": (_choice(("continue", "fault")), "continue"),
     }
 
 
@@ -275,13 +290,14 @@ def _build(path: Path | None, sections: dict[str, dict[str, str]]) -> Config:
             program=base / v["program"] if v["program"] else None,
             tick_ms=v["tick_ms"], io=v["io"], psm=v["psm"], profile=v["profile"],
             retain_file=base / v["retain_file"], retain_period_ms=v["retain_period_ms"],
-            watchdog_ms=v["watchdog_ms"])
+            watchdog_ms=v["watchdog_ms"], retain_save_error=v["retain_save_error"])
     return Config(
         path=path,
         runtime=RuntimeConfig(**runtime),
         modbus=ModbusConfig(enabled=modbus["enabled"], bind=modbus["bind"], port=modbus["port"],
                             unit_ids=modbus["unit_id"], idle_timeout_s=modbus["idle_timeout_s"],
-                            max_clients=modbus["max_clients"]),
+                            max_clients=modbus["max_clients"],
+                            first_request_timeout_s=modbus["first_request_timeout_s"]),
         stands=stands)
 
 

@@ -201,7 +201,8 @@ def _fsync_directory(directory: Path) -> None:
         os.close(dfd)
 
 
-def _process_alive(pid: int) -> bool:
+def process_alive(pid: int) -> bool:
+    """Whether process `pid` runs (ours counts); used to tell a stale temporary from a live one."""
     if pid == os.getpid():
         return True
     try:
@@ -231,7 +232,7 @@ def stale_temporaries(path: PathLike) -> list[Path]:
                 continue
         except OSError:
             continue
-        if not _process_alive(int(m.group("pid"))):
+        if not process_alive(int(m.group("pid"))):
             stale.append(p.parent / entry.name)
     return sorted(stale)
 

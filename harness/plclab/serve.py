@@ -48,7 +48,8 @@ class Service:
         store = RetainStore(st.retain_file, report=report)
         self.plc = PLC(compile_unit(checked), tick_ns=st.tick_ms * 1_000_000 if st.tick_ms else None,
                        watchdog_s=st.watchdog_ms / 1000 if st.watchdog_ms else 1e9, retain=store,
-                       retain_period_ns=st.retain_period_ms * 1_000_000)
+                       retain_period_ns=st.retain_period_ms * 1_000_000,
+                       retain_fault=st.retain_save_error == "fault")
         self.psm = None
         self.plant_host = None
         plants = []
@@ -62,6 +63,7 @@ class Service:
                                         traceback=bool(os.environ.get("PLCLAB_DEBUG")))
             plants.append(self.plant_host)
         self.runner = RealTimeRunner(self.plc, plants, on_scan=self._after_scan if self.psm else None)
+        self.runner.on_error = report     # a stopped scan loop is a FAULT, said once
         if self.psm is not None:
             self.runner.before_scan = self._before_scan   # type: ignore[attr-defined]
         self.server = None
@@ -80,7 +82,15 @@ class Service:
         else:
             rmap = OpenPlcMap(self.plc.image)
         return ModbusTcpServer(rmap, m.bind, m.port, unit_ids=m.unit_ids, idle_timeout=m.idle_timeout_s,
-                               max_clients=m.max_clients)
+                               max_clients=m.max_clients, first_request_timeout=m.first_request_timeout_s,
+                               health=self.problem)
+
+    def problem(self) -> Optional[str]:
+        """Why the PLC is not scanning (its fault), or None while it runs: the Modbus face
+        answers exception 04 while there is one, so no client reads stale values."""
+        if self.plc.state == "RUN":
+            return None
+        return str(self.plc.fault) if self.plc.fault is not None else f"PLC {self.plc.state}"
 
     def _before_scan(self, plc: PLC) -> None:
         self.psm.read_inputs(plc.image)
@@ -101,6 +111,9 @@ class Service:
         s = self.runner.stats
         clients = self.server.active_clients if self.server is not None else 0
         state = self.plc.state if self.plc.fault is None else f"FAULT: {self.plc.fault}"
+        store = self.plc.retain_store
+        if store is not None and store.save_error is not None:
+            state += "  RETAIN NOT SAVED"
         return (f"t={self.plc.now_ns / 1e9:9.2f} s  scans={s.ticks}  overruns={s.overruns}  "
                 f"clients={clients}  {state}")
 

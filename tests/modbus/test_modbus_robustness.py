@@ -155,7 +155,8 @@ def test_client_that_never_reads_its_replies_blocks_nobody(server, scan):
 
 
 def test_unit_id_filter_and_client_limit(image):
-    with ModbusTcpServer(OpenPlcMap(image), "127.0.0.1", 0, unit_ids=[1], max_clients=2) as server:
+    with ModbusTcpServer(OpenPlcMap(image), "127.0.0.1", 0, unit_ids=[1], max_clients=2,
+                         evict_when_full=False) as server:
         a = RawModbusClient("127.0.0.1", server.port, unit=1, timeout=TIMEOUT)
         b = RawModbusClient("127.0.0.1", server.port, unit=2, timeout=0.3)
         with pytest.raises(TimeoutError):

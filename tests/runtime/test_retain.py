@@ -119,7 +119,8 @@ def test_kill_9_at_random_moments_never_corrupts_the_file(tmp_path):
         assert first[0] == "start" and int(first[1]) == previous      # restored what was persisted
         time.sleep(rng.uniform(0.02, 0.25))
         os.kill(proc.pid, signal.SIGKILL)
-        out, _ = proc.communicate(timeout=10)
+        out = proc.stdout.read()       # not communicate(timeout=): it skips lines readline() buffered
+        proc.wait(timeout=10)
         printed = [int(x) for x in out.split()]
         last_printed = printed[-1] if printed else previous
         values = RetainStore(store_path).load(sig)
@@ -128,6 +129,8 @@ def test_kill_9_at_random_moments_never_corrupts_the_file(tmp_path):
         assert not list(tmp_path.glob("retain.json.bad-*"))
         previous = values["INST.COUNT"]
     assert previous > 0
+    RetainStore(store_path)                        # a start removes what the kills left
+    assert sorted(p.name for p in tmp_path.iterdir()) == ["child.py", "retain.json", "retain.st"]
 
 
 def edit_saved_file(src: str, path: Path, scans: int, edit) -> None:
@@ -157,10 +160,12 @@ def test_a_value_not_of_its_type_sets_the_whole_file_aside(tmp_path):
     assert plc.state == "RUN"
 
 
-def test_an_out_of_range_value_is_stored_as_its_type(tmp_path):
+def test_an_out_of_range_value_sets_the_file_aside_instead_of_wrapping(tmp_path):
     path = tmp_path / "retain.json"
-    edit_saved_file(COUNTER, path, 1, lambda v: v["INST.FRAMES"].__setitem__(0, 40000))   # an INT: -25536
-    assert make_plc(COUNTER, path).read("inst.frames[1]") == 40000 - 65536
+    edit_saved_file(COUNTER, path, 1, lambda v: v["INST.FRAMES"].__setitem__(0, 40000))   # an INT
+    plc, problems = load_reporting(COUNTER, path)
+    assert plc.read("inst.frames[1]") == 0                  # not 40000 - 65536
+    assert len(problems) == 1 and "INST.FRAMES: 40000 is out of range for INT" in problems[0]
 
 
 HOLD = """

@@ -8,10 +8,17 @@ Robustness rules (a SCADA lab network has confused and hostile clients):
 - a frame whose MBAP header cannot be trusted (protocol id != 0, length field < 2 or > 254)
   closes that connection: the byte stream cannot be resynchronised;
 - a well-delimited but malformed PDU gets exception 03, an unknown function 01;
-- a whole request must arrive within `idle_timeout` of the previous one, so a silent or
-  half-sent client costs one connection slot for at most that long, and never delays others;
+- a whole request must arrive within `idle_timeout` of the previous one, and the first one
+  within `first_request_timeout` of connecting (short: a connection that never asks for
+  anything is a port scan or a stuck client), so a silent or half-sent client costs one
+  connection slot for a bounded time, and never delays others;
 - a client that does not read its replies is not read from until it does (flow control);
-- at most `max_clients` connections; more are closed on accept;
+- at most `max_clients` connections; when the face is full, the connection idle the longest
+  is closed to admit the new one (counted in stats["evicted"]), so idle clients can never lock
+  the others out (`evict_when_full=False`: the new connection is closed instead);
+- while `health()` names a problem (the PLC is in FAULT, its scan loop stopped), every request
+  is answered with exception 04 (server device failure): a SCADA client sees the fault instead
+  of stale values behind a live face;
 - each response goes out with one write (OpenPLC's PSM client reads each response once).
 """
 from __future__ import annotations
@@ -33,6 +40,7 @@ log = logging.getLogger(__name__)
 DEFAULT_HOST = "127.0.0.1"
 DEFAULT_PORT = 5020          # unprivileged stand-in for 502
 DEFAULT_IDLE_TIMEOUT = 60.0
+DEFAULT_FIRST_REQUEST_TIMEOUT = 5.0
 DEFAULT_MAX_CLIENTS = 100
 
 
@@ -91,7 +99,9 @@ class ModbusTcpServer:
                  port: int = DEFAULT_PORT, *, unit_ids: Iterable[int] | None = None,
                  idle_timeout: float | None = DEFAULT_IDLE_TIMEOUT,
                  max_clients: int = DEFAULT_MAX_CLIENTS, name: str = "modbus",
-                 on_request: Callable[[int, bytes, bytes], None] | None = None):
+                 on_request: Callable[[int, bytes, bytes], None] | None = None,
+                 first_request_timeout: float | None = DEFAULT_FIRST_REQUEST_TIMEOUT,
+                 evict_when_full: bool = True, health: Callable[[], str | None] | None = None):
         if not 0 <= int(port) <= 65535:
             raise ServerError(f"{name}: port {port} is not a TCP port (1..65535, or 0 for any free port)")
         self.register_map = register_map
@@ -99,10 +109,14 @@ class ModbusTcpServer:
         self.name = name
         self.unit_ids = None if unit_ids is None else frozenset(unit_ids)
         self.idle_timeout = idle_timeout if idle_timeout and idle_timeout > 0 else None
+        self.first_request_timeout = first_request_timeout if first_request_timeout and first_request_timeout > 0 \
+            else self.idle_timeout
         self.max_clients = max_clients
         self.on_request = on_request     # (unit, request PDU, response PDU) of each answered request
-        self.stats = {"connections": 0, "refused": 0, "requests": 0, "bad_frames": 0,
-                      "ignored": 0}
+        self.evict_when_full = evict_when_full
+        self.health = health
+        self.stats = {"connections": 0, "refused": 0, "evicted": 0, "requests": 0, "bad_frames": 0,
+                      "ignored": 0, "faulted": 0}
         self._requested_port = port
         self._port: int | None = None
         self._thread: threading.Thread | None = None
@@ -113,6 +127,7 @@ class ModbusTcpServer:
         self._stopped = threading.Event()
         self._error: OSError | None = None
         self._connections: set[_Connection] = set()
+        self._attaching = 0        # accepted sockets whose connection is not made yet
 
     # -- public API -----------------------------------------------------------------------
     @property
@@ -232,21 +247,42 @@ class ModbusTcpServer:
             except OSError as exc:  # e.g. out of file descriptors: keep serving the others
                 log.warning("%s: accept failed: %s", self.name, exc)
                 return
-            if len(self._connections) + len(attaching) >= self.max_clients or self._stop_requested:
+            if self._stop_requested or (len(self._connections) + self._attaching >= self.max_clients
+                                        and not self._evict_one()):
                 self.stats["refused"] += 1
                 sock.close()
                 continue
             self.stats["connections"] += 1
             sock.setblocking(False)
             task = asyncio.get_running_loop().create_task(self._attach(sock))
+            self._attaching += 1        # a slot taken until connection_made (or the attach fails)
             attaching.add(task)
             task.add_done_callback(attaching.discard)
 
+    def _evict_one(self) -> bool:
+        """The face is full: close the connection idle the longest to make room; False if
+        there is none to close (eviction off, or every slot is still being attached)."""
+        if not self.evict_when_full or not self._connections:
+            return False
+        victim = min(self._connections, key=lambda c: c.last_active)
+        self._connections.discard(victim)       # its slot is free now, not when the loop notices
+        victim.close(abort=True)
+        self.stats["evicted"] += 1
+        log.info("%s: full (%d clients): closed the connection idle the longest", self.name, self.max_clients)
+        return True
+
     async def _attach(self, sock: socket.socket) -> None:
+        made: list[_Connection] = []
+
+        def connection() -> _Connection:
+            made.append(_Connection(self))
+            return made[0]
         try:
-            await asyncio.get_running_loop().connect_accepted_socket(lambda: _Connection(self), sock)
+            await asyncio.get_running_loop().connect_accepted_socket(connection, sock)
         except OSError:
             sock.close()
+            if not made or made[0].transport is None:
+                self._attaching -= 1    # connection_made never ran: give the slot back here
 
     def _handle_frame(self, transaction: int, unit: int, pdu: bytes) -> bytes | None:
         """The response ADU for one request frame, or None to send nothing."""
@@ -254,6 +290,9 @@ class ModbusTcpServer:
             self.stats["ignored"] += 1
             return None
         self.stats["requests"] += 1
+        if self.health is not None and self.health() is not None:
+            self.stats["faulted"] += 1
+            return frame(transaction, unit, exception_response(pdu[0], ExceptionCode.SERVER_DEVICE_FAILURE))
         response = handle_pdu(self.register_map, pdu)
         if self.on_request is not None:
             try:
@@ -272,6 +311,8 @@ class _Connection(asyncio.Protocol):
         self.transport: asyncio.Transport | None = None
         self.buffer = bytearray()
         self.timer: asyncio.TimerHandle | None = None
+        self.requests = 0                       # whole request frames received
+        self.last_active = 0.0                  # loop time of connecting or of the last request
 
     def connection_made(self, transport: asyncio.BaseTransport) -> None:
         assert isinstance(transport, asyncio.Transport)
@@ -280,7 +321,9 @@ class _Connection(asyncio.Protocol):
         sock = transport.get_extra_info("socket")
         if sock is not None:
             sock.setsockopt(socket.IPPROTO_TCP, socket.TCP_NODELAY, 1)
+        self.server._attaching -= 1
         self.server._connections.add(self)
+        self.last_active = asyncio.get_running_loop().time()
         self._arm()
 
     def connection_lost(self, exc: Exception | None) -> None:
@@ -304,6 +347,8 @@ class _Connection(asyncio.Protocol):
                 break
             pdu = bytes(self.buffer[MBAP_SIZE:end])
             del self.buffer[:end]
+            self.requests += 1
+            self.last_active = asyncio.get_running_loop().time()
             reply = server._handle_frame(transaction, unit, pdu)
             if reply is not None and self.transport is not None:
                 self.transport.write(reply)
@@ -318,20 +363,21 @@ class _Connection(asyncio.Protocol):
         if self.transport is not None and not self.transport.is_closing():
             self.transport.resume_reading()
 
-    def close(self) -> None:
+    def close(self, abort: bool = False) -> None:
         transport = self.transport
         if transport is None or transport.is_closing():
             return
-        if transport.get_write_buffer_size():
+        if abort or transport.get_write_buffer_size():
             transport.abort()      # a client that does not read gets no more time
         else:
             transport.close()
 
     def _arm(self) -> None:
-        """(Re)start the idle timer: a whole request must arrive within idle_timeout."""
+        """(Re)start the idle timer: a whole request must arrive within idle_timeout (the
+        first one within first_request_timeout)."""
         if self.timer is not None:
             self.timer.cancel()
-        timeout = self.server.idle_timeout
+        timeout = self.server.idle_timeout if self.requests else self.server.first_request_timeout
         if timeout is not None and self.transport is not None:
             self.timer = asyncio.get_running_loop().call_later(timeout, self._idle)
 

@@ -89,7 +89,7 @@ class PLC:
 
     def __init__(self, compiled: CompiledProgram, image: Optional[ProcessImage] = None,
                  tick_ns: Optional[int] = None, watchdog_s: float = DEFAULT_WATCHDOG_S,
-                 retain: Any = None, retain_period_ns: int = 1_000_000_000):
+                 retain: Any = None, retain_period_ns: int = 1_000_000_000, retain_fault: bool = False):
         self.compiled = compiled
         self.checked: CheckedUnit = compiled.checked
         if self.checked.scope_count > 1:
@@ -99,6 +99,7 @@ class PLC:
         self.watchdog_s = watchdog_s
         self.retain_store = retain
         self.retain_period_ns = retain_period_ns
+        self.retain_fault = retain_fault    # a failed retain save: FAULT (True) or reported, scan on
         self._last_persist_ns = 0
         self.state = STOP
         self.fault: Optional[FaultRecord] = None
@@ -295,7 +296,9 @@ class PLC:
         self.write_outputs()
         if self.retain_store is not None and self.now_ns - self._last_persist_ns >= self.retain_period_ns:
             self._last_persist_ns = self.now_ns
-            self.persist_retain()
+            if not self.persist_retain() and self.retain_fault:
+                self.enter_fault("retain", f"cannot save the retained variables: {self.retain_store.save_error}")
+                return False
         return True
 
     def advance(self) -> None:
@@ -320,6 +323,13 @@ class PLC:
                                  where.file if where else None, where.line if where else None, self.now_ns,
                                  internal=internal,
                                  detail="".join(traceback.format_exception(exc)) if internal else "")
+        self.state = FAULT
+        self._safe_outputs()
+
+    def enter_fault(self, kind: str, message: str) -> None:
+        """FAULT for a reason outside the program (a retain save, the I/O layer, the scan
+        loop): outputs safe, no POU or line to name."""
+        self.fault = FaultRecord(kind, message, None, None, None, self.now_ns)
         self.state = FAULT
         self._safe_outputs()
 
@@ -376,9 +386,12 @@ class PLC:
         from plclab.runtime.retain import signature
         return signature((path, ty) for path, _o, _a, ty in self.retained())
 
-    def persist_retain(self) -> None:
+    def persist_retain(self) -> bool:
+        """Save the retained variables; False if the save failed (the store reported it once
+        and retries at the next flush: a full disk never stops the scan)."""
         if self.retain_store is not None and self.retained():
-            self.retain_store.save(self.retain_signature(), self.retain_snapshot())
+            return self.retain_store.flush(self.retain_signature(), self.retain_snapshot())
+        return True
 
     def restore_retain(self) -> None:
         """Retained variables from the file, all or none: one value that is not of its
@@ -397,7 +410,9 @@ class PLC:
             try:
                 if isinstance(ty, T.FBType):
                     inst = getattr(owner, attr)
-                    restored += [(inst, k, v) for k, v in fb_values_from_json(data[path], inst)]
+                    pou = self.checked.pous.get(str(getattr(type(inst), "_ST_NAME", "")).upper())
+                    types = {d.key: d.ty for d in pou.decls if d.ty is not None} if pou is not None else None
+                    restored += [(inst, k, v) for k, v in fb_values_from_json(data[path], inst, types)]
                 else:
                     restored.append((owner, attr, from_json_value(data[path], ty)))
             except RetainError as e:

@@ -4,6 +4,12 @@ The deadline of tick k is `start + k * tick` (not "last scan + tick"), so a late
 not shift every later one; a scan that starts more than one tick late is an overrun, and the
 missed ticks are skipped (counted), as a PLC's cyclic task would. PLC time (what the timers
 read) is the wall-clock time since start, like OpenPLC's __CURRENT_TIME.
+
+No exception ends the loop silently: anything raised by a plant, an I/O layer (the PSM
+connection) or the runtime puts the PLC in FAULT (outputs safe, `plc.fault` says what), is
+reported once through `on_error`, and ends the loop; the status line and the Modbus face
+(which answers exception 04 while the PLC is not in RUN) show it. A dead scan never hides
+behind a face that still says RUN.
 """
 from __future__ import annotations
 
@@ -12,6 +18,7 @@ import time
 from dataclasses import dataclass, field
 from typing import Any, Callable, Iterable, Optional
 
+from plclab.errors import PlcLabError
 from plclab.runtime.plantio import PlantBinding
 from plclab.runtime.plc import PLC
 
@@ -43,6 +50,8 @@ class RealTimeRunner:
         self.plants = [PlantBinding(p, plc.image) for p in plants]
         self.on_scan = on_scan
         self.before_scan: Optional[Callable[[PLC], None]] = None
+        self.on_error: Optional[Callable[[str], None]] = None
+        self.error: Optional[str] = None        # why the loop stopped by itself, if it did
         self.stats = RealTimeStats()
         self._clock, self._sleep = clock, sleep
         self._stop = threading.Event()
@@ -63,6 +72,27 @@ class RealTimeRunner:
         self._loop(until=self._clock() + seconds)
 
     def _loop(self, until: Optional[float] = None) -> None:
+        try:
+            self._scan_loop(until)
+        except Exception as exc:   # noqa: BLE001 - whatever it is, the PLC must show it
+            self._fail(exc)
+
+    def _fail(self, exc: Exception) -> None:
+        """The loop cannot go on: FAULT (outputs safe), reported once, then the loop ends."""
+        if isinstance(exc, (OSError, PlcLabError)):
+            kind, note = "io", ""
+        else:
+            kind, note = "internal", " (a plclab bug: please report it)"
+        text = str(exc) if isinstance(exc, PlcLabError) else f"{type(exc).__name__}: {exc}"
+        self.error = f"the scan loop stopped: {text}{note}"
+        try:
+            self.plc.enter_fault(kind, self.error)
+        except Exception:          # noqa: BLE001 - the report below must still go out
+            pass
+        if self.on_error is not None:
+            self.on_error(str(self.plc.fault) if self.plc.fault is not None else self.error)
+
+    def _scan_loop(self, until: Optional[float]) -> None:
         plc = self.plc
         tick_s = plc.tick_ns / 1e9
         start = self._clock()

@@ -4,18 +4,23 @@ This is the generic "CI checks I/O traces" entry point for programs that are not
 """
 from __future__ import annotations
 
+import math
+import re
 from dataclasses import dataclass
 from pathlib import Path
-from typing import Optional, Sequence
+from typing import Any, Optional, Sequence
 
 from plclab.errors import PlcLabError
 from plclab.fileio import check_output
 from plclab.frontend import load_files
+from plclab.frontend.literals import LiteralError, parse_time
+from plclab.iec import types as T
 from plclab.runtime.faults import FaultRecord
-from plclab.runtime.plc import PLC
+from plclab.runtime.plc import PLC, image_bits, parse_address
 from plclab.runtime.compiler import compile_unit
 from plclab.runtime.sim import InputEvent, Simulation
-from plclab.trace import Trace, plot_trace, read_csv, write_csv, write_vcd
+from plclab.trace import Trace, TraceFormatError, plot_trace, write_csv, write_vcd
+from plclab.trace.csvio import read_rows
 
 
 @dataclass
@@ -26,20 +31,104 @@ class SimResult:
     sim: Simulation
 
 
-def read_input_script(path: str) -> list[InputEvent]:
-    """Rows `time_s,name,value` -> events; a bad row is one `FILE:LINE: error:` line."""
+def read_input_script(path: str, plc: PLC) -> list[InputEvent]:
+    """Rows `time_s,name,value` -> events. Each value is read as the type of what it sets (the
+    variable, or the variable located at the address): text for a REAL, 40000 for an INT, a
+    20-digit number anywhere is refused, never wrapped. A bad row is one `FILE:LINE: error:` line."""
     try:
-        script = read_csv(path, require_initial=False)
+        rows = read_rows(path)
     except FileNotFoundError:
         raise PlcLabError(f"{path}: no such file") from None
+    except IsADirectoryError:
+        raise PlcLabError(f"{path}: is a directory, not an input script") from None
     except OSError as e:
-        raise PlcLabError(f"{path}: cannot read: {e.strerror}") from None
+        raise PlcLabError(f"{path}: cannot read: {e.strerror or e}") from None
+    types: dict[str, Any] = {}
     events = []
-    for name in script.signals():
-        for i, (t, v) in enumerate(script.changes(name)):
-            events.append(InputEvent(t, name, v))
-    events.sort(key=lambda e: e.time_ns)
+    for row in rows:
+        try:
+            if row.name not in types:
+                types[row.name] = input_type(plc, row.name)
+            value = typed_value(row.text, types[row.name], row.name)
+        except PlcLabError as e:
+            raise TraceFormatError(path, row.line, str(e)) from None
+        events.append(InputEvent(row.time_ns, row.name, value))
     return events
+
+
+def input_type(plc: PLC, name: str) -> Any:
+    """The type a scripted value for `name` must have: the variable's, the type of the
+    variable located at an address, or for an address no variable uses, its image cell
+    (`_RawCell`: any value of the cell's width, signed or not)."""
+    if name.strip().startswith("%"):
+        area, index = parse_address(name)
+        for b in plc.bindings:
+            if b.area == area and b.index == index:
+                return b.ty
+        return T.BOOL if area[1] == "X" else _RawCell(image_bits(area))
+    ty = plc.resolve_typed(name)[2]
+    if not isinstance(T.base_of(ty), (T.ElementaryType, T.StringType, T.EnumType)):
+        raise PlcLabError(f"{name} is not an elementary variable; set one of its elements or fields")
+    return ty
+
+
+@dataclass(frozen=True)
+class _RawCell:
+    bits: int
+
+
+_INT_TEXT = re.compile(r"[+-]?\d{1,40}")
+_REAL_MAX = 3.4028234663852886e38
+
+
+def typed_value(text: str, ty: Any, name: str) -> Any:
+    """`text` as a value of `ty`, or PlcLabError saying why not (never a wrapped value)."""
+    t = text.strip()
+    shown = repr(t if len(t) <= 40 else t[:37] + "...")
+    if isinstance(ty, _RawCell):
+        low, high, what = -(1 << (ty.bits - 1)), (1 << ty.bits) - 1, f"a {ty.bits}-bit image cell"
+        return _integer(t, shown, low, high, f"{name} ({what})")
+    b = T.base_of(ty)
+    if b is T.BOOL:
+        if t.lower() in ("0", "1", "true", "false"):
+            return t.lower() in ("1", "true")
+        raise PlcLabError(f"bad value {shown} for BOOL {name}: expected 0 or 1")
+    if isinstance(b, T.ElementaryType) and b.kind in ("sint", "uint", "bits"):
+        return _integer(t, shown, b.min, b.max, f"{b.name} {name}")
+    if isinstance(b, T.ElementaryType) and b.is_real:
+        try:
+            value = float(t)
+        except ValueError:
+            raise PlcLabError(f"bad value {shown} for {b.name} {name}: not a number") from None
+        if b is T.REAL and math.isfinite(value) and abs(value) > _REAL_MAX:
+            raise PlcLabError(f"value {shown} is out of range for REAL {name} (at most 3.4e38 in magnitude)")
+        return value
+    if isinstance(b, T.ElementaryType) and b.kind in ("time", "date", "tod", "dt"):
+        if t.upper().startswith(("T#", "TIME#")) and b.kind == "time":
+            try:
+                return parse_time(t)
+            except (LiteralError, ValueError):
+                raise PlcLabError(f"bad value {shown} for TIME {name}") from None
+        return _integer(t, shown, -(1 << 63), (1 << 63) - 1, f"{b.name} {name} (nanoseconds, or T#...)")
+    if isinstance(b, T.EnumType):
+        member = t.split("#")[-1].upper()
+        if member in b.values:
+            return member
+        raise PlcLabError(f"bad value {shown} for {b.name} {name}: one of {', '.join(b.values)}")
+    if isinstance(b, T.StringType):
+        return text
+    raise PlcLabError(f"{name} cannot be set from an input script")
+
+
+def _integer(t: str, shown: str, low: int, high: int, what: str) -> int:
+    if not _INT_TEXT.fullmatch(t):
+        if re.fullmatch(r"[+-]?\d+", t):
+            raise PlcLabError(f"value {shown} is out of range for {what} ({low}..{high})")
+        raise PlcLabError(f"bad value {shown} for {what}: expected an integer")
+    value = int(t)
+    if not low <= value <= high:
+        raise PlcLabError(f"value {t} is out of range for {what} ({low}..{high})")
+    return value
 
 
 def run_sim(files: Sequence[str], duration_s: float, inputs: Optional[str] = None, csv: Optional[str] = None,
@@ -50,7 +139,7 @@ def run_sim(files: Sequence[str], duration_s: float, inputs: Optional[str] = Non
             check_output(out)                # a bad output path is refused before the run
     checked = load_files(files)
     plc = PLC(compile_unit(checked), tick_ns=round(tick_s * 1e9) if tick_s else None)
-    events = read_input_script(inputs) if inputs else []
+    events = read_input_script(inputs, plc) if inputs else []
     extra = [e.name for e in events if e.name.startswith("%")]
     sim = Simulation(plc, watch=watch, extra_addresses=extra)
     try:

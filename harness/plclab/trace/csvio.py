@@ -103,13 +103,22 @@ def _write(trace: Trace, f: TextIO, names: Optional[Sequence[str]]) -> None:
 
 # ---------------------------------------------------------------------------- reading
 
-@dataclass
-class _Row:
+MAX_INPUT_BYTES = 64 * 1024 * 1024     # a trace or input script beyond this is not a CSV we made
+
+
+@dataclass(frozen=True)
+class CsvRow:
+    """One data row as written: its line, time, signal name and value text (`quoted`: the
+    value was in quotes, so it is a string)."""
+
     line: int
     time_ns: int
     name: str
     text: str
     quoted: bool
+
+
+_Row = CsvRow
 
 
 class _RawLines:
@@ -131,6 +140,42 @@ class _RawLines:
         return line
 
 
+def decode_text(data: bytes, filename: str) -> str:
+    """The text of a CSV file's bytes (UTF-8, a BOM allowed); anything else is one
+    TraceFormatError naming the line: UTF-16, binary data, bytes that are not UTF-8."""
+    if data.startswith((b"\xff\xfe", b"\xfe\xff")):
+        raise TraceFormatError(filename, 1, "the file is UTF-16; save it as UTF-8 (plain text CSV)")
+    nul = data.find(b"\x00")
+    if nul >= 0:
+        raise TraceFormatError(filename, data.count(b"\n", 0, nul) + 1,
+                               "a NUL byte: this is a binary file, not a CSV text file")
+    try:
+        return data.decode("utf-8-sig")
+    except UnicodeDecodeError as e:
+        raise TraceFormatError(filename, data.count(b"\n", 0, e.start) + 1,
+                               f"byte 0x{data[e.start]:02x} is not UTF-8 text; save the file as UTF-8") from None
+
+
+def _open_text(source: Source) -> tuple[TextIO, str]:
+    if isinstance(source, (str, os.PathLike)):
+        filename = os.fspath(source)
+        with open(source, "rb") as f:
+            data = f.read(MAX_INPUT_BYTES + 1)
+        if len(data) > MAX_INPUT_BYTES:
+            raise TraceFormatError(filename, 1, f"larger than {MAX_INPUT_BYTES // (1024 * 1024)} MB; "
+                                                f"not a trace this project reads")
+        return io.StringIO(decode_text(data, filename), newline=""), filename
+    return source, getattr(source, "name", "<csv>")
+
+
+def read_rows(source: Source) -> list[CsvRow]:
+    """The data rows of a trace or input CSV (a path or an open text file), in file order,
+    with the header, the field count, the times (sorted) and duplicates checked; values are
+    left as text for the caller to type. Raises TraceFormatError (`FILE:LINE: error: ...`)."""
+    f, filename = _open_text(source)
+    return _rows(f, filename)
+
+
 def read_csv(source: Source, kinds: Optional[Mapping[str, str]] = None,
              require_initial: bool = True) -> Trace:
     """Read a trace CSV (a path or an open text file) into a Trace, validating every row.
@@ -138,11 +183,8 @@ def read_csv(source: Source, kinds: Optional[Mapping[str, str]] = None,
     `kinds` fixes the kind of some or all signals. `require_initial=False` accepts signals
     whose first row is after time 0 (input scripts); they are declared at that time.
     """
-    if isinstance(source, (str, os.PathLike)):
-        filename = os.fspath(source)
-        with open(source, encoding="utf-8-sig", newline="") as f:
-            return _read(f, filename, kinds or {}, require_initial)
-    return _read(source, getattr(source, "name", "<csv>"), kinds or {}, require_initial)
+    f, filename = _open_text(source)
+    return _read(f, filename, kinds or {}, require_initial)
 
 
 def parse_csv(text: str, filename: str = "<csv>", kinds: Optional[Mapping[str, str]] = None,
@@ -151,16 +193,13 @@ def parse_csv(text: str, filename: str = "<csv>", kinds: Optional[Mapping[str, s
     return _read(io.StringIO(text), filename, kinds or {}, require_initial)
 
 
-def _read(f: TextIO, filename: str, kinds: Mapping[str, str], require_initial: bool) -> Trace:
+def _rows(f: TextIO, filename: str) -> list[CsvRow]:
     def fail(line: int, message: str) -> TraceFormatError:
         return TraceFormatError(filename, line, message)
 
-    for name, kind in kinds.items():
-        if kind not in KINDS:
-            raise ValueError(f"kind {kind!r} for {name!r} is not one of {', '.join(KINDS)}")
     raw = _RawLines(f)
     reader = csv.reader(raw)
-    rows_by_name: dict[str, list[_Row]] = {}
+    rows: list[CsvRow] = []
     last_time, last_line = 0, 0
     seen: dict[tuple[str, int], int] = {}
     header_seen = False
@@ -176,8 +215,9 @@ def _read(f: TextIO, filename: str, kinds: Mapping[str, str], require_initial: b
             if not header_seen:
                 got = [x.strip() for x in fields]
                 if got != list(HEADER):
-                    raise fail(line, f"expected the header `{','.join(HEADER)}`, "
-                                     f"got `{text.strip()}`")
+                    shown = text.strip()
+                    shown = shown if len(shown) <= 60 else shown[:57] + "..."
+                    raise fail(line, f"expected the header `{','.join(HEADER)}`, got `{shown}`")
                 header_seen = True
                 continue
             if len(fields) != 3:
@@ -199,11 +239,26 @@ def _read(f: TextIO, filename: str, kinds: Mapping[str, str], require_initial: b
             seen[name, t] = line
             last_time, last_line = t, line
             quoted = text.rstrip("\r\n").endswith('"')
-            rows_by_name.setdefault(name, []).append(_Row(line, t, name, fields[2], quoted))
+            rows.append(CsvRow(line, t, name, fields[2], quoted))
     except csv.Error as e:
         raise fail(line_end + 1, f"bad CSV: {e}") from None
     if not header_seen:
         raise fail(1, f"empty file: expected the header `{','.join(HEADER)}`")
+    return rows
+
+
+def _read(f: TextIO, filename: str, kinds: Mapping[str, str], require_initial: bool) -> Trace:
+    def fail(line: int, message: str) -> TraceFormatError:
+        return TraceFormatError(filename, line, message)
+
+    for name, kind in kinds.items():
+        if kind not in KINDS:
+            raise ValueError(f"kind {kind!r} for {name!r} is not one of {', '.join(KINDS)}")
+    all_rows = _rows(f, filename)
+    rows_by_name: dict[str, list[CsvRow]] = {}
+    for r in all_rows:
+        rows_by_name.setdefault(r.name, []).append(r)
+    last_time = all_rows[-1].time_ns if all_rows else 0
 
     trace = Trace()
     for name, rows in rows_by_name.items():
@@ -252,12 +307,17 @@ def _parse_value(row: _Row, kind: str, fail: Any) -> Any:
     if kind == "bool":
         if text.lower() in _BOOL_TEXT:
             return _BOOL_TEXT[text.lower()]
-        raise fail(row.line, f"bad value {text!r} for BOOL {row.name}: expected 0 or 1")
+        raise fail(row.line, f"bad value {_shown(text)} for BOOL {row.name}: expected 0 or 1")
     if kind == "int":
-        if _INT_RE.fullmatch(text):
+        if _INT_RE.fullmatch(text) and len(text) <= 40:
             return int(text)
-        raise fail(row.line, f"bad value {text!r} for integer {row.name}")
+        raise fail(row.line, f"bad value {_shown(text)} for integer {row.name}")
     try:
         return float(text)
     except ValueError:
-        raise fail(row.line, f"bad value {text!r} for REAL {row.name}") from None
+        raise fail(row.line, f"bad value {_shown(text)} for REAL {row.name}") from None
+
+
+def _shown(text: str) -> str:
+    """A value as an error message quotes it: cut to 40 characters."""
+    return repr(text if len(text) <= 40 else text[:37] + "...")
