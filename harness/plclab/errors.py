@@ -35,3 +35,10 @@ class CompileError(PlcLabError):
 
 class ConfigError(PlcLabError):
     """A bad openplc.conf: the message names section, key, value and what is allowed."""
+
+
+def quoted(value: object, limit: int = 40) -> str:
+    """A value as a one-line message quotes it (repr of text), cut to `limit` characters: a
+    5,000-digit number or a binary line must not become a 5,000-character error."""
+    text = repr(value)
+    return text if len(text) <= limit else text[:limit - 3] + "..."

@@ -25,7 +25,7 @@ import time
 from pathlib import Path
 from typing import Any, Iterable, Optional
 
-from plclab.errors import PlcLabError
+from plclab.errors import PlcLabError, quoted
 from plclab.fileio import existing_kind, process_alive, remove_stale_temporaries, write_text
 from plclab.iec import types as T
 
@@ -90,9 +90,9 @@ def from_json_value(data: Any, ty: T.Type) -> Any:
         if isinstance(data, (int, float)) and not isinstance(data, bool):
             value = float(data)
             if b is T.REAL and math.isfinite(value) and abs(value) > _REAL_MAX:
-                raise RetainError(f"{_shown(data)} is out of range for REAL")
+                raise RetainError(f"{quoted(data)} is out of range for REAL")
             return T.wrapper_for(b)(value)
-        raise RetainError(f"{_shown(data)} is not of type {b.name}")
+        raise RetainError(f"{quoted(data)} is not of type {b.name}")
     if b is T.BOOL:
         if data in (True, False, 0, 1):
             return bool(data)
@@ -100,17 +100,17 @@ def from_json_value(data: Any, ty: T.Type) -> Any:
     if isinstance(b, T.EnumType):
         if isinstance(data, str) and data in b.values:
             return data
-        raise RetainError(f"{_shown(data)} is not a value of {b.name}")
+        raise RetainError(f"{quoted(data)} is not a value of {b.name}")
     if isinstance(b, T.StringType):
         if isinstance(data, str):
             return data
-        raise RetainError(f"{_shown(data)} is not of type {b.name}")
+        raise RetainError(f"{quoted(data)} is not of type {b.name}")
     if isinstance(data, int) and not isinstance(data, bool):
         low, high = _int_range(b)
         if not low <= data <= high:
-            raise RetainError(f"{_shown(data)} is out of range for {getattr(b, 'name', '?')} ({low}..{high})")
+            raise RetainError(f"{quoted(data)} is out of range for {getattr(b, 'name', '?')} ({low}..{high})")
         return data
-    raise RetainError(f"{_shown(data)} is not of type {getattr(b, 'name', '?')}")
+    raise RetainError(f"{quoted(data)} is not of type {getattr(b, 'name', '?')}")
 
 
 def _int_range(b: T.Type) -> tuple[int, int]:
@@ -119,11 +119,6 @@ def _int_range(b: T.Type) -> tuple[int, int]:
         return b.min, b.max
     return -(1 << 63), (1 << 63) - 1
 
-
-def _shown(data: Any) -> str:
-    """A saved value as a message quotes it: at most 40 characters."""
-    text = repr(data)
-    return text if len(text) <= 40 else text[:37] + "..."
 
 
 def fb_values_from_json(data: Any, inst: Any, types: Optional[dict[str, T.Type]] = None) -> list[tuple[str, Any]]:
@@ -138,7 +133,7 @@ def fb_values_from_json(data: Any, inst: Any, types: Optional[dict[str, T.Type]]
         if type(current) not in (bool, int, float, str):
             continue                          # not a variable of the block
         if type(v) is not type(current) and not (type(current) is float and type(v) is int):
-            raise RetainError(f"{_shown(v)} is not of the variable's type", field=k)
+            raise RetainError(f"{quoted(v)} is not of the variable's type", field=k)
         declared = (types or {}).get(k)
         if declared is not None and isinstance(T.base_of(declared), T.ElementaryType):
             try:
@@ -146,7 +141,7 @@ def fb_values_from_json(data: Any, inst: Any, types: Optional[dict[str, T.Type]]
             except RetainError as e:
                 raise RetainError(str(e), field=k) from None
         elif type(current) is int and not -(1 << 63) <= v < (1 << 64):
-            raise RetainError(f"{_shown(v)} is out of range for a 64-bit integer", field=k)
+            raise RetainError(f"{quoted(v)} is out of range for a 64-bit integer", field=k)
         values.append((k, float(v) if type(current) is float else v))
     return values
 

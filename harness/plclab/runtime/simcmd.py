@@ -10,7 +10,7 @@ from dataclasses import dataclass
 from pathlib import Path
 from typing import Any, Optional, Sequence
 
-from plclab.errors import PlcLabError
+from plclab.errors import PlcLabError, quoted
 from plclab.fileio import check_output
 from plclab.frontend import load_files
 from plclab.frontend.literals import LiteralError, parse_time
@@ -84,7 +84,7 @@ _REAL_MAX = 3.4028234663852886e38
 def typed_value(text: str, ty: Any, name: str) -> Any:
     """`text` as a value of `ty`, or PlcLabError saying why not (never a wrapped value)."""
     t = text.strip()
-    shown = repr(t if len(t) <= 40 else t[:37] + "...")
+    shown = quoted(t)
     if isinstance(ty, _RawCell):
         low, high, what = -(1 << (ty.bits - 1)), (1 << ty.bits) - 1, f"a {ty.bits}-bit image cell"
         return _integer(t, shown, low, high, f"{name} ({what})")

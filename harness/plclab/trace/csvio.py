@@ -21,7 +21,7 @@ import re
 from dataclasses import dataclass
 from typing import Any, Iterator, Mapping, Optional, Sequence, TextIO, Union
 
-from plclab.errors import PlcLabError
+from plclab.errors import PlcLabError, quoted
 from plclab.fileio import open_atomic
 
 from .times import format_seconds, parse_seconds
@@ -215,9 +215,8 @@ def _rows(f: TextIO, filename: str) -> list[CsvRow]:
             if not header_seen:
                 got = [x.strip() for x in fields]
                 if got != list(HEADER):
-                    shown = text.strip()
-                    shown = shown if len(shown) <= 60 else shown[:57] + "..."
-                    raise fail(line, f"expected the header `{','.join(HEADER)}`, got `{shown}`")
+                    got_text = text.strip() if len(text.strip()) <= 60 else text.strip()[:57] + "..."
+                    raise fail(line, f"expected the header `{','.join(HEADER)}`, got `{got_text}`")
                 header_seen = True
                 continue
             if len(fields) != 3:
@@ -307,17 +306,13 @@ def _parse_value(row: _Row, kind: str, fail: Any) -> Any:
     if kind == "bool":
         if text.lower() in _BOOL_TEXT:
             return _BOOL_TEXT[text.lower()]
-        raise fail(row.line, f"bad value {_shown(text)} for BOOL {row.name}: expected 0 or 1")
+        raise fail(row.line, f"bad value {quoted(text)} for BOOL {row.name}: expected 0 or 1")
     if kind == "int":
         if _INT_RE.fullmatch(text) and len(text) <= 40:
             return int(text)
-        raise fail(row.line, f"bad value {_shown(text)} for integer {row.name}")
+        raise fail(row.line, f"bad value {quoted(text)} for integer {row.name}")
     try:
         return float(text)
     except ValueError:
-        raise fail(row.line, f"bad value {_shown(text)} for REAL {row.name}") from None
+        raise fail(row.line, f"bad value {quoted(text)} for REAL {row.name}") from None
 
-
-def _shown(text: str) -> str:
-    """A value as an error message quotes it: cut to 40 characters."""
-    return repr(text if len(text) <= 40 else text[:37] + "...")
