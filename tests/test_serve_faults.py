@@ -12,6 +12,10 @@ import pytest
 from plclab import config
 from plclab.cli import main
 from plclab.modbus.rawclient import RawModbusClient, RawModbusError
+from plclab.frontend import check_sources
+from plclab.runtime.compiler import compile_unit
+from plclab.runtime.plc import PLC
+from plclab.runtime.realtime import RealTimeRunner
 from plclab.serve import ServeOptions, Service
 
 TIMEOUT = 10.0
@@ -81,6 +85,32 @@ def test_a_failing_retain_save_configured_as_fault_is_visible_on_the_face(tmp_pa
         svc.stop()
 
 
+def test_an_exception_in_the_real_time_loop_is_a_visible_fault(tmp_path):
+    svc, reports = service(tmp_path, f"retain_file = {tmp_path / 'r.json'}\n")
+    calls = []
+
+    def io_layer(plc) -> None:                         # the PSM link, say, dropping on its third use
+        calls.append(1)
+        if len(calls) == 3:
+            raise ConnectionResetError(104, "Connection reset by peer")
+    svc.runner.before_scan = io_layer
+    svc.start()
+    try:
+        wait_for(lambda: svc.plc.state == "FAULT", "the FAULT")
+        svc.runner._thread.join(TIMEOUT)
+        assert not svc.runner._thread.is_alive()               # the loop ended, said so
+        assert len(reports) == 1 and "PLC FAULT (io)" in reports[0]
+        assert "scan loop stopped: ConnectionResetError" in reports[0]
+        assert "FAULT" in svc.status()
+        assert svc.plc.image.areas["QX"][0] == 0               # outputs safe
+        with RawModbusClient("127.0.0.1", svc.server.port, timeout=TIMEOUT) as c:
+            with pytest.raises(RawModbusError) as e:
+                c.read_coils(0, 1)
+            assert e.value.code == 4
+    finally:
+        svc.stop()
+
+
 class ExplodingPlant:
     """A plant model with a bug: its third step raises."""
 
@@ -96,22 +126,16 @@ class ExplodingPlant:
         return {}
 
 
-def test_an_exception_in_the_real_time_loop_is_a_visible_fault(tmp_path):
-    svc, reports = service(tmp_path, f"retain_file = {tmp_path / 'r.json'}\n", plant=ExplodingPlant())
-    svc.start()
-    try:
-        wait_for(lambda: svc.plc.state == "FAULT", "the FAULT")
-        svc.runner._thread.join(TIMEOUT)
-        assert not svc.runner._thread.is_alive()               # the loop ended, said so
-        assert len(reports) == 1 and "scan loop stopped: KeyError" in reports[0] and "report it" in reports[0]
-        assert "FAULT" in svc.status()
-        assert svc.plc.image.areas["QX"][0] == 0               # outputs safe
-        with RawModbusClient("127.0.0.1", svc.server.port, timeout=TIMEOUT) as c:
-            with pytest.raises(RawModbusError) as e:
-                c.read_coils(0, 1)
-            assert e.value.code == 4
-    finally:
-        svc.stop()
+def test_a_bug_in_the_loop_is_a_fault_that_asks_to_be_reported():
+    plc = PLC(compile_unit(check_sources([("prog.st", PROGRAM)])))
+    clock = iter(i * 0.01 for i in range(10_000))
+    runner = RealTimeRunner(plc, [ExplodingPlant()], clock=lambda: next(clock), sleep=lambda s: None)
+    reports: list[str] = []
+    runner.on_error = reports.append
+    runner.run_for(1.0)
+    assert plc.state == "FAULT" and plc.fault.kind == "internal"
+    assert len(reports) == 1 and "KeyError: 'valve'" in reports[0] and "please report it" in reports[0]
+    assert runner.stats.ticks == 2                             # it stopped at the third step
 
 
 @pytest.mark.parametrize("where, expected", [
