@@ -14,3 +14,13 @@ for folder in ("runtime", "grader", "stands", "modbus"):
     if str(TESTS / folder) not in sys.path:
         sys.path.insert(0, str(TESTS / folder))
 pytest.register_assert_rewrite("st_helpers", "grader_helpers", "golden", "modbus_support")
+
+# CI is deterministic: under CI=true every property test draws the same examples each run
+# (a failure found there reproduces on the next run); a developer's run still explores anew.
+import os  # noqa: E402
+
+from hypothesis import settings  # noqa: E402
+
+settings.register_profile("ci", derandomize=True, print_blob=True)
+if os.environ.get("CI"):
+    settings.load_profile("ci")
