@@ -2,7 +2,8 @@
 and limit switches, the plant faults it can inject, the signals trended by default and the
 plant state the mimic drawing needs.
 
-The labels are the stands' console and wiring labels (the GVLs), written the way the console
+The controls come in the stand's declared console order (`StandSpec.console`, tested to
+agree); the labels are the stands' console and wiring labels (the GVLs), written the way the console
 prints them (`I0.7`, `SA1 forward`); `input` is the plant's name for the same contact. The
 page builds its controls from this table, so a label here is the accessible name a test (or
 a screen reader) finds.
@@ -12,7 +13,8 @@ from __future__ import annotations
 from dataclasses import dataclass, field
 from typing import Any, Callable
 
-from plclab.scenario import Session
+from plclab.errors import PlcLabError
+from plclab.scenario import ScenarioFailure, Session
 
 
 @dataclass(frozen=True)
@@ -106,8 +108,8 @@ MP9C = Panel(
         Control("SA4", "SA4", "switch", "extension: off backward, on forward"),
         Control("SA5", "SA5", "switch", "lift: off up, on down"),
         Control("SA6", "SA6", "switch", "automatic: off continuous, on step"),
-        Control("I0.7", "I07", "switch", "spare input (Tasks 2, 3)"),
         Control("SB1", "SB1", "button", "short: record / start / stop; hold 3 s: reset"),
+        Control("I0.7", "I07", "switch", "spare input (Tasks 2, 3)"),
     ),
     lamps=tuple(Lamp(f"L{i}", _L_HINTS[i - 1], "coil") for i in range(1, 8))
     + (Lamp("HL1", "reset / fault indicator"),)
@@ -132,9 +134,9 @@ def _tur10_mimic(s: Session) -> dict[str, Any]:
     p = s.plant
     targets = []
     for k in range(1, 6):
-        try:
-            targets.append(int(s.plc.read(f"Targets[{k}]")))
-        except Exception:          # a student's program need not have the shared Targets
+        try:                       # the stand's observable (one place names its ST path)
+            targets.append(int(s.value(f"Target{k}")))
+        except (ScenarioFailure, PlcLabError):   # a student's program need not have it
             targets.append(None)
     links = []
     for k, d in p.drives.items():
@@ -155,9 +157,9 @@ TUR10 = Panel(
         for k in range(1, 6) for way in ("forward", "backward"))
     + (
         Control("SA6", "SA6", "switch", "low speed"),
+        Control("SB1", "SB1", "button", "short: record / start / stop; hold 3 s: reset"),
         Control("SA7", "SA7", "switch", "mode: off manual, on automatic"),
         Control("I1.5", "I15", "switch", "spare input (Tasks 2, 3)"),
-        Control("SB1", "SB1", "button", "short: record / start / stop; hold 3 s: reset"),
     ),
     lamps=(Lamp("HL1", "reset indicator"),),
     faults=(
