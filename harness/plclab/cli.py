@@ -148,8 +148,8 @@ def _cmd_serve(args: argparse.Namespace) -> int:
             plant = None
     profile = None
     if stand_cfg.profile == "twido":
-        from plclab.modbus.profiles import TWIDO_PROFILES
-        profile = TWIDO_PROFILES[args.stand]
+        from plclab.modbus.profiles import twido_profile
+        profile = twido_profile(args.stand)
     console = None if args.console == "none" else _host_port(args.console, "--console")
     opts = ServeOptions(srcs, stand_cfg, modbus, plant, stand_cfg.profile, profile, console)
     return serve_forever(opts, duration=args.duration, hmi=args.hmi)

@@ -3,11 +3,20 @@
 A SCADA exercise relies on a register contract (which %MW exist, which are read-only, which
 values are accepted and when); keeping that contract in a table rather than in code lets the
 server, the thermo stand, the HMI and the docs share one source. THERMO is `docs/thermo.md`'s table.
+
+Each fact has one home. The stand's GVL (plc/GVL/GVL_THERMO.st) says which %MW exist, their
+names, types, initial values and meanings; what ST cannot say -- the Twido's refusal rules
+(read only, valid values, writable only in manual mode) and the HMI's point names -- is
+declared here once, per GVL label (THERMO_RULES), and tests/modbus/test_profiles.py holds the
+ranges to PRG_Thermo's constants. THERMO is built from both on first use, not at import: the
+PSM script embeds this module (for TwidoMap's types) without the ST sources.
 """
 from __future__ import annotations
 
 import enum
+import functools
 from dataclasses import dataclass
+from typing import Mapping, Sequence
 
 from .protocol import (READ_HOLDING_REGISTERS, READ_WRITE_MULTIPLE_REGISTERS,
                        WRITE_MULTIPLE_REGISTERS, WRITE_SINGLE_REGISTER)
@@ -99,24 +108,89 @@ class TwidoProfile:
         return None
 
 
-_MANUAL = WhenEquals(address=0, value=0)
+@dataclass(frozen=True)
+class RegisterRule:
+    """What a Twido enforces on one %MW of a stand's GVL (`label`), which ST cannot say."""
 
-THERMO = TwidoProfile(
-    name="thermo",
-    registers=(
-        Register(0, "mode", Access.RW, ValueSet(frozenset({0, 1, 2})),
-                 description="0 manual, 1 automatic-1 (heater regulates), 2 automatic-2 (fan regulates)"),
-        Register(1, "fan", Access.RW, ValueRange(0, 1000), writable_when=_MANUAL,
-                 description="fan control; in automatic modes the current fan command"),
-        Register(2, "heater", Access.RW, ValueRange(0, 2000), writable_when=_MANUAL,
-                 description="heater control; in automatic modes the current heater command"),
-        Register(3, "temperature", Access.RO, description="heat-sink temperature, whole C"),
-        Register(4, "fan_speed", Access.RO, description="fan speed, pulses per second"),
-        Register(5, "reserved", Access.RO, description="reserved, reads 0"),
-        Register(6, "setpoint", Access.RW, ValueRange(25, 70),
-                 description="temperature setpoint, whole C"),
-    ),
+    label: str                                      # the GVL variable: 'HEATER_CTRL'
+    name: str                                       # the point name SCADA and the HMI use: 'heater'
+    access: Access = Access.RW
+    valid: ValueRange | ValueSet | None = None
+    writable_when: tuple[str, int] | None = None    # (GVL label, value): writable only while it holds it
+
+
+@dataclass(frozen=True)
+class GvlRegister:
+    """What a profile takes of one %MW global of the GVL (plclab.stands.gvl_variables)."""
+
+    address: int
+    type: str
+    comment: str
+
+
+_SIGNED_TYPES = frozenset({"SINT", "INT", "DINT", "LINT"})
+
+
+def profile_from_gvl(name: str, gvl: Mapping[str, GvlRegister], rules: Sequence[RegisterRule]) -> TwidoProfile:
+    """A profile with one register per rule, at its GVL label's address, signed as its GVL type,
+    described by its GVL comment."""
+    def address(label: str) -> int:
+        if label not in gvl:
+            raise ValueError(f"profile {name}: {label} is not a %MW variable of the stand's GVL")
+        return gvl[label].address
+
+    unruled = set(gvl) - {rule.label for rule in rules}
+    if unruled:
+        raise ValueError(f"profile {name}: no Twido rule for {', '.join(sorted(unruled))} of the stand's GVL")
+    registers = []
+    for rule in rules:
+        when = None if rule.writable_when is None else WhenEquals(address(rule.writable_when[0]),
+                                                                 rule.writable_when[1])
+        var = gvl[rule.label] if rule.label in gvl else None
+        registers.append(Register(address(rule.label), rule.name, rule.access, rule.valid, when,
+                                  signed=var is not None and var.type in _SIGNED_TYPES,
+                                  description=var.comment if var is not None else ""))
+    return TwidoProfile(name, tuple(registers))
+
+
+# The thermo stand's modes (%MW0), as PRG_Thermo's MODE_MANUAL / MODE_AUTO1 / MODE_AUTO2.
+MANUAL, AUTO1, AUTO2 = 0, 1, 2
+THERMO_MODES = {MANUAL: "manual", AUTO1: "automatic-1", AUTO2: "automatic-2"}
+
+THERMO_RULES = (
+    RegisterRule("MODE", "mode", Access.RW, ValueSet(frozenset(THERMO_MODES))),
+    RegisterRule("FAN_CTRL", "fan", Access.RW, ValueRange(0, 1000), writable_when=("MODE", MANUAL)),
+    RegisterRule("HEATER_CTRL", "heater", Access.RW, ValueRange(0, 2000), writable_when=("MODE", MANUAL)),
+    RegisterRule("TEMPERATURE", "temperature", Access.RO),
+    RegisterRule("FAN_SPEED", "fan_speed", Access.RO),
+    RegisterRule("RESERVED", "reserved", Access.RO),
+    RegisterRule("SETPOINT", "setpoint", Access.RW, ValueRange(25, 70)),
 )
 
-# Profile name used in openplc.conf (`profile = twido`) -> the stand's table.
-TWIDO_PROFILES: dict[str, TwidoProfile] = {"thermo": THERMO}
+def valid_range(rules: Sequence[RegisterRule], label: str) -> ValueRange:
+    """The range of values the rule of `label` accepts (its bounds are the command's scale)."""
+    valid = next((r.valid for r in rules if r.label == label), None)
+    if not isinstance(valid, ValueRange):
+        raise ValueError(f"{label}: no range of valid values")
+    return valid
+
+
+# Stand name (and openplc.conf `profile = twido`) -> the rules of its Twido map.
+TWIDO_RULES: dict[str, tuple[RegisterRule, ...]] = {"thermo": THERMO_RULES}
+
+
+@functools.lru_cache(maxsize=None)
+def twido_profile(stand: str) -> TwidoProfile:
+    """The Twido map of `stand`: its GVL's %MW globals under its rules."""
+    from plclab.stands import get_stand, gvl_variables     # the ST sources: not in the PSM script
+
+    gvl = {v.name: GvlRegister(int(v.address[3:]), v.type, v.comment)
+           for v in gvl_variables(get_stand(stand)) if v.address.startswith("%MW")}
+    return profile_from_gvl(stand, gvl, TWIDO_RULES[stand])
+
+
+def __getattr__(name: str) -> TwidoProfile:
+    """`THERMO`, built on first use (see the module docstring)."""
+    if name == "THERMO":
+        return twido_profile("thermo")
+    raise AttributeError(f"module {__name__!r} has no attribute {name!r}")

@@ -113,23 +113,43 @@ def get_stand(name: str) -> Stand:
     return stand_module(name).STAND
 
 
-# `NAME AT %IX0.1 : BOOL;` in a GVL: the label and its located address
-_LOCATED = re.compile(r"\b([A-Za-z_]\w*)\s+AT\s+(%[IQM][XBWDL]?\d+(?:\.\d+)?)", re.IGNORECASE)
+# `NAME AT %IX0.1 : INT := 40;` in a GVL: the label, its located address, type, initial value
+_LOCATED = re.compile(r"\b([A-Za-z_]\w*)\s+AT\s+(%[IQM][XBWDL]?\d+(?:\.\d+)?)\s*:\s*([A-Za-z_]\w*)"
+                      r"(?:\s*:=\s*([^;]*?))?\s*;", re.IGNORECASE)
+_COMMENT = re.compile(r"\(\*.*?\*\)", re.DOTALL)
+_TRAILING_COMMENT = re.compile(r"[ \t]*\(\*(.*?)\*\)")
 
 
-def gvl_labels(stand: Stand) -> dict[str, str]:
-    """The stand's located globals, label -> address (`'SQ2': '%IX0.1'`), read from its GVL
-    files: the one source of each stand's I/O map (plants and Modbus profiles are tested
-    against it, scenarios and the grader name I/O by these labels)."""
-    out: dict[str, str] = {}
+@dataclass(frozen=True)
+class GvlVariable:
+    """One located global of a stand's GVL, as written there."""
+
+    name: str                    # the label: 'SETPOINT'
+    address: str                 # '%MW6'
+    type: str                    # 'INT'
+    initial: str | None = None   # the initial value as written ('40'), None if not given
+    comment: str = ""            # the comment after it on its line: what it means, its range
+
+
+def gvl_variables(stand: Stand) -> list[GvlVariable]:
+    """The stand's located globals in declaration order, read from its GVL files: the one
+    source of each stand's I/O map and register contract (plants are tested against it;
+    Modbus profiles, scenarios and the grader name I/O by these labels)."""
+    out: list[GvlVariable] = []
     for stem in stand.gvl:
-        text = _strip_comments(_read(PLC_DIR / "GVL" / f"{stem}.st"))
-        out.update({m.group(1): m.group(2).upper() for m in _LOCATED.finditer(text)})
+        text = _read(PLC_DIR / "GVL" / f"{stem}.st")
+        # comments blanked in place, so a match's end is where its own trailing comment starts
+        code = _COMMENT.sub(lambda m: re.sub(r"[^\n]", " ", m.group()), text)
+        for m in _LOCATED.finditer(code):
+            after = _TRAILING_COMMENT.match(text, m.end())
+            out.append(GvlVariable(m.group(1), m.group(2).upper(), m.group(3).upper(), m.group(4),
+                                   " ".join(after.group(1).split()) if after else ""))
     return out
 
 
-def _strip_comments(text: str) -> str:
-    return re.sub(r"\(\*.*?\*\)", " ", text, flags=re.DOTALL)
+def gvl_labels(stand: Stand) -> dict[str, str]:
+    """The stand's located globals, label -> address (`'SQ2': '%IX0.1'`), from its GVL."""
+    return {v.name: v.address for v in gvl_variables(stand)}
 
 
 def pou_path(stem: str, reference: bool = False) -> Path:

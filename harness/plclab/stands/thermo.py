@@ -11,14 +11,15 @@ what is output (check_never).
 """
 from __future__ import annotations
 
+import math
 from dataclasses import dataclass
 from typing import Callable, Iterable, Optional
 
 from plclab.modbus.maps import TwidoMap
-from plclab.modbus.profiles import THERMO
+from plclab.modbus.profiles import AUTO1, AUTO2, MANUAL, THERMO_MODES, THERMO_RULES, twido_profile, valid_range
 from plclab.modbus.protocol import ModbusException, Table
 from plclab.plants.base import signed16
-from plclab.plants.thermo import FACE
+from plclab.plants.thermo import FACE, ThermoParams
 from plclab.scenario import ScenarioFailure, Session
 from plclab.stands import Stand, Task, Variant, gvl_labels
 from plclab.stands.base import Fault, StandSpec
@@ -40,10 +41,15 @@ STAND = Stand(
     register_map="twido",
 )
 
-MANUAL, AUTO1, AUTO2 = 0, 1, 2
-MODE_NAMES = {MANUAL: "manual", AUTO1: "automatic-1", AUTO2: "automatic-2"}
-FAN_MAX, HEATER_MAX = 1000, 2000
-ADC_FULL = 1000                    # counts at 100.0 C; also what an open sensor reads
+# The register contract is GVL_THERMO plus the Twido rules of plclab.modbus.profiles; the
+# scaling of the I/O is the plant model's (its defaults are the stand of docs/thermo.md).
+MODE_NAMES = THERMO_MODES
+FAN_MAX = valid_range(THERMO_RULES, "FAN_CTRL").high
+HEATER_MAX = valid_range(THERMO_RULES, "HEATER_CTRL").high
+_MODEL = ThermoParams()
+ADC_FULL = _MODEL.adc_max          # counts at full scale (100.0 C); also what an open sensor reads
+ADC_PER_C = _MODEL.adc_max / _MODEL.adc_span_c                  # 10 counts per C
+FULL_SPEED_PPS = _MODEL.fan_max_rpm * _MODEL.pulses_per_rev / 60  # fan pulses per second at FAN_MAX
 CELSIUS = "Celsius"                # the regulators' measurement, 0.1 C (an observable)
 BAND = 1.0                         # C: "within +/-1 C"
 FINE_BAND = 0.2                    # C: steady (two ADC steps), the integral action's work done
@@ -89,7 +95,7 @@ class Scada:
         self.s = s
 
     def _map(self) -> TwidoMap:
-        return TwidoMap(self.s.plc.image, THERMO)    # the image of the PLC running now
+        return TwidoMap(self.s.plc.image, twido_profile(STAND.name))    # the image of the PLC running now
 
     def write(self, **registers: int) -> None:
         """Write registers by name, one request each, in order (`MODE=0, HEATER_CTRL=2000`).
@@ -127,7 +133,7 @@ class Scada:
         """A register as SCADA reads it (signed INT)."""
         self._started()
         raw = self._map().read(Table.HOLDING_REGISTERS, REGISTERS[name], 1)[0]
-        return raw - 0x10000 if raw >= 0x8000 else raw
+        return twido_profile(STAND.name).register(REGISTERS[name]).as_value(raw)
 
 
 def disturbance(s: Session, on: bool) -> None:
@@ -141,8 +147,8 @@ def disturbance(s: Session, on: bool) -> None:
 def celsius(s: Session, t: Optional[float] = None) -> float:
     """The measured temperature (ADC %IW0, 0.1 C) at time t (default: now)."""
     if t is None:
-        return s.value("TEMP_ADC") / 10.0
-    return s.trace.value_at("TEMP_ADC", t) / 10.0
+        return s.value("TEMP_ADC") / ADC_PER_C
+    return s.trace.value_at("TEMP_ADC", t) / ADC_PER_C
 
 
 def samples(s: Session, name: str, after: float, until: Optional[float] = None) -> list[tuple[float, int]]:
@@ -181,7 +187,7 @@ def response(s: Session, start: float, target: float, until: Optional[float] = N
     is +1 / -1 for a setpoint step up / down (the overshoot is measured past the target in
     that direction), 0 for a disturbance (no overshoot, the deviation is what counts)."""
     pts = samples(s, "TEMP_ADC", start, until)
-    errors = [(t, v / 10.0 - target) for t, v in pts]
+    errors = [(t, v / ADC_PER_C - target) for t, v in pts]
     settle = _last_entry(errors, start, BAND)
     steady = _last_entry(errors, start, FINE_BAND)
     if direction > 0:
@@ -243,7 +249,7 @@ def check_never(s: Session) -> None:
         if v["MODE"] in (AUTO1, AUTO2) and (v["FAN_CTRL"], v["HEATER_CTRL"]) != (v["FAN"], v["HEATER"]):
             raise ScenarioFailure(f"t={t:.2f} s: {MODE_NAMES[v['MODE']]}: %MW1/%MW2 report "
                                   f"{v['FAN_CTRL']}/{v['HEATER_CTRL']}, output {v['FAN']}/{v['HEATER']}")
-        whole = (min(max(v["TEMP_ADC"], 0), ADC_FULL) + 5) // 10
+        whole = math.floor(min(max(v["TEMP_ADC"], 0), ADC_FULL) / ADC_PER_C + 0.5)
         if v["TEMPERATURE"] != whole:
             raise ScenarioFailure(f"t={t:.2f} s: %MW3 = {v['TEMPERATURE']}, ADC {v['TEMP_ADC']} is {whole} C")
         if v["RESERVED"] != 0:
@@ -259,7 +265,7 @@ def settle_at(s: Session, mode: int, setpoint: int, hold: float = 60.0, timeout:
     since = [None]
 
     def steady(io) -> bool:
-        if abs(io.TEMP_ADC / 10.0 - setpoint) > 0.5:
+        if abs(io.TEMP_ADC / ADC_PER_C - setpoint) > 0.5:
             since[0] = None
             return False
         if since[0] is None:
@@ -275,7 +281,7 @@ def expect(s: Session, ok: bool, what: str) -> None:
 
 def fan_speed_ok(s: Session, fan: int) -> None:
     """%MW4, pulses per second, for a fan command: 3000 rpm x 2 pulses / 60 s at 1000."""
-    expected = round(fan * 100 / FAN_MAX)
+    expected = round(fan * FULL_SPEED_PPS / FAN_MAX)
     speed = s.scada.read("FAN_SPEED")
     expect(s, abs(speed - expected) <= 1, f"fan {fan}: %MW4 = {speed} pulses/s, expected {expected}")
 
@@ -428,7 +434,7 @@ def sensor_open(s: Session) -> None:
     bump = jump(s, "HEATER", at)
     s.log(f"sensor back: largest heater step {bump} in the 5 s after")
     expect(s, bump <= HEATER_MAX // BUMP_FRACTION, f"heater jumped by {bump} when the sensor came back")
-    s.wait_until(lambda io: abs(io.TEMP_ADC / 10.0 - 42) <= BAND, 900, "back within +/-1 C of 42 C")
+    s.wait_until(lambda io: abs(io.TEMP_ADC / ADC_PER_C - 42) <= BAND, 900, "back within +/-1 C of 42 C")
 
 
 def demo(s: Session) -> None:
@@ -437,7 +443,7 @@ def demo(s: Session) -> None:
     s.scada.write(MODE=MANUAL, HEATER_CTRL=HEATER_MAX)
     s.run(150.0)
     s.scada.write(SETPOINT=40, MODE=AUTO1)
-    s.wait_until(lambda io: abs(io.TEMP_ADC / 10.0 - 40) <= 0.3, 600, "automatic-1 at 40 C")
+    s.wait_until(lambda io: abs(io.TEMP_ADC / ADC_PER_C - 40) <= 0.3, 600, "automatic-1 at 40 C")
     s.run(60.0)
     s.scada.write(SETPOINT=45)
     start = s.now - s.tick
@@ -477,7 +483,7 @@ def timeline(s: Session) -> list[str]:
         v = {n: signed16(tr.value_at(n, t)) for n in
              ("MODE", "SETPOINT", "TEMP_ADC", "TEMPERATURE", "HEATER", "FAN", "FAN_SPEED", "DISTURBANCE")}
         text = "; ".join(acts.get(round(t, 6), []))
-        rows.append(f"{t:8.1f}  {text[:34]:<34} {v['MODE']:>4} {v['SETPOINT']:>4} {v['TEMP_ADC'] / 10:>6.1f} "
+        rows.append(f"{t:8.1f}  {text[:34]:<34} {v['MODE']:>4} {v['SETPOINT']:>4} {v['TEMP_ADC'] / ADC_PER_C:>6.1f} "
                     f"{v['TEMPERATURE']:>4} {v['HEATER']:>6} {v['FAN']:>5} {v['FAN_SPEED']:>7} "
                     f"{'on' if v['DISTURBANCE'] else '-':>4}")
     results = [a.text for a in s.actions if ": within" in a.text or ": not within" in a.text
