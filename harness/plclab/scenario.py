@@ -184,8 +184,8 @@ class Session:
         """A label's I/O point (`SQ2`), an observable (`FramePtr`) or an ST path, now."""
         address = self.labels.get(name, name)
         if address.startswith("%"):
-            from plclab.runtime.plc import parse_address
-            area, index = parse_address(address)
+            from plclab.runtime.image import image_slot
+            area, index = image_slot(address)
             raw = self.plc.image.areas[area][index]
             return bool(raw) if area[1] == "X" else raw
         if name in self.observables:

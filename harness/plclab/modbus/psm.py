@@ -30,7 +30,6 @@ from __future__ import annotations
 import base64
 import importlib
 import importlib.util
-import re
 import socket
 import struct
 import textwrap
@@ -38,6 +37,8 @@ import zlib
 from typing import Any, Callable, Protocol
 
 from plclab.errors import PlcLabError
+from plclab.iec.address import AddressError
+from plclab.runtime.image import image_slot
 
 from .console import CONSOLE_PORT, FAULT_LAMP, start_console_face
 from .maps import RegisterMap
@@ -69,25 +70,13 @@ class PsmImage(Protocol):
 
 # --------------------------------------------------------------------------- locations
 
-_LOCATION = re.compile(r"^%?(IX|QX|IW|QW)(\d+)(?:\.(\d+))?$", re.IGNORECASE)
-
-
 def parse_location(location: str) -> tuple[str, int]:
-    """'IX1.2' or '%IX1.2' -> ('IX', 10); 'QW3' -> ('QW', 3), within the PSM layout."""
-    m = _LOCATION.match(location.strip())
-    if not m:
-        raise ValueError(f"not a PSM location: {location!r} (IXb.i, QXb.i, IWn, QWn)")
-    area, number, bit = m.group(1).upper(), int(m.group(2)), m.group(3)
-    if area in ("IX", "QX"):
-        if bit is None or int(bit) > 7:
-            raise ValueError(f"bit location needs byte.bit with bit 0..7: {location!r}")
-        index, size = 8 * number + int(bit), PSM_BITS
-    else:
-        if bit is not None:
-            raise ValueError(f"word location has no bit: {location!r}")
-        index, size = number, PSM_WORDS
-    if index >= size:
-        raise ValueError(f"{location!r} is outside the PSM layout")
+    """'IX1.2' or '%IX1.2' -> ('IX', 10); 'QW3' -> ('QW', 3), within the PSM layout (an
+    AddressError, a ValueError, otherwise)."""
+    area, index = image_slot(location, percent=False)
+    if area not in ("IX", "QX", "IW", "QW") or index >= (PSM_BITS if area[1] == "X" else PSM_WORDS):
+        raise AddressError(f"{location}: outside OpenPLC's PSM layout (%IX0.0..%IX49.7, %QX0.0..%QX49.7, "
+                           f"%IW0..%IW49, %QW0..%QW49)")
     return area, index
 
 
@@ -432,11 +421,11 @@ def run_plant(stand: str, psm: tuple[str, int] = (DEFAULT_HOST, PSM_PORT),
 
 # What the script embeds: the modules run_plant needs, standard library only. Packages whose
 # __init__ imports more than these are embedded empty.
-_EMBEDDED = ("plclab.errors", "plclab.runtime.image", "plclab.modbus.protocol", "plclab.modbus.profiles",
+_EMBEDDED = ("plclab.errors", "plclab.iec.address", "plclab.runtime.image", "plclab.modbus.protocol", "plclab.modbus.profiles",
              "plclab.modbus.maps", "plclab.modbus.rawclient", "plclab.modbus.server",
              "plclab.modbus.console", "plclab.modbus.psm", "plclab.plants", "plclab.plants.base",
              "plclab.plants.host")
-_EMPTY_PACKAGES = ("plclab", "plclab.runtime", "plclab.modbus")
+_EMPTY_PACKAGES = ("plclab", "plclab.iec", "plclab.runtime", "plclab.modbus")
 
 _SCRIPT = '''\
 #                  - OpenPLC Python SubModule (PSM) -

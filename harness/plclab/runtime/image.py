@@ -11,6 +11,8 @@ from __future__ import annotations
 import threading
 from dataclasses import dataclass, field
 
+from plclab.iec.address import AddressError, parse_address
+
 BIT_AREA_BYTES = 100     # %IX0.0 .. %IX99.7, %QX0.0 .. %QX99.7
 WORD_AREA_SIZE = 1024    # %IW, %QW, %MW, %MD, %ML 0..1023
 
@@ -24,6 +26,21 @@ AREAS: dict[str, tuple[int, int]] = {
     "MD": (WORD_AREA_SIZE, 32),
     "ML": (WORD_AREA_SIZE, 64),
 }
+
+
+def image_slot(address: str, *, percent: bool = True) -> tuple[str, int]:
+    """Where a located address lives in the image: `'%IX1.6'` -> ('IX', 14), `'%QW3'` ->
+    ('QW', 3). `percent=False` also takes the plants' spelling ('QW3'). An address outside
+    OpenPLC's areas is one AddressError line."""
+    a = parse_address(address, percent=percent)
+    if a.area not in AREAS:
+        raise AddressError(f"{address}: not an OpenPLC area (%IX %QX %IW %QW %MW %MD %ML)")
+    if a.index >= AREAS[a.area][0]:
+        if a.bit is not None:
+            raise AddressError(f"{address}: a bit address is %{a.area}byte.bit with byte "
+                               f"0..{BIT_AREA_BYTES - 1}, bit 0..7")
+        raise AddressError(f"{address}: a word address is %{a.area}0..{WORD_AREA_SIZE - 1}")
+    return a.area, a.index
 
 
 @dataclass

@@ -10,7 +10,7 @@ from __future__ import annotations
 
 from typing import Protocol
 
-from plclab.runtime.image import ProcessImage
+from plclab.runtime.image import ProcessImage, image_slot
 
 
 class Plant(Protocol):
@@ -20,17 +20,6 @@ class Plant(Protocol):
     def step(self, outputs: dict[str, int], dt: float) -> dict[str, int]: ...
 
 
-def location_index(loc: str) -> tuple[str, int]:
-    """'QX1.0' -> ('QX', 8); 'IW3' -> ('IW', 3)."""
-    loc = loc.lstrip("%").upper()
-    area = loc[:2]
-    rest = loc[2:]
-    if area[1] == "X":
-        byte, bit = rest.split(".")
-        return area, int(byte) * 8 + int(bit)
-    return area, int(rest)
-
-
 class PlantBinding:
     """One plant stepped against one image: reads its outputs, writes the inputs it returns."""
 
@@ -38,7 +27,7 @@ class PlantBinding:
         self.plant = plant
         self.image = image
         areas = image.areas
-        self._outs = [(loc, areas[a], i) for loc in plant.outputs for a, i in [location_index(loc)]]
+        self._outs = [(loc, areas[a], i) for loc in plant.outputs for a, i in [image_slot(loc, percent=False)]]
         self._cells: dict[str, tuple[list[int], int, int]] = {}   # input name -> (area, index, mask)
 
     def step(self, dt: float) -> None:
@@ -47,7 +36,7 @@ class PlantBinding:
         for loc, value in self.plant.step(outputs, dt).items():
             cell = cells.get(loc)
             if cell is None:
-                a, i = location_index(loc)
+                a, i = image_slot(loc, percent=False)
                 cell = cells[loc] = (self.image.areas[a], i, 1 if a[1] == "X" else 0xFFFF)
             area, i, mask = cell
             area[i] = int(value) & mask

@@ -23,7 +23,8 @@ from plclab.frontend.checked import CheckedUnit
 from plclab.iec import types as T
 from plclab.runtime.compiler import CompiledProgram, compile_unit, located_attr
 from plclab.runtime.faults import FaultRecord, PlcFault
-from plclab.runtime.image import ProcessImage
+from plclab.iec.address import SIZE_BITS, Address
+from plclab.runtime.image import AREAS, ProcessImage, image_slot
 from plclab.runtime.stdfb import ScanClock
 
 DEFAULT_TICK_NS = 20_000_000          # OpenPLC's default scan time when no task gives one
@@ -67,7 +68,6 @@ def _converters(ty: T.Type, bits: int) -> tuple[Callable[[Any], int], Callable[[
     return (lambda v: int(v) & mask), (lambda r: wrap(r & mask))
 
 
-_AREA_BITS = {"X": 1, "W": 16, "D": 32, "L": 64}
 
 _PROGRAM_FAULTS: dict[type, str] = {
     ZeroDivisionError: "division_by_zero", RecursionError: "stack_overflow",
@@ -182,16 +182,10 @@ class PLC:
         return out
 
     def _binding(self, d: A.VarDecl, owner: Any, attr: str, name: str) -> LocatedBinding:
-        loc = d.location
-        area = loc.area + loc.size
-        if loc.size == "X":
-            index = loc.parts[0] * 8 + loc.parts[1]
-            address = f"%{loc.area}X{loc.parts[0]}.{loc.parts[1]}"
-        else:
-            index = loc.parts[0]
-            address = f"%{area}{index}"
-        to_raw, from_raw = _converters(d.ty, _AREA_BITS[loc.size])
-        return LocatedBinding(address, area, index, owner, attr, d.ty, name, to_raw, from_raw)
+        loc = d.location      # checked by the front end: an OpenPLC area, in range
+        a = Address(loc.area, loc.size, loc.parts[0], loc.parts[1] if loc.size == "X" else None)
+        to_raw, from_raw = _converters(d.ty, a.bits)
+        return LocatedBinding(str(a), a.area, a.index, owner, attr, d.ty, name, to_raw, from_raw)
 
     @property
     def now_ns(self) -> int:
@@ -262,7 +256,7 @@ class PLC:
             if t is T.BOOL:
                 return f"1 if {value} else 0"
             if isinstance(t, T.ElementaryType) and t.kind in ("sint", "uint", "bits"):
-                return f"{value} & {(1 << _AREA_BITS[b.area[1]]) - 1}"
+                return f"{value} & {(1 << SIZE_BITS[b.area[1]]) - 1}"
             ns[f"t{i}"] = b.to_raw
             return f"t{i}({value})"
 
@@ -509,7 +503,7 @@ class PLC:
 
     def write_address(self, address: str, value: Any) -> None:
         """Write a raw value into the image at an address no variable is located at."""
-        area, index = parse_address(address)
+        area, index = image_slot(address)
         self.image.areas[area][index] = int(value) & ((1 << image_bits(area)) - 1)
 
 
@@ -542,26 +536,7 @@ def _member_type(ty: T.Type, name: str) -> Optional[T.Type]:
 
 
 def image_bits(area: str) -> int:
-    return {"IX": 1, "QX": 1, "IW": 16, "QW": 16, "MW": 16, "MD": 32, "ML": 64}[area]
-
-
-def parse_address(address: str) -> tuple[str, int]:
-    """'%IX1.6' -> ('IX', 14); '%QW3' -> ('QW', 3). Raises PlcLabError on anything else."""
-    import re
-    m = re.fullmatch(r"%([IQM])([XWDL])?(\d+)(?:\.(\d+))?", address.strip().upper())
-    if not m:
-        raise PlcLabError(f"malformed address '{address}' (e.g. %IX0.0, %QW1)")
-    area = m.group(1) + (m.group(2) or "X")
-    if area not in ("IX", "QX", "IW", "QW", "MW", "MD", "ML"):
-        raise PlcLabError(f"{address}: not an OpenPLC area (%IX %QX %IW %QW %MW %MD %ML)")
-    n = int(m.group(3))
-    if area[1] == "X":
-        if m.group(4) is None or int(m.group(4)) > 7 or n > 99:
-            raise PlcLabError(f"{address}: a bit address is %{area}byte.bit with byte 0..99, bit 0..7")
-        return area, n * 8 + int(m.group(4))
-    if m.group(4) is not None or n > 1023:
-        raise PlcLabError(f"{address}: a word address is %{area}0..1023")
-    return area, n
+    return AREAS[area][1]
 
 
 def load_plc(checked: CheckedUnit, **kwargs: Any) -> PLC:

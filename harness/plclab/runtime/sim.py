@@ -15,7 +15,8 @@ from typing import Any, Callable, Iterable, Optional
 from plclab.errors import PlcLabError
 from plclab.iec import types as T
 from plclab.runtime.plantio import Plant, PlantBinding
-from plclab.runtime.plc import PLC, image_bits, parse_address
+from plclab.runtime.image import image_slot
+from plclab.runtime.plc import PLC, image_bits
 from plclab.trace import Recorder, Trace
 
 
@@ -62,7 +63,7 @@ class Simulation:
                 seen.add(b.address)
                 self._add_signal(b.address, b.ty, b.owner, b.attr, "attr")
         for addr in extra_addresses:
-            area, index = parse_address(addr)
+            area, index = image_slot(addr)
             norm = _format_address(area, index)
             if norm in seen:
                 continue
@@ -117,7 +118,7 @@ class Simulation:
 
     def _resolve_target(self, name: str) -> None:
         if name.strip().startswith("%"):
-            parse_address(name)
+            image_slot(name)
         else:
             self.plc.resolve(name)
 
@@ -125,7 +126,7 @@ class Simulation:
         """Set an input address or a variable now (seen by the next scan)."""
         plc = self.plc
         if name.strip().startswith("%"):
-            area, index = parse_address(name)
+            area, index = image_slot(name)
             for b in plc.bindings:
                 if b.area == area and b.index == index:
                     plc.image.areas[area][index] = b.to_raw(_coerce(value, b.ty))

@@ -16,7 +16,8 @@ from plclab.frontend import load_files
 from plclab.frontend.literals import LiteralError, parse_time
 from plclab.iec import types as T
 from plclab.runtime.faults import FaultRecord
-from plclab.runtime.plc import PLC, image_bits, parse_address
+from plclab.runtime.image import image_slot
+from plclab.runtime.plc import PLC, image_bits
 from plclab.runtime.compiler import compile_unit
 from plclab.runtime.sim import InputEvent, Simulation
 from plclab.trace import Trace, TraceFormatError, plot_trace, write_csv, write_vcd
@@ -61,7 +62,7 @@ def input_type(plc: PLC, name: str) -> Any:
     variable located at an address, or for an address no variable uses, its image cell
     (`_RawCell`: any value of the cell's width, signed or not)."""
     if name.strip().startswith("%"):
-        area, index = parse_address(name)
+        area, index = image_slot(name)
         for b in plc.bindings:
             if b.area == area and b.index == index:
                 return b.ty

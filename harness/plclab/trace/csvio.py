@@ -23,6 +23,7 @@ from typing import Any, Iterator, Mapping, Optional, Sequence, TextIO, Union
 
 from plclab.errors import PlcLabError, quoted
 from plclab.fileio import open_atomic
+from plclab.iec.address import AddressError, parse_address
 
 from .times import format_seconds, parse_seconds
 from .trace import KINDS, Trace
@@ -31,9 +32,6 @@ HEADER = ("time_s", "name", "value")
 
 Source = Union[str, "os.PathLike[str]", TextIO]
 
-_ADDRESS_RE = re.compile(r"%([IQM])([XBWDL])\d+(\.\d+)?", re.IGNORECASE)
-_ADDRESS_KIND = {"X": ("bool", 1), "B": ("int", 8), "W": ("int", 16), "D": ("int", 32),
-                 "L": ("int", 64)}
 _BOOL_TEXT = {"0": False, "1": True, "false": False, "true": True}
 _INT_RE = re.compile(r"[+-]?\d+")
 _NEEDS_QUOTES = re.compile(r'[",\r\n]|^\s|\s$')
@@ -276,14 +274,23 @@ def _read(f: TextIO, filename: str, kinds: Mapping[str, str], require_initial: b
     return trace
 
 
+def _address_kind(name: str) -> Optional[tuple[str, int]]:
+    """A column named like a located address has its type: (kind, width in bits)."""
+    try:
+        address = parse_address(name)
+    except AddressError:
+        return None
+    return ("bool", 1) if address.size == "X" else ("int", address.bits)
+
+
 def _kind_of(name: str, rows: list[_Row], given: Optional[str]) -> tuple[str, Optional[int]]:
-    m = _ADDRESS_RE.fullmatch(name)
+    located = _address_kind(name)
     if given is not None:
         if given == "bool":
             return given, 1
-        return given, (_ADDRESS_KIND[m.group(2).upper()][1] if m and given == "int" else None)
-    if m:
-        return _ADDRESS_KIND[m.group(2).upper()]
+        return given, (located[1] if located is not None and given == "int" else None)
+    if located is not None:
+        return located
     texts = [r.text.strip() for r in rows]
     if any(r.quoted for r in rows):
         return "str", None
