@@ -1,20 +1,23 @@
-"""What the virtual lab's page shows of each stand: its console (in console order), its lamps
-and limit switches, the plant faults it can inject, the signals trended by default and the
-plant state the mimic drawing needs.
+"""How the virtual lab's page shows each stand: labels as the console prints them, hints,
+fault parameter choices, the signals trended by default and the plant state the mimic
+drawing needs. Presentation only.
 
-The controls come in the stand's declared console order (`StandSpec.console`, tested to
-agree); the labels are the stands' console and wiring labels (the GVLs), written the way the console
-prints them (`I0.7`, `SA1 forward`); `input` is the plant's name for the same contact. The
-page builds its controls from this table, so a label here is the accessible name a test (or
-a screen reader) finds.
+What the page has -- the console's contacts in console order, the lamps (and, where the
+page draws them, the valve coils and limit switches), the injectable faults and their
+parameters -- is what the stand declares once in its StandSpec (plclab.stands.base); each
+`Panel` here is derived from that spec and a `Look`. A look that names something the stand
+does not have is an error when the panel is built, so the two cannot drift apart. The page
+builds its controls from the panel, so a label here is the accessible name a test (or a
+screen reader) finds.
 """
 from __future__ import annotations
 
 from dataclasses import dataclass, field
-from typing import Any, Callable
+from typing import Any, Callable, Mapping
 
 from plclab.errors import PlcLabError
 from plclab.scenario import ScenarioFailure, Session
+from plclab.stands.base import StandSpec, stand_spec
 
 
 @dataclass(frozen=True)
@@ -83,6 +86,54 @@ class Panel:
         }
 
 
+# Which of a spec's I/O groups the page draws as lamps, and in which lamp group.
+LAMP_GROUPS = {"actuators": "coil", "lamps": "lamp", "sensors": "switch"}
+
+
+@dataclass(frozen=True)
+class Look:
+    """How one stand is shown; every key names a console input, a GVL label, a fault or a
+    fault parameter of the stand's StandSpec."""
+
+    labels: Mapping[str, str] = field(default_factory=dict)     # console input -> printed label
+    hints: Mapping[str, str] = field(default_factory=dict)      # GVL label -> what it does
+    buttons: frozenset[str] = frozenset()                       # push buttons; other inputs are switches
+    lamp_groups: tuple[str, ...] = ("lamps",)                   # spec groups drawn as lamps, in order
+    fault_texts: Mapping[str, str] = field(default_factory=dict)   # short text (default: the spec's)
+    # (fault, parameter) -> (choices, default); a parameter not here is a number field
+    fault_params: Mapping[tuple[str, str], tuple[tuple[str, ...], str]] = field(default_factory=dict)
+    trends: tuple[str, ...] = ()
+    mimic: Callable[[Session], dict[str, Any]] = field(repr=False, default=lambda s: {})
+
+
+def derive_panel(spec: StandSpec, look: Look) -> Panel:
+    """The page of `spec`'s stand as `look` shows it. A look naming what the stand does not
+    have is a PlcLabError (a stale presentation entry)."""
+    shown = {name for group in look.lamp_groups for name in getattr(spec, group)}
+    params = {(f.name, p.name) for f in spec.faults for p in f.params}
+    stale = [*(k for k in look.labels if k not in spec.console), *(b for b in look.buttons if b not in spec.console),
+             *(k for k in look.hints if k not in set(spec.console) | shown),
+             *(k for k in look.fault_texts if k not in {f.name for f in spec.faults}),
+             *(f"{f}.{p}" for f, p in look.fault_params if (f, p) not in params),
+             *(g for g in look.lamp_groups if g not in LAMP_GROUPS)]
+    if stale:
+        raise PlcLabError(f"lab panel of {spec.name}: {', '.join(stale)} not in the stand's StandSpec")
+    controls = tuple(Control(look.labels.get(i, i), i, "button" if i in look.buttons else "switch",
+                             look.hints.get(i, "")) for i in spec.console)
+    lamps = tuple(Lamp(name, look.hints.get(name, ""), LAMP_GROUPS[group])
+                  for group in look.lamp_groups for name in getattr(spec, group))
+    faults = tuple(Fault(f.name, look.fault_texts.get(f.name, f.doc),
+                         tuple(_fault_param(look, f.name, p) for p in f.params)) for f in spec.faults)
+    return Panel(spec.name, controls, lamps, faults, look.trends, look.mimic)
+
+
+def _fault_param(look: Look, fault: str, param: Any) -> FaultParam:
+    choices, default = look.fault_params.get((fault, param.name), ((), None))
+    if default is None:
+        default = "" if param.required or param.default is None else str(param.default)
+    return FaultParam(param.name, choices, default)
+
+
 # --------------------------------------------------------------------------- MP-9C
 
 def _mp9c_mimic(s: Session) -> dict[str, Any]:
@@ -99,33 +150,28 @@ _SQ_HINTS = ("arm up", "arm down", "gripper released", "rotated left", "rotated 
              "arm backward")
 _L_HINTS = ("gripper clamp", "arm up", "arm down", "rotate left", "rotate right", "arm forward", "arm backward")
 
-MP9C = Panel(
-    stand="mp9c",
-    controls=(
-        Control("SA1", "SA1", "switch", "mode: off manual, on automatic"),
-        Control("SA2", "SA2", "switch", "gripper: on clamp"),
-        Control("SA3", "SA3", "switch", "rotation: off left, on right"),
-        Control("SA4", "SA4", "switch", "extension: off backward, on forward"),
-        Control("SA5", "SA5", "switch", "lift: off up, on down"),
-        Control("SA6", "SA6", "switch", "automatic: off continuous, on step"),
-        Control("SB1", "SB1", "button", "short: record / start / stop; hold 3 s: reset"),
-        Control("I0.7", "I07", "switch", "spare input (Tasks 2, 3)"),
-    ),
-    lamps=tuple(Lamp(f"L{i}", _L_HINTS[i - 1], "coil") for i in range(1, 8))
-    + (Lamp("HL1", "reset / fault indicator"),)
-    + tuple(Lamp(f"SQ{i}", _SQ_HINTS[i - 1], "switch") for i in range(1, 8)),
-    faults=(
-        Fault("stuck_switch", "a limit switch reads a fixed state",
-              (FaultParam("switch", tuple(f"SQ{i}" for i in range(1, 8)), "SQ1"), FaultParam("state", ("on", "off"), "on"))),
-        Fault("jammed", "a mechanism stops where it is",
-              (FaultParam("mechanism", ("lift", "rotation", "extension", "gripper"), "lift"),)),
-        Fault("low_pressure", "every travel takes longer", (FaultParam("factor", (), "3"),)),
-        Fault("dead_coil", "a valve coil does nothing", (FaultParam("coil", tuple(f"L{i}" for i in range(1, 8)), "L3"),)),
-        Fault("bounce", "console contacts chatter", (FaultParam("duration", (), "0.02"),)),
-    ),
+MP9C = derive_panel(stand_spec("mp9c"), Look(
+    labels={"I07": "I0.7"},
+    hints={"SA1": "mode: off manual, on automatic", "SA2": "gripper: on clamp",
+           "SA3": "rotation: off left, on right", "SA4": "extension: off backward, on forward",
+           "SA5": "lift: off up, on down", "SA6": "automatic: off continuous, on step",
+           "SB1": "short: record / start / stop; hold 3 s: reset", "I07": "spare input (Tasks 2, 3)",
+           "HL1": "reset / fault indicator",
+           **{f"L{i}": hint for i, hint in enumerate(_L_HINTS, 1)},
+           **{f"SQ{i}": hint for i, hint in enumerate(_SQ_HINTS, 1)}},
+    buttons=frozenset({"SB1"}),
+    lamp_groups=("actuators", "lamps", "sensors"),       # coils L1..L7, HL1, limit switches SQ1..SQ7
+    fault_texts={"stuck_switch": "a limit switch reads a fixed state", "jammed": "a mechanism stops where it is",
+                 "low_pressure": "every travel takes longer", "dead_coil": "a valve coil does nothing",
+                 "bounce": "console contacts chatter"},
+    fault_params={("stuck_switch", "switch"): (tuple(f"SQ{i}" for i in range(1, 8)), "SQ1"),
+                  ("stuck_switch", "state"): (("on", "off"), "on"),
+                  ("jammed", "mechanism"): (("lift", "rotation", "extension", "gripper"), "lift"),
+                  ("low_pressure", "factor"): ((), "3"),
+                  ("dead_coil", "coil"): (tuple(f"L{i}" for i in range(1, 8)), "L3")},
     trends=("SB1", "SA1", "SQ1", "SQ2", "L2", "L3", "HL1"),
     mimic=_mp9c_mimic,
-)
+))
 
 
 # --------------------------------------------------------------------------- TUR-10
@@ -149,29 +195,23 @@ def _tur10_mimic(s: Session) -> dict[str, Any]:
 
 _AXIS = {1: "shoulder", 2: "raceme rotation", 3: "raceme inclination", 4: "platform rotation", 5: "hand"}
 
-TUR10 = Panel(
-    stand="tur10",
-    controls=tuple(
-        Control(f"SA{k} {way}", f"SA{k}_{'FWD' if way == 'forward' else 'BWD'}", "switch",
-                f"drive {k} ({_AXIS[k]}) {way}")
-        for k in range(1, 6) for way in ("forward", "backward"))
-    + (
-        Control("SA6", "SA6", "switch", "low speed"),
-        Control("SB1", "SB1", "button", "short: record / start / stop; hold 3 s: reset"),
-        Control("SA7", "SA7", "switch", "mode: off manual, on automatic"),
-        Control("I1.5", "I15", "switch", "spare input (Tasks 2, 3)"),
-    ),
-    lamps=(Lamp("HL1", "reset indicator"),),
-    faults=(
-        Fault("dead_sensor", "a position sensor reads a constant",
-              (FaultParam("axis", ("1", "2", "3", "4", "5"), "1"), FaultParam("value", (), ""))),
-        Fault("stuck_drive", "a link does not move", (FaultParam("axis", ("1", "2", "3", "4", "5"), "1"),)),
-        Fault("slow_drive", "a link runs slower", (FaultParam("axis", ("1", "2", "3", "4", "5"), "1"),
-                                                   FaultParam("factor", (), "0.5"))),
-    ),
+_WAYS = {"FWD": "forward", "BWD": "backward"}
+_AXES = ("1", "2", "3", "4", "5")
+
+TUR10 = derive_panel(stand_spec("tur10"), Look(
+    labels={**{f"SA{k}_{w}": f"SA{k} {way}" for k in _AXIS for w, way in _WAYS.items()}, "I15": "I1.5"},
+    hints={**{f"SA{k}_{w}": f"drive {k} ({_AXIS[k]}) {way}" for k in _AXIS for w, way in _WAYS.items()},
+           "SA6": "low speed", "SB1": "short: record / start / stop; hold 3 s: reset",
+           "SA7": "mode: off manual, on automatic", "I15": "spare input (Tasks 2, 3)", "HL1": "reset indicator"},
+    buttons=frozenset({"SB1"}),
+    fault_texts={"dead_sensor": "a position sensor reads a constant", "stuck_drive": "a link does not move",
+                 "slow_drive": "a link runs slower"},
+    fault_params={("dead_sensor", "axis"): (_AXES, "1"), ("dead_sensor", "value"): ((), ""),
+                  ("stuck_drive", "axis"): (_AXES, "1"),
+                  ("slow_drive", "axis"): (_AXES, "1"), ("slow_drive", "factor"): ((), "0.5")},
     trends=("SB1", "SA7", "DRIVE1", "DRIVE2", "HL1"),
     mimic=_tur10_mimic,
-)
+))
 
 
 # --------------------------------------------------------------------------- thermo
@@ -184,17 +224,12 @@ def _thermo_mimic(s: Session) -> dict[str, Any]:
             "faults": snap["faults"]}
 
 
-THERMO = Panel(
-    stand="thermo",
-    controls=(Control("DISTURBANCE", "DISTURBANCE", "switch", "switch the disturbance on"),),
-    lamps=(),
-    faults=(
-        Fault("sensor_open", "temperature sensor open circuit"),
-        Fault("fan_stalled", "fan rotor jammed"),
-        Fault("heater_dead", "heater burnt out"),
-    ),
+THERMO = derive_panel(stand_spec("thermo"), Look(
+    hints={"DISTURBANCE": "switch the disturbance on"},
+    fault_texts={"sensor_open": "temperature sensor open circuit", "fan_stalled": "fan rotor jammed",
+                 "heater_dead": "heater burnt out"},
     trends=("TEMP_ADC", "SETPOINT", "HEATER", "FAN", "DISTURBANCE"),
     mimic=_thermo_mimic,
-)
+))
 
 PANELS = {p.stand: p for p in (MP9C, TUR10, THERMO)}
