@@ -4,7 +4,9 @@ The student's files are one compilation unit forming a complete OpenPLC program 
 the bundle they were handed, modified). It is judged by its I/O behaviour alone: each
 scenario of the task's requirement set runs it on a fresh stand in virtual time, through the
 located I/O (the console and wiring labels); the student's internal names are never read.
-The submission is parsed and checked once per grade; every scenario runs that checked program.
+The submission is parsed, checked and compiled once per grade; every scenario runs that
+compiled program on a fresh PLC (plclab.scenario.compiled_once). Trace files go through
+plclab.fileio like every output: a bad --out is refused, one line, before any scenario runs.
 
 The grader never charges the student for its own bug: an unexpected exception in a scenario
 or a check (anything but ScenarioFailure) turns that scenario's unfinished requirements into
@@ -17,8 +19,9 @@ from pathlib import Path
 from typing import Optional, Sequence
 
 from plclab.errors import CompileError, PlcLabError
+from plclab.fileio import check_output
 from plclab.frontend import check_sources, read_sources
-from plclab.scenario import ScenarioFailure, Session
+from plclab.scenario import ScenarioFailure, Session, compiled_once
 from plclab.trace import write_csv, write_vcd
 
 from .registry import EVERY, Checks, RequirementSet, requirement_set
@@ -28,8 +31,8 @@ from .report import GradeReport, Row
 def grade(stand: str, task: str, files: Sequence[str], out_dir: Optional[str] = None) -> GradeReport:
     """Grade the ST `files` (one program) on `task` of `stand`; trace files go to `out_dir`.
 
-    Raises PlcLabError only for a stand or task the grader does not know; a program that does
-    not compile or does not run is a report that fails.
+    Raises PlcLabError only for a stand or task the grader does not know, or trace files it
+    must not write; a program that does not compile or does not run is a report that fails.
     """
     requirement_set(stand, task)                     # unknown stand / task: one-line error
     try:
@@ -45,6 +48,7 @@ def grade_sources(stand: str, task: str, sources: Sequence[tuple[str, str]],
                   out_dir: Optional[str] = None) -> GradeReport:
     """Like `grade`, with the program given as (file name, text) pairs."""
     req = requirement_set(stand, task)
+    _check_trace_outputs(req, out_dir)               # a bad --out: one line, before the work
     sources = list(sources)
     report = GradeReport(stand, task, req.title, [name for name, _ in sources])
     if not sources:
@@ -60,7 +64,7 @@ def grade_sources(stand: str, task: str, sources: Sequence[tuple[str, str]],
                          "(the bundle you were given, with its CONFIGURATION Config0)"]
         return report
     checks = Checks(req.requirements)
-    with tempfile.TemporaryDirectory(prefix="plclab-grade-") as tmp:
+    with tempfile.TemporaryDirectory(prefix="plclab-grade-") as tmp, compiled_once(checked):
         for scenario in req.scenarios:
             checks.scenario = scenario.name
             retain = Path(tmp) / f"{scenario.name}.retain.json" if scenario.needs_retain else None
@@ -86,11 +90,24 @@ def grade_sources(stand: str, task: str, sources: Sequence[tuple[str, str]],
     return report
 
 
-def _write_traces(s: Session, req: RequirementSet, scenario: str, out_dir: Path) -> list[Path]:
-    out_dir.mkdir(parents=True, exist_ok=True)
+def _trace_files(req: RequirementSet, scenario: str, out_dir: Path) -> list[Path]:
+    """The CSV and VCD of one scenario in `out_dir` (created by the writers if missing)."""
     base = out_dir / f"{req.stand}-{req.task}-{scenario}"
+    return [base.with_suffix(".csv"), base.with_suffix(".vcd")]
+
+
+def _check_trace_outputs(req: RequirementSet, out_dir: Optional[str]) -> None:
+    """Refuse, before any scenario runs, a trace file that exists and is no regular file or a
+    directory that cannot be made (plclab.fileio's rules, one line)."""
+    if out_dir is not None:
+        for scenario in req.scenarios:
+            for path in _trace_files(req, scenario.name, Path(out_dir)):
+                check_output(path)
+
+
+def _write_traces(s: Session, req: RequirementSet, scenario: str, out_dir: Path) -> list[Path]:
     names = req.trace_names(s) if req.trace_names else None
-    files = [base.with_suffix(".csv"), base.with_suffix(".vcd")]
+    files = _trace_files(req, scenario, out_dir)
     write_csv(s.trace, files[0], names=names)
     write_vcd(s.trace, files[1], names=names)
     return files
