@@ -18,7 +18,7 @@ from plclab import plcopen
 from plclab.errors import PlcLabError
 from plclab.fileio import check_output, write_bytes
 from plclab.frontend import check_sources
-from plclab.frontend.checker import CheckedUnit
+from plclab.frontend.checked import CheckedUnit
 from plclab.stands import bundle, get_stand, sources
 
 

@@ -318,6 +318,11 @@ def build_parser() -> argparse.ArgumentParser:
     c.add_argument("--plain", action="store_true", help="with --emit-python: without the compiler's fast paths")
     c.set_defaults(func=_cmd_check)
 
+    c = sub.add_parser("compile", help="the same as check --emit-python: print the Python the program compiles to")
+    c.add_argument("files", nargs="+", metavar="FILE.st")
+    c.add_argument("--plain", action="store_true", help="without the compiler's fast paths")
+    c.set_defaults(func=_cmd_check, emit_python=True)
+
     c = sub.add_parser("sim", help="run any ST program in virtual time with scripted inputs; write traces")
     c.add_argument("files", nargs="+", metavar="FILE.st")
     c.add_argument("--duration", type=_seconds, required=True, metavar="T", help="simulated time (e.g. 10s)")

@@ -1,8 +1,8 @@
 """Helpers shared by tests/grader/test_grader_*.py: a stand's wrong-solution fixtures and the
 checks every stand's grade reports must pass.
 
-Imported by the test files after putting this directory on sys.path (the suite has no
-conftest.py and no package __init__), like tests/runtime/st_helpers.py.
+Imported by its plain name: tests/conftest.py puts this directory on sys.path (as
+tests/runtime/st_helpers.py).
 """
 from __future__ import annotations
 

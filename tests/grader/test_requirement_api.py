@@ -4,19 +4,14 @@
 the student (an ERROR row, exit code 2)."""
 from __future__ import annotations
 
-import sys
-from pathlib import Path
-
 import pytest
 
-sys.path.insert(0, str(Path(__file__).resolve().parent))
-
-from plclab.grader import Checks, Requirement, RequirementSet, Scenario, grade_sources  # noqa: E402
-from plclab.grader import registry  # noqa: E402
-from plclab.grader.mp9c import make_session  # noqa: E402
-from plclab.scenario import ScenarioFailure  # noqa: E402
-from plclab.stands import sources  # noqa: E402
-from plclab.stands.mp9c import STAND  # noqa: E402
+from plclab.grader import Checks, Requirement, RequirementSet, Scenario, grade_sources
+from plclab.grader import registry
+from plclab.grader.mp9c import make_session
+from plclab.scenario import ScenarioFailure
+from plclab.stands import sources
+from plclab.stands.mp9c import STAND
 
 R1, R2, R3 = (Requirement(f"R{i}", f"requirement {i}", "s") for i in (1, 2, 3))
 

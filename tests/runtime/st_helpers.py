@@ -1,7 +1,6 @@
 """Small helpers shared by tests/runtime/test_semantics_*.py: compile ST, run it in virtual time.
 
-Imported by the test files after putting this directory on sys.path (the suite has no
-conftest.py and no package __init__).
+Imported by its plain name: tests/conftest.py puts this directory on sys.path.
 """
 from __future__ import annotations
 

@@ -9,16 +9,13 @@ and review their diff before committing it.
 from __future__ import annotations
 
 import os
-import sys
 import traceback
 from pathlib import Path
 
 import pytest
 
-sys.path.insert(0, str(Path(__file__).resolve().parent))
-
-from plclab.cli import main  # noqa: E402
-from st_helpers import program  # noqa: E402
+from plclab.cli import main
+from st_helpers import program
 
 SNAPSHOTS = Path(__file__).resolve().parent / "snapshots"
 UPDATE = os.environ.get("PLCLAB_UPDATE_SNAPSHOTS") == "1"
@@ -35,6 +32,17 @@ def test_emitted_python_matches_its_snapshot(name, plain, capsys, monkeypatch):
         snap.write_text(out, encoding="utf-8")
     assert snap.exists(), f"missing snapshot {snap}: run with PLCLAB_UPDATE_SNAPSHOTS=1 and review it"
     assert out == snap.read_text(encoding="utf-8"), f"{snap.name} differs: review, then regenerate"
+
+
+@pytest.mark.parametrize("plain", [False, True], ids=["optimized", "plain"])
+def test_plclab_compile_is_check_emit_python(plain, capsys, monkeypatch):
+    monkeypatch.chdir(SNAPSHOTS)
+    flags = ["--plain"] if plain else []
+    assert main(["compile", "pous.st"] + flags) == 0
+    assert capsys.readouterr().out == (SNAPSHOTS / f"pous{'.plain' if plain else ''}.py").read_text(encoding="utf-8")
+    assert main(["compile", "missing.st"]) == 1
+    err = capsys.readouterr().err
+    assert "missing.st" in err and len(err.strip().splitlines()) == 1
 
 
 def test_every_statement_line_names_its_st_line(capsys, monkeypatch):

@@ -3,18 +3,13 @@ or library code) stops the PLC as a fault does, but is marked internal, asks for
 is never charged to the student's program; a fault of the program stays the program's."""
 from __future__ import annotations
 
-import sys
-from pathlib import Path
-
 import pytest
 
-sys.path.insert(0, str(Path(__file__).resolve().parent))
-
-from plclab.grader import grade_sources  # noqa: E402
-from plclab.runtime import stdfb  # noqa: E402
-from plclab.runtime.faults import REPORT_THIS  # noqa: E402
-from plclab.stands import get_stand, sources  # noqa: E402
-from st_helpers import program, val  # noqa: E402
+from plclab.grader import grade_sources
+from plclab.runtime import stdfb
+from plclab.runtime.faults import REPORT_THIS
+from plclab.stands import get_stand, sources
+from st_helpers import program, val
 
 
 def _harness_bug(self) -> None:

@@ -4,18 +4,13 @@ programs, not only on the semantics cases."""
 from __future__ import annotations
 
 import functools
-import sys
-from pathlib import Path
 
 import pytest
+from golden import check_golden
 
-sys.path.insert(0, str(Path(__file__).resolve().parents[1] / "stands"))
-
-from golden import check_golden  # noqa: E402
-
-import plclab.scenario  # noqa: E402
-from plclab.runtime.compiler import compile_unit  # noqa: E402
-from plclab.stands import mp9c, thermo, tur10  # noqa: E402
+import plclab.scenario
+from plclab.runtime.compiler import compile_unit
+from plclab.stands import mp9c, thermo, tur10
 
 
 @pytest.mark.parametrize("stand", [mp9c, tur10, thermo], ids=lambda m: m.__name__.rsplit(".", 1)[1])

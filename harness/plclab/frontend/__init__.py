@@ -9,7 +9,8 @@ from typing import Iterable
 
 from plclab.errors import CompileError, Diagnostic
 from plclab.frontend import ast as A
-from plclab.frontend.checker import CheckedUnit, check_unit
+from plclab.frontend.checked import CheckedUnit
+from plclab.frontend.checker import check_unit
 from plclab.frontend.parser import parse_source
 
 __all__ = ["CheckedUnit", "check_sources", "load_files", "read_source", "read_sources"]

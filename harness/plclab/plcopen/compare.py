@@ -12,7 +12,7 @@ import dataclasses
 from typing import Any, Optional
 
 from plclab.frontend import ast as A
-from plclab.frontend.checker import CheckedUnit
+from plclab.frontend.checked import CheckedUnit
 
 # fields that say where a node is, or that the checker filled in (see frontend/ast.py)
 _SKIP = {"line", "col", "file", "key", "ty", "sym", "pou", "std", "arg_types", "fb_type", "call", "param",

@@ -16,7 +16,7 @@ from typing import Optional
 from lxml import etree
 
 from plclab.errors import PlcLabError
-from plclab.frontend.checker import CheckedUnit
+from plclab.frontend.checked import CheckedUnit
 from plclab.plcopen.configuration import configuration_text, configurations_element
 from plclab.plcopen.datatypes import NS, PPX, XHTML, data_type_element, data_type_text, q, sub
 from plclab.plcopen.pous import pou_element, pou_text
