@@ -50,10 +50,12 @@ def grid(v: float, h: float) -> int:
 
 
 def check_blocks(frames: Sequence[Frame], points: Sequence[tuple[float, int, int, int, int]], h: float,
-                 method: str, start_time: float = 0.0) -> list[BlockResult]:
-    """One result per frame; `points` are (time, frame, x, y, z) in steps, in time order."""
+                 method: str, start_time: float = 0.0,
+                 origin: tuple[int, ...] = (0, 0, 0)) -> list[BlockResult]:
+    """One result per frame; `points` are (time, frame, x, y, z) in steps, in time order;
+    frame 1 starts at `origin` (steps) at `start_time`."""
     results = []
-    prev_end = (0, 0, 0)
+    prev_end = tuple(origin)
     prev_time = start_time
     for k, f in enumerate(frames, start=1):
         pts = [p for p in points if p[1] == k]

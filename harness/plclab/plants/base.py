@@ -53,18 +53,35 @@ class PlantModel:
     period: float = 0.01
     FAULTS: dict[str, str] = {}          # fault name -> what it does (for help texts)
     FACE = ConsoleFace((), (), ())       # the console face (switches, lamps, readouts)
+    CONSOLE: dict[str, str] = {}         # console input name -> PLC input location ("IX0.0")
+    NORMALLY_CLOSED: frozenset[str] = frozenset()   # buttons whose contact opens when pressed
 
     def __init__(self) -> None:
         self.time = 0.0
         self.events: list[PlantEvent] = []
         self.faults: dict[str, dict[str, Any]] = {}
+        # console inputs at rest: released buttons, switches off (normally closed ones conduct)
+        self.console_bits: dict[str, int] = {name: int(name in self.NORMALLY_CLOSED) for name in self.CONSOLE}
 
     def step(self, outputs: dict[str, int], dt: float) -> dict[str, int]:
         raise NotImplementedError
 
-    def set_switch(self, name: str, value: int) -> None:
-        """Set one console input (a name of FACE.switches) to 0/1."""
-        raise PlantError(f"this plant has no console switch {name!r}")
+    def set_switch(self, name: str, value: bool | int) -> None:
+        """Set one console input (a name of CONSOLE) to 0/1: the contact's level."""
+        if name not in self.CONSOLE:
+            if not self.CONSOLE:
+                raise PlantError(f"this plant has no console switch {name!r}")
+            raise PlantError(f"unknown console input {name!r}; one of {', '.join(self.CONSOLE)}")
+        self.console_bits[name] = 1 if value else 0
+
+    def press(self, name: str = "SB1") -> None:
+        """Press a push button: its contact closes, or opens for a normally closed one (an
+        emergency stop)."""
+        self.set_switch(name, name not in self.NORMALLY_CLOSED)
+
+    def release(self, name: str = "SB1") -> None:
+        """Release a push button."""
+        self.set_switch(name, name in self.NORMALLY_CLOSED)
 
     def readouts(self) -> list[int]:
         """The FACE.readouts values now, as raw 16-bit register contents."""

@@ -9,6 +9,17 @@ that rate is missed (counted per axis, the table does not move); a step against 
 limit switch is blocked by the stop (counted too). With the emergency stop pressed (or the
 drives not enabled) the drives take no steps at all.
 
+Backlash. A transmission may have `backlash` steps of play: the table follows the motor
+only after the motor has crossed the dead band, so on each reversal the table lags the motor
+by the play (textbook 4.2.2.3). At power-up the play is taken up on the positive side (the
+table was last approached moving positive, as after referencing).
+
+Touch probe. For the blank-installation measuring cycle (textbook 4.2.2.2, Fig. 18) the
+blank carries base holes (`set_blank`: their centres on the machine, their radius). A probe
+in the spindle, lowered into the hole the tool is over, makes contact (B1, %IX1.2) when it
+reaches the hole's wall: inside a collar of three hole radii around a centre, contact means
+at or beyond the wall; elsewhere the probe is above the blank and open.
+
 Position counters. The table reports each axis's position in steps as a 16-bit counter on
 %IW (it wraps), what a linear scale's counter card would give; the plant's own positions in
 mm (`position_mm`) are what the harness plots and checks.
@@ -40,6 +51,7 @@ LIMITS = {                # normally open limit switches at the ends of travel: 
 }
 LIMIT_LABELS = {("X", -1): "SQ1", ("X", 1): "SQ2", ("Y", -1): "SQ3", ("Y", 1): "SQ4",
                 ("Z", -1): "SQ5", ("Z", 1): "SQ6"}
+PROBE = "IX1.2"           # B1: the touch probe made contact
 OVERRIDE = "IW0"          # RP1 feed override potentiometer, percent 0..150
 COUNTER = {"X": "IW1", "Y": "IW2", "Z": "IW3"}
 # The console face (docs/openplc.md): coils SB1, SB2, SA1, SB3 (1 = released); lamps HL1, HL2;
@@ -54,6 +66,7 @@ class Axis:
     """One axis: where the table is and what its drive did."""
 
     steps: int = 0             # table position, steps from the machine zero
+    motor: int = 0             # where the motor has turned to, steps (differs by the play)
     step_line: int = 0         # the STEP level the drive saw last
     budget: float = 1.0        # steps the drive can still take at its maximum rate
     received: int = 0          # steps commanded (edges of STEP)
@@ -65,23 +78,30 @@ class CncTable(PlantModel):
     """The X-Y-Z table, its drives, limit switches and console."""
 
     outputs = [STEP[a] for a in AXES] + [DIR[a] for a in AXES] + [ENABLE] + list(LAMPS.values())
-    inputs = list(CONSOLE.values()) + list(LIMITS.values()) + [OVERRIDE] + list(COUNTER.values())
+    inputs = list(CONSOLE.values()) + list(LIMITS.values()) + [PROBE, OVERRIDE] + list(COUNTER.values())
     FACE = FACE
+    CONSOLE = CONSOLE             # set_switch / press / release: plants.base.PlantModel
+    NORMALLY_CLOSED = frozenset({"SB3"})
     FAULTS = {
         "slow_drive": "axis=X|Y|Z rate=steps_per_s: that drive's maximum step rate drops (missed steps)",
     }
 
     def __init__(self, step_mm: float = 0.01, max_rate: float = 2000.0,
-                 travel_mm: tuple[float, float] = (-150.0, 150.0), period: float = 0.001) -> None:
+                 travel_mm: tuple[float, float] = (-150.0, 150.0), period: float = 0.001,
+                 backlash: int = 0) -> None:
         super().__init__()
         if step_mm <= 0 or max_rate <= 0 or period <= 0:
             raise PlantError("step_mm, max_rate and period must be positive")
+        if int(backlash) < 0:
+            raise PlantError("backlash must be >= 0 steps")
+        self.backlash = int(backlash)
+        self.holes: list[tuple[float, float]] = []      # base holes' centres on the machine, mm
+        self.hole_radius = 0.0
         if not travel_mm[0] < 0 < travel_mm[1]:
             raise PlantError("travel_mm must contain the machine zero: (min < 0 < max)")
         self.step_mm, self.max_rate, self.period = float(step_mm), float(max_rate), float(period)
         self.travel = (round(travel_mm[0] / step_mm), round(travel_mm[1] / step_mm))
         self.axes = {a: Axis() for a in AXES}
-        self.console_bits = {"SB1": 0, "SB2": 0, "SA1": 0, "SB3": 1}
         self.override = 100
         self.lamps = {name: 0 for name in LAMPS}
         self.enabled = False
@@ -110,27 +130,39 @@ class CncTable(PlantModel):
                 axis.missed += 1
                 continue
             axis.budget -= 1.0
-            target = axis.steps + direction
+            motor = axis.motor + direction
+            # the table is carried once the motor crosses the dead band of the play
+            target = min(max(axis.steps, motor), motor + self.backlash)
             if not self.travel[0] <= target <= self.travel[1]:
                 axis.blocked += 1
                 continue
-            axis.steps = target
+            axis.motor, axis.steps = motor, target
         return self._inputs()
 
-    # --- console --------------------------------------------------------------------------
+    # --- console and set-up ----------------------------------------------------------------
 
-    def set_switch(self, name: str, on: bool | int) -> None:
-        """Set a console input: SB1, SB2, SA1, or SB3 (1 = released, 0 = emergency stop pressed)."""
-        if name not in CONSOLE:
-            raise PlantError(f"unknown console input {name!r}; one of {', '.join(CONSOLE)}")
-        self.console_bits[name] = 1 if on else 0
+    def set_backlash(self, steps: int) -> None:
+        """The play of every axis's transmission, in steps (textbook 4.2.2.3)."""
+        if int(steps) < 0:
+            raise PlantError("backlash must be >= 0 steps")
+        self.backlash = int(steps)
 
-    def press(self, name: str = "SB1") -> None:
-        """Press a button; SB3 is normally closed, pressing it opens the contact."""
-        self.set_switch(name, 0 if name == "SB3" else 1)
+    def set_blank(self, holes: list[tuple[float, float]], radius: float) -> None:
+        """Put a blank on the table whose base holes have these centres on the machine (mm)."""
+        if radius <= 0 or not holes:
+            raise PlantError("a blank needs base holes and a positive hole radius")
+        self.holes = [(float(x), float(y)) for x, y in holes]
+        self.hole_radius = float(radius)
 
-    def release(self, name: str = "SB1") -> None:
-        self.set_switch(name, 1 if name == "SB3" else 0)
+    def probe_contact(self) -> bool:
+        """The probe touches a base hole's wall (see the module docstring)."""
+        x, y = self.position_mm("X"), self.position_mm("Y")
+        r = self.hole_radius
+        for cx, cy in self.holes:
+            d = ((x - cx) ** 2 + (y - cy) ** 2) ** 0.5
+            if d < 3.0 * r:
+                return d >= r
+        return False
 
     def set_override(self, percent: int) -> None:
         """Turn RP1, the feed override potentiometer (0..150 %)."""
@@ -167,6 +199,7 @@ class CncTable(PlantModel):
         for (a, side), loc in LIMITS.items():
             edge = self.travel[1] if side > 0 else self.travel[0]
             out[loc] = 1 if self.axes[a].steps == edge else 0
+        out[PROBE] = 1 if self.holes and self.probe_contact() else 0
         out[OVERRIDE] = self.override
         for a, loc in COUNTER.items():
             out[loc] = unsigned16(self.axes[a].steps)

@@ -73,6 +73,7 @@ class Tur10(PlantModel):
     outputs = [ENABLE[k] for k in AXES] + [RESET_LAMP] + [DAC[k] for k in AXES]
     inputs = list(CONSOLE.values()) + list(BUS_BITS)
     FACE = FACE
+    CONSOLE = CONSOLE             # set_switch / press / release: plants.base.PlantModel
     FAULTS = {
         "dead_sensor": "axis=k [value=code]: sensor k reads a constant (default: its code now)",
         "stuck_drive": "axis=k: link k does not move whatever its reference",
@@ -96,7 +97,6 @@ class Tur10(PlantModel):
         self.working, self.stops, self.dac_limit = tuple(working), tuple(stops), int(dac_limit)
         self.drives = {k: Drive(float(s), in_range=working[0] <= s <= working[1])
                        for k, s in zip(AXES, starts)}
-        self.console_bits = {name: 0 for name in CONSOLE}
         self.reset_indicator = 0
         self.selected: tuple[int, ...] = ()
         self.bus = FULL_SCALE
@@ -127,20 +127,6 @@ class Tur10(PlantModel):
         return self._inputs()
 
     # --- console: the operator's side of the inputs -----------------------------------------
-
-    def set_switch(self, name: str, on: bool | int) -> None:
-        """Set a console input (SA1_FWD..SA5_BWD, SA6, SB1, SA7, I15) to on/off."""
-        if name not in CONSOLE:
-            raise PlantError(f"unknown console input {name!r}; one of {', '.join(CONSOLE)}")
-        self.console_bits[name] = 1 if on else 0
-
-    def press(self, name: str = "SB1") -> None:
-        """Press a push button (SB1, or a jog button such as SA1_FWD)."""
-        self.set_switch(name, 1)
-
-    def release(self, name: str = "SB1") -> None:
-        """Release a push button."""
-        self.set_switch(name, 0)
 
     def jog(self, axis: int, direction: int) -> None:
         """Hold SAk forward (+1) or backward (-1), or release both (0)."""

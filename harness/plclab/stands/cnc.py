@@ -7,6 +7,7 @@ SB1 and records the table's path, frame by frame; `plclab cnc` and the scenarios
 """
 from __future__ import annotations
 
+import math
 from dataclasses import dataclass, field, replace
 from typing import Callable, Optional
 
@@ -17,7 +18,7 @@ from plclab.stands.base import Fault, FaultParam, StandSpec
 
 POUS = ("FC_CncArcQuadrant", "FC_CncAngle", "FB_CncEvalLinear", "FB_CncEvalCircular", "FB_CncDdaPulses",
         "FB_CncDdaLinear", "FB_CncIntegLinear", "FB_CncIntegCircular", "FB_CncToolCorner", "FB_CncToolRadius",
-        "PRG_CncStand")
+        "FB_CncProbeHole", "FB_CncBlankSetup", "FB_CncBlankTransform", "FB_CncBacklash", "PRG_CncStand")
 FINE_CYCLE_S = 0.001
 MAX_FRAMES = 200
 METHODS = {"evalfn": 0, "dda": 1, "integration": 2}
@@ -81,26 +82,33 @@ class PartRun:
     start: float = 0.0         # s: when SB1 started the program
     executed: list[Frame] = field(default_factory=list)   # the frames as the PLC ran them (corrected)
     prep_error: int = 0        # frame whose tool-radius correction the PLC could not build
+    origin: tuple[int, int, int] = (0, 0, 0)   # steps: where frame 1 started (after a measuring cycle)
+    frames_start: float = 0.0  # s: when frame 1 started
 
 
 def run_part(s: Session, frames: list[Frame], method: str = "evalfn", diagonal: bool = False,
              timeout: float = 600.0) -> PartRun:
     """Load the frames, press SB1 and run until the program ends (or `timeout` s)."""
     load_frames(s, frames, method, diagonal)
-    run = PartRun(frames, s.plant.step_mm, start=s.now)
+    run = PartRun(frames, s.plant.step_mm, start=s.now, frames_start=s.now,
+                  origin=tuple(s.plant.axes[a].steps for a in "XYZ"))
     s.console.press("SB1", hold=0.005)
     record_until(s, run, "ProgramEnd", timeout)
+    before = [p for p in run.points if p[1] == 0]          # a measuring cycle's moves
+    if before:
+        run.frames_start, run.origin = before[-1][0], before[-1][2:]
     run.finished = bool(s.plc.read("ProgramEnd"))
-    run.executed = executed_frames(s, frames)
+    run.executed = executed_frames(s, frames, run.origin)
     run.prep_error = s.plc.read("PrepError")
     return run
 
 
-def executed_frames(s: Session, frames: list[Frame]) -> list[Frame]:
+def executed_frames(s: Session, frames: list[Frame], origin: tuple[int, ...] = (0, 0, 0)) -> list[Frame]:
     """The frames the PLC ran, read back from its executed table (ExecX/ExecY/ExecI/ExecJ:
-    after FB_CncToolRadius), in mm on the steps' grid."""
+    after FB_CncToolRadius and the blank's correction), in mm on the steps' grid; frame 1
+    starts at `origin` (steps)."""
     h = s.plant.step_mm
-    out, start = [], (0.0, 0.0, 0.0)
+    out, start = [], tuple(v * h for v in origin)
     for k, f in enumerate(frames, start=1):
         end = (s.plc.read(f"ExecX[{k}]") * h, s.plc.read(f"ExecY[{k}]") * h, s.plc.read(f"FrameZ[{k}]") * h)
         out.append(replace(f, start=start, end=end, i=s.plc.read(f"ExecI[{k}]") * h if f.is_arc else 0.0,
@@ -182,6 +190,95 @@ def _part(text: str, method: str, tools: Optional[dict[int, float]] = None):
     return scenario
 
 
+BACKLASH = """(a square and a full circle: every axis reverses several times)
+G21 G90 G17 F600
+G01 X5 Y0
+Y5
+X0
+Y0
+G02 X0 Y0 I2.5 J0
+"""
+PLAY_STEPS = 5                 # the backlash scenario's play in every transmission
+
+
+def backlash(s: Session) -> None:
+    """The drives have PLAY_STEPS of play; FB_CncBacklash compensates it (GVL_CNC.Backlash):
+    the tool path stays within the evaluation function's bound and ends at the end point."""
+    s.plant.set_backlash(PLAY_STEPS)
+    s.plc.write("Backlash", PLAY_STEPS)
+    s.log(f"play of {PLAY_STEPS} steps in every transmission, compensated by FB_CncBacklash")
+    run = run_part(s, parse(BACKLASH, "<backlash>").frames, "evalfn")
+    _require_on_contour(s, run, "evalfn")
+
+
+BLANK = """(a 10 x 6 rectangle on the blank, drawn in the part's coordinates)
+G21 G90 G17 F600
+G01 X10 Y10
+X20
+Y16
+X10
+Y10
+"""
+BASE_HOLES = ((0.0, 0.0), (40.0, 0.0))      # the base holes in the part's coordinates, mm
+HOLE_RADIUS = 2.0
+BLANK_PLACEMENT = (0.8, -0.5, math.radians(1.5))   # where the blank lies: shift X, Y (mm), turn
+
+
+def blank_to_machine(p: tuple[float, ...], placement=BLANK_PLACEMENT) -> tuple[float, float]:
+    """A point of the part program on the machine, for a blank at `placement` (eq. 28)."""
+    x0, y0, alpha = placement
+    c, sn = math.cos(alpha), math.sin(alpha)
+    return x0 + p[0] * c - p[1] * sn, y0 + p[0] * sn + p[1] * c
+
+
+def place_blank(s: Session, placement=BLANK_PLACEMENT, holes=BASE_HOLES) -> None:
+    """Lay the blank on the table (the plant's base holes) and give the PLC the drawn holes."""
+    h = s.plant.step_mm
+    s.plant.set_blank([blank_to_machine(p, placement) for p in holes], HOLE_RADIUS)
+    s.plc.write("BlankMeasure", True)
+    for k, (x, y) in enumerate(holes, start=1):
+        s.plc.write(f"BaseX[{k}]", round(x / h))
+        s.plc.write(f"BaseY[{k}]", round(y / h))
+
+
+def blank(s: Session) -> None:
+    """The blank lies shifted and turned: SB1 measures its two base holes with the probe
+    (FB_CncProbeHole), solves the correction (FB_CncBlankSetup) and runs the part turned
+    onto the blank (FB_CncBlankTransform, eq. 28)."""
+    place_blank(s)
+    x0, y0, alpha = BLANK_PLACEMENT
+    s.log(f"blank shifted by ({x0:g}, {y0:g}) mm and turned by {math.degrees(alpha):g} degrees")
+    run = run_part(s, parse(BLANK, "<blank>").frames, "evalfn")
+    error = s.plc.read("BlankError")
+    if error:
+        raise ScenarioFailure(f"t={s.now:.2f} s: the measuring cycle failed (BlankError {error})")
+    _require_on_contour(s, run, "evalfn")
+    h = s.plant.step_mm
+    for f, e in zip(run.frames, run.executed):
+        want = blank_to_machine(f.end)
+        off = math.dist(want, e.end[:2])
+        if off > BLANK_TOLERANCE_STEPS * h:
+            raise ScenarioFailure(f"frame line {f.line}: ends {off:.4f} mm from the blank's point "
+                                  f"(tolerance {BLANK_TOLERANCE_STEPS * h:g} mm)")
+
+
+BLANK_TOLERANCE_STEPS = 3      # the holes' centres are measured within a step: the turn adds a little
+
+
+def _require_on_contour(s: Session, run: "PartRun", method: str) -> None:
+    """Every frame of `run` within its bound and at its end point (the scenario's verdict)."""
+    from plclab.cnc.toolpath import check_blocks
+
+    if not run.finished:
+        raise ScenarioFailure(f"t={s.now:.2f} s: the part program did not end")
+    s.cnc_run = run                        # type: ignore[attr-defined]
+    for block in check_blocks(run.executed, run.points, run.step_mm, method, run.frames_start, run.origin):
+        if not block.ok:
+            raise ScenarioFailure(f"frame {block.index} (line {block.line}): contour error "
+                                  f"{block.error_mm:.4f} mm (bound {block.bound_mm:.4f} mm), "
+                                  f"end point off by {block.end_error_mm:.4f} mm")
+
+
 def estop(s: Session) -> None:
     """SB3 in the middle of a frame: the drives stop at once, HL2 lights, KM1 drops."""
     load_frames(s, parse(SQUARE).frames, "evalfn")
@@ -201,7 +298,8 @@ def estop(s: Session) -> None:
 
 SCENARIOS: dict[str, Callable[[Session], None]] = {
     "demo": _part(SQUARE, "evalfn"), "square": _part(SQUARE, "evalfn"), "circle": _part(CIRCLE, "evalfn"),
-    "star": _part(STAR, "dda"), "pocket": _part(POCKET, "integration", POCKET_TOOLS), "estop": estop,
+    "star": _part(STAR, "dda"), "pocket": _part(POCKET, "integration", POCKET_TOOLS), "backlash": backlash,
+    "blank": blank, "estop": estop,
 }
 PLOT_SIGNALS = ("SB1", "SB3", "HL1", "HL2", "STEP_X", "DIR_X", "STEP_Y", "DIR_Y", "CNT_X", "CNT_Y", "Frame")
 
@@ -226,7 +324,7 @@ SPEC = StandSpec(
     stand=STAND,
     console=("SB1", "SB2", "SA1", "SB3", "RP1"),
     lamps=("HL1", "HL2"),
-    sensors=("SQ1", "SQ2", "SQ3", "SQ4", "SQ5", "SQ6", "CNT_X", "CNT_Y", "CNT_Z"),
+    sensors=("SQ1", "SQ2", "SQ3", "SQ4", "SQ5", "SQ6", "B1", "CNT_X", "CNT_Y", "CNT_Z"),
     actuators=("STEP_X", "DIR_X", "STEP_Y", "DIR_Y", "STEP_Z", "DIR_Z", "KM1"),
     faults=(Fault("slow_drive", "that drive's maximum step rate drops: steps beyond it are missed",
                   (FaultParam("axis", "X|Y|Z"), FaultParam("rate", "steps per second"))),),
