@@ -74,7 +74,7 @@ def _cmd_cnc(args: argparse.Namespace) -> int:
     try:
         result = run_cnc(args.part, method=args.method, step_mm=args.step, feed=args.feed, csv=args.csv,
                          vcd=args.vcd, plot=args.plot, svg=args.svg, diagonal=args.diagonal,
-                         tools=dict(args.tool or []))
+                         tools=dict(args.tool or []), drive=args.drive)
     except GcodeError as e:              # already `file:line:col: error: ...`; nothing has run
         print(e, file=sys.stderr)
         return 1
@@ -446,6 +446,8 @@ def build_parser() -> argparse.ArgumentParser:
     c.add_argument("part", metavar="PART.nc")
     c.add_argument("--method", choices=("evalfn", "dda", "integration"), default="evalfn")
     c.add_argument("--diagonal", action="store_true", help="evaluation function: the diagonal variant")
+    c.add_argument("--drive", choices=("step", "pulse"), default="step",
+                   help="step/direction bits on %%QX (default) or pulse counts per cycle on %%QW")
     c.add_argument("--step", type=float, default=0.01, metavar="MM", help="the drives' step (default 0.01 mm)")
     c.add_argument("--feed", type=float, metavar="MM_MIN", help="feed of every cutting block (replaces F)")
     c.add_argument("--tool", type=_tool, action="append", metavar="DN=R",

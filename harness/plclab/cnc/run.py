@@ -33,12 +33,14 @@ class CncResult:
 def run_cnc(part: str, method: str = "evalfn", step_mm: float = 0.01, feed: Optional[float] = None,
             csv: Optional[str] = None, vcd: Optional[str] = None, plot: Optional[str] = None,
             svg: Optional[str] = None, diagonal: bool = False,
-            tools: Optional[dict[int, float]] = None) -> CncResult:
+            tools: Optional[dict[int, float]] = None, drive: str = "step") -> CncResult:
     from plclab.stands import cnc
     from plclab.trace import write_vcd
 
     if method not in cnc.METHODS:
         raise PlcLabError(f"unknown method '{method}' (one of {', '.join(cnc.METHODS)})")
+    if drive not in cnc.DRIVES:
+        raise PlcLabError(f"unknown drive '{drive}' (one of {', '.join(cnc.DRIVES)})")
     if not 0.001 <= step_mm <= 1.0:
         raise PlcLabError(f"--step {step_mm}: the drives' step must be 0.001..1 mm")
     if feed is not None and feed <= 0:
@@ -57,10 +59,11 @@ def run_cnc(part: str, method: str = "evalfn", step_mm: float = 0.01, feed: Opti
     length = sum(math.dist(f.start, f.end) if not f.is_arc else 2 * math.pi * math.hypot(f.i, f.j)
                  for f in frames)
     slowest = min(min(f.feed, 60_000 * step_mm) for f in frames) / 60.0
-    run = cnc.run_part(s, frames, method, diagonal, timeout=10.0 + 3.0 * length / slowest)
-    blocks = check_blocks(run.executed, run.points, step_mm, method, start_time=run.start)
+    run = cnc.run_part(s, frames, method, diagonal, timeout=10.0 + 3.0 * length / slowest, drive=drive)
+    blocks = check_blocks(run.executed, run.points, step_mm, method, start_time=run.start, drive=drive)
     offsets = check_offsets(frames, run.executed, step_mm)
-    lines = list(program.notes) + [f"{part}: {len(frames)} frames, method {method}, step {step_mm:g} mm", HEADER]
+    lines = list(program.notes) + [f"{part}: {len(frames)} frames, method {method}, step {step_mm:g} mm, "
+                                   f"drive {drive}", HEADER]
     lines += [b.row() for b in blocks]
     if offsets:
         lines.append("tool-radius correction (frames on the equidistant):")

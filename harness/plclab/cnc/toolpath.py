@@ -7,7 +7,10 @@ Bounds: one step h for the evaluation-function method (every visited point withi
 line, radial error within h); for the DDA and digital-integration methods the pulses keep
 within half a pulse per axis of the interpolated point (h / sqrt 2 from the contour), and
 an arc by digital integration adds the accumulated error of eq. (19), N R dphi^3 / 3!, and
-the chord's sag R (1 - cos(dphi / 2)) between interpolation cycles.
+the chord's sag R (1 - cos(dphi / 2)) between interpolation cycles. With the pulse-count
+drive (the paper's module) the table passes the interpolator's points at the cycles' ends and
+between them follows the staircase of the generator's evenly spread pulses: half a pulse per
+axis more, h / sqrt 2.
 """
 from __future__ import annotations
 
@@ -51,9 +54,9 @@ def grid(v: float, h: float) -> int:
 
 def check_blocks(frames: Sequence[Frame], points: Sequence[tuple[float, int, int, int, int]], h: float,
                  method: str, start_time: float = 0.0,
-                 origin: tuple[int, ...] = (0, 0, 0)) -> list[BlockResult]:
+                 origin: tuple[int, ...] = (0, 0, 0), drive: str = "step") -> list[BlockResult]:
     """One result per frame; `points` are (time, frame, x, y, z) in steps, in time order;
-    frame 1 starts at `origin` (steps) at `start_time`."""
+    frame 1 starts at `origin` (steps) at `start_time`; `drive` "pulse": the pulse-count drive."""
     results = []
     prev_end = tuple(origin)
     prev_time = start_time
@@ -67,7 +70,8 @@ def check_blocks(frames: Sequence[Frame], points: Sequence[tuple[float, int, int
         end_error = math.dist(reached, end) * h
         t_end = pts[-1][0] if pts else prev_time
         results.append(BlockResult(k, f.line, f.kind, _length(f), t_end - prev_time, error,
-                                   _bound(f, method, h), end_error, _grid_error(f, start, end, h)))
+                                   _bound(f, method, h) + (h / math.sqrt(2) if drive == "pulse" else 0.0),
+                                   end_error, _grid_error(f, start, end, h)))
         prev_end, prev_time = reached, t_end
     return results
 

@@ -9,6 +9,13 @@ that rate is missed (counted per axis, the table does not move); a step against 
 limit switch is blocked by the stop (counted too). With the emergency stop pressed (or the
 drives not enabled) the drives take no steps at all.
 
+Pulse counts (the paper's position-control module). Instead of step edges the PLC may send,
+once per interpolation cycle, a signed pulse count per axis on %QW (PULSES_X/Y/Z) with the
+cycle's number on %QW3: each new number hands the counts to a pulse generator that spreads
+them evenly over the next `pulse_cycle` seconds (pulse k of n at (k + 1/2) T / n), with the
+count's sign as the direction. The drives count what they receive either way; counts of a
+cycle not yet spread when the next arrives are still issued, never dropped.
+
 Backlash. A transmission may have `backlash` steps of play: the table follows the motor
 only after the motor has crossed the dead band, so on each reversal the table lags the motor
 by the play (textbook 4.2.2.3). At power-up the play is taken up on the positive side (the
@@ -28,14 +35,16 @@ Standard library only (see the package docstring).
 """
 from __future__ import annotations
 
-from dataclasses import dataclass
-from typing import Any
+from dataclasses import dataclass, field
+from typing import Any, Optional
 
-from plclab.plants.base import ConsoleFace, PlantError, PlantModel, unsigned16
+from plclab.plants.base import ConsoleFace, PlantError, PlantModel, signed16, unsigned16
 
 AXES = ("X", "Y", "Z")
 STEP = {"X": "QX0.0", "Y": "QX0.2", "Z": "QX0.4"}
 DIR = {"X": "QX0.1", "Y": "QX0.3", "Z": "QX0.5"}
+PULSES = {"X": "QW0", "Y": "QW1", "Z": "QW2"}   # pulse counts of one cycle, signed
+PULSE_CYCLE = "QW3"       # the cycle's number: a new value hands the counts to the generator
 ENABLE = "QX0.6"          # KM1: drive power (the program switches it on when running)
 LAMPS = {"HL1": "QX0.7", "HL2": "QX1.0"}      # HL1 program running, HL2 fault / emergency stop
 CONSOLE = {
@@ -72,12 +81,15 @@ class Axis:
     received: int = 0          # steps commanded (edges of STEP)
     missed: int = 0            # steps lost: rate exceeded
     blocked: int = 0           # steps against a closed limit switch
+    clock: float = 0.0         # time of the drive's last pulse (its rate budget)
+    pending: list[tuple[float, int, int]] = field(default_factory=list)   # generator: (time, direction, cycle)
 
 
 class CncTable(PlantModel):
     """The X-Y-Z table, its drives, limit switches and console."""
 
-    outputs = [STEP[a] for a in AXES] + [DIR[a] for a in AXES] + [ENABLE] + list(LAMPS.values())
+    outputs = ([STEP[a] for a in AXES] + [DIR[a] for a in AXES] + [ENABLE] + list(LAMPS.values())
+               + [PULSES[a] for a in AXES] + [PULSE_CYCLE])
     inputs = list(CONSOLE.values()) + list(LIMITS.values()) + [PROBE, OVERRIDE] + list(COUNTER.values())
     FACE = FACE
     CONSOLE = CONSOLE             # set_switch / press / release: plants.base.PlantModel
@@ -88,13 +100,19 @@ class CncTable(PlantModel):
 
     def __init__(self, step_mm: float = 0.01, max_rate: float = 2000.0,
                  travel_mm: tuple[float, float] = (-150.0, 150.0), period: float = 0.001,
-                 backlash: int = 0) -> None:
+                 backlash: int = 0, pulse_cycle: float = 0.004) -> None:
         super().__init__()
         if step_mm <= 0 or max_rate <= 0 or period <= 0:
             raise PlantError("step_mm, max_rate and period must be positive")
         if int(backlash) < 0:
             raise PlantError("backlash must be >= 0 steps")
         self.backlash = int(backlash)
+        if pulse_cycle <= 0:
+            raise PlantError("pulse_cycle must be positive")
+        self.pulse_cycle = float(pulse_cycle)
+        self.cycle_seen = 0                             # the last pulse-cycle number taken
+        self.last_cycle = 0                             # the cycle of the last generator pulse a drive got
+        self.pulse_log: Optional[dict[str, list[float]]] = None   # log_pulses(): each pulse's time
         self.holes: list[tuple[float, float]] = []      # base holes' centres on the machine, mm
         self.hole_radius = 0.0
         if not travel_mm[0] < 0 < travel_mm[1]:
@@ -114,30 +132,70 @@ class CncTable(PlantModel):
             raise PlantError(f"dt must not be negative (got {dt})")
         self.lamps = {name: 1 if outputs.get(loc, 0) else 0 for name, loc in LAMPS.items()}
         self.enabled = bool(outputs.get(ENABLE, 0)) and bool(self.console_bits["SB3"])
+        cycle = outputs.get(PULSE_CYCLE, 0)
+        if cycle != self.cycle_seen:
+            self.cycle_seen = cycle
+            self._generate(outputs)
         self.time += dt
         for a, axis in self.axes.items():
-            rate = self._rate(a)
-            axis.budget = min(1.0, axis.budget + rate * dt)
+            if axis.pending:
+                self._spread(a, axis)
             line = 1 if outputs.get(STEP[a], 0) else 0
-            if line == axis.step_line:
-                continue
-            axis.step_line = line
-            if not self.enabled:
-                continue
-            axis.received += 1
-            direction = -1 if outputs.get(DIR[a], 0) else 1
-            if axis.budget < 1.0:
-                axis.missed += 1
-                continue
-            axis.budget -= 1.0
-            motor = axis.motor + direction
-            # the table is carried once the motor crosses the dead band of the play
-            target = min(max(axis.steps, motor), motor + self.backlash)
-            if not self.travel[0] <= target <= self.travel[1]:
-                axis.blocked += 1
-                continue
-            axis.motor, axis.steps = motor, target
+            if line != axis.step_line:
+                axis.step_line = line
+                self._pulse(a, axis, -1 if outputs.get(DIR[a], 0) else 1, self.time)
         return self._inputs()
+
+    def _generate(self, outputs: dict[str, int]) -> None:
+        """A new cycle's counts: pulse k of n at (k + 1/2) T / n from now, after any left over."""
+        t0, period = self.time, self.pulse_cycle
+        for a in AXES:
+            count = signed16(outputs.get(PULSES[a], 0))
+            if count:
+                n, direction = abs(count), 1 if count > 0 else -1
+                pending = self.axes[a].pending
+                pending.extend((t0 + (k + 0.5) * period / n, direction, self.cycle_seen) for k in range(n))
+                pending.sort()
+
+    def _spread(self, a: str, axis: Axis) -> None:
+        """The generator's pulses due by now go to the drive, each at its own time."""
+        due = 0
+        for t, direction, cycle in axis.pending:
+            if t > self.time + 1e-12:
+                break
+            due += 1
+            self.last_cycle = cycle
+            self._pulse(a, axis, direction, t)
+        del axis.pending[:due]
+
+    def _pulse(self, a: str, axis: Axis, direction: int, t: float) -> None:
+        """One step pulse reaches the drive at time t: taken, missed (rate) or blocked (limit)."""
+        axis.budget = min(1.0, axis.budget + self._rate(a) * (t - axis.clock))
+        axis.clock = t
+        if not self.enabled:
+            return
+        axis.received += 1
+        if self.pulse_log is not None:
+            self.pulse_log[a].append(t)
+        if axis.budget < 1.0:
+            axis.missed += 1
+            return
+        axis.budget -= 1.0
+        motor = axis.motor + direction
+        # the table is carried once the motor crosses the dead band of the play
+        target = min(max(axis.steps, motor), motor + self.backlash)
+        if not self.travel[0] <= target <= self.travel[1]:
+            axis.blocked += 1
+            return
+        axis.motor, axis.steps = motor, target
+
+    def pulses_pending(self) -> bool:
+        """The pulse generator still has pulses to spread."""
+        return any(axis.pending for axis in self.axes.values())
+
+    def log_pulses(self) -> None:
+        """Record the time of every pulse each drive receives (for the tests' timing checks)."""
+        self.pulse_log = {a: [] for a in AXES}
 
     # --- console and set-up ----------------------------------------------------------------
 

@@ -45,12 +45,19 @@ def _setup(s: Session) -> None:
     s.plc.write("StepMm", s.plant.step_mm)
 
 
-def load_frames(s: Session, frames: list[Frame], method: str = "evalfn", diagonal: bool = False) -> None:
-    """Write the frame table into the PLC (GVL_CNC), in steps of the drives."""
+DRIVES = ("step", "pulse")     # step/direction bits on %QX, or pulse counts per cycle on %QW
+
+
+def load_frames(s: Session, frames: list[Frame], method: str = "evalfn", diagonal: bool = False,
+                drive: str = "step") -> None:
+    """Write the frame table into the PLC (GVL_CNC), in steps of the drives, and the drive
+    interface the program uses (GVL_CNC.PulseDrive)."""
     if len(frames) > MAX_FRAMES:
         raise ScenarioFailure(f"{len(frames)} frames: the frame table holds {MAX_FRAMES}")
     if method not in METHODS:
         raise ScenarioFailure(f"unknown method {method!r} (one of {', '.join(METHODS)})")
+    if drive not in DRIVES:
+        raise ScenarioFailure(f"unknown drive {drive!r} (one of {', '.join(DRIVES)})")
     h = s.plant.step_mm
     write = s.plc.write
     for k, f in enumerate(frames, start=1):
@@ -67,6 +74,7 @@ def load_frames(s: Session, frames: list[Frame], method: str = "evalfn", diagona
     write("FrameCount", len(frames))
     write("Method", METHODS[method])
     write("Diagonal", bool(diagonal))
+    write("PulseDrive", drive == "pulse")
     s.log(f"{len(frames)} frames loaded ({method})")
 
 
@@ -87,9 +95,10 @@ class PartRun:
 
 
 def run_part(s: Session, frames: list[Frame], method: str = "evalfn", diagonal: bool = False,
-             timeout: float = 600.0) -> PartRun:
-    """Load the frames, press SB1 and run until the program ends (or `timeout` s)."""
-    load_frames(s, frames, method, diagonal)
+             timeout: float = 600.0, drive: str = "step") -> PartRun:
+    """Load the frames, press SB1 and run until the program ends (or `timeout` s) and the
+    pulse generator has spread its last counts."""
+    load_frames(s, frames, method, diagonal, drive)
     run = PartRun(frames, s.plant.step_mm, start=s.now, frames_start=s.now,
                   origin=tuple(s.plant.axes[a].steps for a in "XYZ"))
     s.console.press("SB1", hold=0.005)
@@ -126,19 +135,29 @@ def record_until(s: Session, run: PartRun, flag: str, timeout: float) -> None:
     last = tuple(a.steps for a in axes)
     frame = getattr(frame_at, frame_key)
     step = s.sim.step
+    counts = bool(s.plc.read("PulseDrive"))
+    cycle_at, cycle_key = s.plc.resolve("PULSE_CYCLE")
+    cycle_frame: dict[int, int] = {}        # pulse-count drive: the frame each message (cycle) was sent in
     for _ in range(round(timeout / s.tick) + 1):
         step(1)                             # the plant took the previous scan's steps first
         pos = tuple(a.steps for a in axes)
         if pos != last:
-            run.points.append((s.now, frame, *pos))
+            run.points.append((s.now, cycle_frame.get(s.plant.last_cycle, frame) if counts else frame, *pos))
             last = pos
+        if counts:
+            cycle_frame.setdefault(getattr(cycle_at, cycle_key), getattr(frame_at, frame_key))
         if getattr(flag_at, flag_key) and frame == getattr(frame_at, frame_key):
             break
         frame = getattr(frame_at, frame_key)
-    step(1)                                 # the last scan's steps
-    pos = tuple(a.steps for a in axes)
-    if pos != last:
-        run.points.append((s.now, frame, *pos))
+    pending = getattr(s.plant, "pulses_pending", lambda: False)
+    while True:                             # the last scan's steps; the generator's last pulses
+        step(1)
+        pos = tuple(a.steps for a in axes)
+        if pos != last:
+            run.points.append((s.now, cycle_frame.get(s.plant.last_cycle, frame) if counts else frame, *pos))
+            last = pos
+        if not pending():
+            break
     s._copy_trace()
     run.missed = s.plant.missed()
 
