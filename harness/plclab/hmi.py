@@ -21,7 +21,7 @@ from dataclasses import dataclass
 from typing import Callable, Optional, TextIO
 
 from plclab.errors import PlcLabError
-from plclab.modbus.profiles import THERMO, Access, Register, TwidoProfile
+from plclab.modbus.profiles import THERMO, THERMO_RULES, Access, Register, TwidoProfile
 
 MODE_NAMES = {0: "manual", 1: "auto-1", 2: "auto-2"}
 MODE_WORDS = {"manual": 0, "auto1": 1, "auto-1": 1, "automatic-1": 1, "auto2": 2, "auto-2": 2,
@@ -30,11 +30,15 @@ EXCEPTION_NAMES = {1: "illegal function", 2: "illegal data address", 3: "illegal
                    4: "server device failure"}
 UNITS = {"temperature": " C", "setpoint": " C", "fan_speed": "/s"}
 
-HELP = """commands (one per line):
-  heater N        heater power 0..2000 (manual mode)       fan N      fan 0..1000 (manual mode)
-  setpoint N      temperature setpoint 25..70 C            mode M     manual | auto1 | auto2 (or 0, 1, 2)
-  %MWn N          write any register                       show       every register with its meaning
-  help            this text                                quit       stop (also end of input, Ctrl-C)"""
+_VALID = {rule.name: rule.valid for rule in THERMO_RULES}       # the contract's ranges, not a copy
+_HELP_ROWS = (
+    ("heater N", f"heater power {_VALID['heater']} (manual mode)", "fan N", f"fan {_VALID['fan']} (manual mode)"),
+    ("setpoint N", f"temperature setpoint {_VALID['setpoint']} C", "mode M",
+     f"manual | auto1 | auto2 (or {_VALID['mode']})"),
+    ("%MWn N", "write any register", "show", "every register with its meaning"),
+    ("help", "this text", "quit", "stop (also end of input, Ctrl-C)"),
+)
+HELP = "\n".join(["commands (one per line):"] + [f"  {a:<16}{b:<41}{c:<11}{d}" for a, b, c, d in _HELP_ROWS])
 
 
 class HmiError(PlcLabError):
