@@ -421,8 +421,8 @@ def run_plant(stand: str, psm: tuple[str, int] = (DEFAULT_HOST, PSM_PORT),
 
 # What the script embeds: the modules run_plant needs, standard library only. Packages whose
 # __init__ imports more than these are embedded empty.
-_EMBEDDED = ("plclab.errors", "plclab.iec.address", "plclab.runtime.image", "plclab.modbus.protocol", "plclab.modbus.profiles",
-             "plclab.modbus.maps", "plclab.modbus.rawclient", "plclab.modbus.server",
+_EMBEDDED = ("plclab.errors", "plclab.iec.address", "plclab.runtime.image", "plclab.modbus.protocol",
+             "plclab.modbus.profiles", "plclab.modbus.maps", "plclab.modbus.rawclient", "plclab.modbus.server",
              "plclab.modbus.console", "plclab.modbus.psm", "plclab.plants", "plclab.plants.base",
              "plclab.plants.host")
 _EMPTY_PACKAGES = ("plclab", "plclab.iec", "plclab.runtime", "plclab.modbus")

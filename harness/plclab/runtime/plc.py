@@ -21,9 +21,9 @@ from plclab.errors import PlcLabError
 from plclab.frontend import ast as A
 from plclab.frontend.checked import CheckedUnit
 from plclab.iec import types as T
+from plclab.iec.address import SIZE_BITS, Address
 from plclab.runtime.compiler import CompiledProgram, compile_unit, located_attr
 from plclab.runtime.faults import FaultRecord, PlcFault
-from plclab.iec.address import SIZE_BITS, Address
 from plclab.runtime.image import AREAS, ProcessImage, image_slot
 from plclab.runtime.stdfb import ScanClock
 
