@@ -80,3 +80,16 @@ def test_a_bad_out_is_one_line_before_any_scenario_runs(selftest, tmp_path, bloc
     assert "\n" not in str(e.value) and runs == []
     if block == "file_as_dir":
         assert out.read_text() == "the user's notes\n"
+
+
+def test_plclab_grade_with_an_out_that_is_a_file_is_one_line_and_leaves_it(tmp_path, capsys):
+    from plclab.cli import main
+    from plclab.stands import get_stand
+
+    taken = tmp_path / "notes.txt"
+    taken.write_text("keep me\n")
+    files = [str(p) for p in get_stand("mp9c").files("task1")]
+    assert main(["grade", "mp9c", "task1", *files, "--out", str(taken)]) == 1
+    err = capsys.readouterr().err.strip()
+    assert "is a file, not a directory" in err and len(err.splitlines()) == 1
+    assert taken.read_text() == "keep me\n"

@@ -14,8 +14,9 @@ from typing import Any, Callable, Iterable, Optional
 
 from plclab.errors import PlcLabError
 from plclab.iec import types as T
-from plclab.runtime.plantio import Plant, PlantBinding
+from plclab.iec.address import parse_address
 from plclab.runtime.image import image_slot
+from plclab.runtime.plantio import Plant, PlantBinding
 from plclab.runtime.plc import PLC, image_bits
 from plclab.trace import Recorder, Trace
 
@@ -64,7 +65,7 @@ class Simulation:
                 self._add_signal(b.address, b.ty, b.owner, b.attr, "attr")
         for addr in extra_addresses:
             area, index = image_slot(addr)
-            norm = _format_address(area, index)
+            norm = str(parse_address(addr))           # the canonical spelling: %I0.1 is %IX0.1
             if norm in seen:
                 continue
             seen.add(norm)
@@ -205,8 +206,3 @@ def _coerce_like(value: Any, current: Any) -> Any:
         return float(value)
     return value
 
-
-def _format_address(area: str, index: int) -> str:
-    if area[1] == "X":
-        return f"%{area}{index // 8}.{index % 8}"
-    return f"%{area}{index}"
