@@ -145,8 +145,10 @@ def test_unknown_stand_or_task_is_one_line_error(tmp_path):
     assert tasks("mp9c") == ["task1", "task2", "task3"]
     with pytest.raises(PlcLabError, match="no task 'task4'"):
         grade("mp9c", "task4", [write_bundle(tmp_path, "task1")])
-    with pytest.raises(PlcLabError, match="no requirements for stand 'thermo'"):
+    with pytest.raises(PlcLabError, match=r"stand 'thermo' has no task 'task1' \(one of scada1, scada2\)"):
         grade("thermo", "task1", [write_bundle(tmp_path, "task1")])
+    with pytest.raises(PlcLabError, match="no requirements for stand 'cnc'"):
+        grade("cnc", "task1", [write_bundle(tmp_path, "task1")])
 
 
 # --------------------------------------------------------------------------- report

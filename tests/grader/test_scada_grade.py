@@ -236,6 +236,65 @@ def test_a_bad_traffic_log_is_one_line(text, message):
     assert str(e.value) == message
 
 
+# --------------------------------------------------------------------------- the grading engine's path
+def test_the_tasks_are_registered_requirements_graded_by_grade_like_the_robots(tmp_path):
+    from plclab.grader import grade, requirement_table, tasks
+
+    assert tasks("thermo", None) == ["scada1", "scada2"]
+    assert tasks("thermo") == []                          # none grades an ST program (the lab page's list)
+    assert [rid for rid, _ in requirement_table("thermo", "scada1")] == ["S1.1", "S1.2", "G1"]
+    assert dict(requirement_table("thermo", "scada1"))["S1.2"].startswith("It reads %MW3 periodically, at least "
+                                                                         "every 10 s")
+    assert [rid for rid, _ in requirement_table("thermo", "scada2")] == ["S2.1", "S2.2", "S2.3", "S2.4", "G1"]
+    right, wrong = tmp_path / "right.csv", tmp_path / "wrong.csv"
+    right.write_text(traffic(40.0, extra=RIGHT_TASK2).csv_text(), encoding="utf-8")
+    wrong.write_text(traffic(40.0, extra=RIGHT_TASK2 + ((25.0, write(2, 2500)),)).csv_text(), encoding="utf-8")
+    passed = grade("thermo", "scada2", [str(right)], out_dir=str(tmp_path / "out"))
+    assert passed.passed and passed.exit_code == 0, passed.text()
+    assert passed.text().splitlines()[1] == f"traffic log: {right}"
+    failed = grade("thermo", "scada2", [str(wrong)])
+    assert failed.exit_code == 1
+    row = failed.row("S2.3")
+    assert (row.result, row.expected, row.time, row.scenario) == (
+        "FAIL", "%MW2 within 0..2000 (2000 is full power, 40 W)", 25.0, "replay")
+
+
+@pytest.mark.parametrize("data, message", [
+    (b"\x00\x01binary\xff", "log.csv:1: error: not a text file (a plclab traffic log is UTF-8 CSV)"),
+    (b"time_s,unit,request,response\n1.0,1\n", "log.csv:2: error: expected time_s,unit,request,response[,what]"),
+])
+def test_an_unreadable_log_is_a_failing_report_with_one_line(data, message, tmp_path, monkeypatch, capsys):
+    from plclab.grader import grade
+
+    monkeypatch.chdir(tmp_path)
+    (tmp_path / "log.csv").write_bytes(data)
+    report = grade("thermo", "scada1", ["log.csv"])
+    assert report.errors == [message] and report.exit_code == 1
+    assert report.text().splitlines()[2:] == ["the traffic log cannot be read:", message, "FAIL"]
+    assert main(["grade", "thermo", "scada1", "--traffic", "log.csv", "--out", "o"]) == 1
+    assert message in capsys.readouterr().out
+
+
+def test_a_grader_bug_is_an_error_row_and_exit_code_2_never_the_students_fault(monkeypatch):
+    from plclab.grader import thermo
+
+    def broken(self, register):
+        raise ZeroDivisionError("bug in a judge")
+    monkeypatch.setattr(thermo.Replayed, "written", broken)
+    report = grade_traffic("scada2", traffic(40.0, extra=RIGHT_TASK2))
+    assert report.exit_code == 2
+    assert rows(report)["S2.1"].result == "PASS"            # judged before the bug
+    assert rows(report)["S2.2"].result == "ERROR"
+    assert "the grader failed (ZeroDivisionError: bug in a judge)" in rows(report)["S2.2"].observed
+
+
+def test_the_committed_class_of_logs_is_what_the_generator_makes():
+    sys.path.insert(0, str(Path(__file__).resolve().parent))
+    from make_scada_fixtures import main as make
+
+    assert make(["--check"]) == 0
+
+
 # --------------------------------------------------------------------------- live, real clients
 class Live:
     """`grade_live` in a thread on an ephemeral loopback port; the test's client talks to it,

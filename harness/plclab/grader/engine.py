@@ -34,13 +34,13 @@ def grade(stand: str, task: str, files: Sequence[str], out_dir: Optional[str] = 
     Raises PlcLabError only for a stand or task the grader does not know, or trace files it
     must not write; a program that does not compile or does not run is a report that fails.
     """
-    requirement_set(stand, task)                     # unknown stand / task: one-line error
+    req = requirement_set(stand, task)               # unknown stand / task: one-line error
     try:
         sources = read_sources(files)
     except CompileError as e:
-        req = requirement_set(stand, task)
         return GradeReport(stand, task, req.title, [str(f) for f in files],
-                           errors=[str(d) for d in e.diagnostics])
+                           errors=[str(d) for d in e.diagnostics], noun=req.submission.noun,
+                           unreadable=req.submission.unreadable)
     return grade_sources(stand, task, sources, out_dir)
 
 
@@ -50,16 +50,20 @@ def grade_sources(stand: str, task: str, sources: Sequence[tuple[str, str]],
     req = requirement_set(stand, task)
     _check_trace_outputs(req, out_dir)               # a bad --out: one line, before the work
     sources = list(sources)
-    report = GradeReport(stand, task, req.title, [name for name, _ in sources])
+    report = GradeReport(stand, task, req.title, [name for name, _ in sources], noun=req.submission.noun,
+                         unreadable=req.submission.unreadable)
     if not sources:
-        report.errors = ["grade: no ST file given"]
+        report.errors = [f"grade: no {req.submission.suffix} file given"]
         return report
     try:
-        checked = check_sources(sources)
+        checked = check_sources(sources) if req.submission.read is None else req.submission.read(sources)
     except CompileError as e:
         report.errors = [str(d) for d in e.diagnostics]
         return report
-    if checked.config is None:
+    except PlcLabError as e:                         # a submission that is no program: its reader's line
+        report.errors = [str(e)]
+        return report
+    if req.submission.read is None and checked.config is None:
         report.errors = [f"{sources[-1][0]}:1:1: error: no CONFIGURATION: hand in the complete program "
                          "(the bundle you were given, with its CONFIGURATION Config0)"]
         return report

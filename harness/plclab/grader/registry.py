@@ -122,6 +122,23 @@ class Checks:
 
 
 @dataclass(frozen=True)
+class Submission:
+    """What a student hands in when it is not an ST program (the thermo SCADA tasks: the
+    traffic log of their client). The engine reads the files as text, as it reads ST, and
+    `read` turns them into what `make_session` receives as `checked`."""
+
+    noun: str                 # "traffic log": the report's line naming the files ("program: a.st")
+    suffix: str               # ".csv": the files `grade-class` takes for submissions
+    unreadable: str           # the report's heading over its errors: "the traffic log cannot be read:"
+    # (name, text) pairs -> what make_session gets as `checked`; raises PlcLabError (one line)
+    # for a file it cannot take. None: an ST program, checked by the front end.
+    read: Optional[Callable[[list[tuple[str, str]]], Any]] = None
+
+
+ST_PROGRAM = Submission("program", ".st", "the program does not compile:")
+
+
+@dataclass(frozen=True)
 class Scenario:
     name: str
     run: Callable[[Session, Checks], None]
@@ -143,6 +160,7 @@ class RequirementSet:
     make_session: SessionFactory                              # (sources, retain_path, checked) -> Session
     every: tuple[Callable[[Session, Checks], None], ...] = ()  # run after each scenario
     trace_names: Optional[Callable[[Session], list[str]]] = None   # signals for the trace files
+    submission: Submission = ST_PROGRAM                       # what a student hands in
 
     def __post_init__(self) -> None:
         names = {s.name for s in self.scenarios}
@@ -175,17 +193,19 @@ def _load(stand: str) -> None:
             raise
 
 
-def tasks(stand: str) -> list[str]:
-    """The tasks the grader knows for `stand`."""
+def tasks(stand: str, submission: Optional[Submission] = ST_PROGRAM) -> list[str]:
+    """The tasks of `stand` graded from a `submission` of that kind (default: an ST program,
+    what the lab page can grade; None: every task the grader knows)."""
     _load(stand)
-    return sorted(task for s, task in _REGISTRY if s == stand)
+    return sorted(task for (s, task), req in _REGISTRY.items()
+                  if s == stand and (submission is None or req.submission == submission))
 
 
 def requirement_set(stand: str, task: str) -> RequirementSet:
     _load(stand)
     found = _REGISTRY.get((stand, task))
     if found is None:
-        known = tasks(stand)
+        known = tasks(stand, None)
         if not known:
             raise PlcLabError(f"grade: no requirements for stand '{stand}' yet")
         raise PlcLabError(f"grade: stand '{stand}' has no task '{task}' (one of {', '.join(known)})")

@@ -42,8 +42,10 @@ class GradeReport:
     title: str                                       # e.g. "MP-9C pneumatic robot, Task 1: ..."
     files: list[str]
     rows: list[Row] = field(default_factory=list)
-    errors: list[str] = field(default_factory=list)  # compile errors: file:line:col: error: ...
+    errors: list[str] = field(default_factory=list)  # compile errors: file:line:col: error: ... (or the log's)
     traces: dict[str, list[Path]] = field(default_factory=dict)   # scenario -> files written
+    noun: str = "program"                            # what `files` are (the thermo SCADA tasks: "traffic log")
+    unreadable: str = "the program does not compile:"   # heading over `errors` (a traffic log: "cannot be read")
 
     @property
     def passed(self) -> bool:
@@ -71,9 +73,9 @@ class GradeReport:
 
     def text(self) -> str:
         """The report as printed by `plclab grade`."""
-        out = [self.title, "program: " + " ".join(self.files)]
+        out = [self.title, f"{self.noun}: " + " ".join(self.files)]
         if self.errors:
-            out.append("the program does not compile:")
+            out.append(self.unreadable)
             out.extend(self.errors)
             out.append("FAIL")
             return "\n".join(out) + "\n"

@@ -7,16 +7,18 @@ grader judges what the client did on the wire, from a Modbus traffic log (modbus
 
 1. `record_session` serves the stand in real time (its shipped program, the Twido face)
    and records every request the client sends, with the PLC's time;
-2. `grade_traffic` replays that log on a fresh stand in virtual time: each request is
-   answered by the same Twido map at the same plant time, so the verdict is reproducible
-   from the log alone (an instructor can grade it again later, tests are deterministic), and
-   the plant's answer (does the heater follow?) is in the replay's trace;
-3. each requirement is a check over the replayed exchanges and the trace, and a failing row
+2. the grading engine (`grade`, as for the robots) reads the log as the task's submission
+   (`TRAFFIC_LOG`) and runs its one scenario, `replay`: each logged request is answered by
+   the same Twido map at the same plant time on a fresh stand in virtual time, so the verdict
+   is reproducible from the log alone (an instructor grades it again later, `grade-class`
+   grades a folder of logs, tests are deterministic), and the plant's answer (does the
+   heater follow?) is in the replay's trace;
+3. each requirement is judged over the replayed exchanges and the trace, and a failing row
    names the mistake (the register actually read, the value refused, the mode it was
    written in) with expected and observed values.
 
-Requirements are declared once below (`TASKS`), each with the sentence the student reads and
-its check; the thresholds are the module constants.
+Requirements are declared once below (`Requirement`s registered per task like the robots'),
+each sentence built from the module constants its judge uses.
 """
 from __future__ import annotations
 
@@ -32,11 +34,12 @@ from plclab.modbus.maps import TwidoMap
 from plclab.modbus.profiles import THERMO
 from plclab.modbus.protocol import ModbusException, Request, Table
 from plclab.modbus.server import answer_pdu
-from plclab.modbus.traffic import Exchange, Traffic, TrafficRecorder, describe, exception_name, read_traffic
+from plclab.modbus.traffic import Exchange, Traffic, TrafficRecorder, describe, exception_name, parse_traffic
 from plclab.scenario import Session
-from plclab.trace import write_csv, write_vcd
 
-from .report import GradeReport, Row
+from .engine import grade, grade_sources
+from .registry import Checks, Failure, Requirement, RequirementSet, Scenario, Submission, register
+from .report import GradeReport
 
 STAND = "thermo"
 SCENARIO = "replay"                 # the one "scenario": the recorded traffic replayed
@@ -87,9 +90,20 @@ class Replayed:
 
 @dataclass
 class Replay:
+    """The stand as the client drove it: what the grading engine runs a scenario on (it reads
+    `now` and `trace`, like a Session's), with the exchanges the requirements judge."""
+
     traffic: Traffic
     session: Session
     exchanges: list[Replayed]
+
+    @property
+    def now(self) -> float:
+        return self.session.now
+
+    @property
+    def trace(self):
+        return self.session.trace
 
     @property
     def span(self) -> tuple[float, float]:
@@ -122,8 +136,7 @@ def _run_through(s: Session, t_ns: int, tick_ns: int) -> None:
 
 
 # --------------------------------------------------------------------------- checks
-def _row(rid: str, text: str, expected: str = "", observed: str = "", time: Optional[float] = None) -> Row:
-    return Row(rid, text, not observed, expected if observed else "", observed, time, SCENARIO if observed else "")
+Judge = Callable[[Replay], Optional[Failure]]      # None: the requirement is met
 
 
 def _no_traffic(r: Replay) -> Optional[str]:
@@ -168,78 +181,73 @@ def _registers(addresses: list[int]) -> str:
     return ", ".join(runs)
 
 
-def reads_register(rid: str, text: str, register: int, name: str) -> Callable[[Replay], Row]:
-    def check(r: Replay) -> Row:
+def reads_register(register: int, name: str) -> Judge:
+    def check(r: Replay) -> Optional[Failure]:
         if any(x.reads(register) and x.refusal is None for x in r.exchanges):
-            return _row(rid, text)
+            return None
         observed, t = _why_not_read(r, register, name)
-        return _row(rid, text, f"a read of holding register {register} ({name}, function 03)", observed, t)
+        return Failure(f"a read of holding register {register} ({name}, function 03)", observed, t)
     return check
 
 
-def reads_periodically(rid: str, text: str, register: int, name: str,
-                       period_s: float = READ_PERIOD_S) -> Callable[[Replay], Row]:
-    def check(r: Replay) -> Row:
+def reads_periodically(register: int, name: str, period_s: float = READ_PERIOD_S) -> Judge:
+    def check(r: Replay) -> Optional[Failure]:
         tick = r.session.tick
         expected = f"a read of {name} at least every {period_s:g} s (+/- one scan, {tick:g} s)"
         times = [x.time for x in r.exchanges if x.reads(register) and x.refusal is None]
         if not times:
             observed, t = _why_not_read(r, register, name)
-            return _row(rid, text, expected, observed, t)
+            return Failure(expected, observed, t)
         first, last = r.span
         if len(times) < 2:
-            return _row(rid, text, expected, f"one read of {name} (t = {times[0]:.2f} s) in the {last - first:.1f} s "
-                        f"the client talked to the stand: a display read once never updates", times[0])
+            return Failure(expected, f"one read of {name} (t = {times[0]:.2f} s) in the {last - first:.1f} s "
+                           f"the client talked to the stand: a display read once never updates", times[0])
         points = [first] + times + [last]
         gap, at = max((b - a, a) for a, b in zip(points, points[1:]))
         if gap > period_s + tick + 1e-9:
             what = "before the first read" if at == first and times[0] != first else \
                    "after the last read" if at == times[-1] and at != last else "between two reads"
-            return _row(rid, text, expected, f"no read of {name} for {gap:.1f} s {what}, from t = {at:.2f} s "
-                        f"to t = {at + gap:.2f} s ({len(times)} reads in {last - first:.1f} s)", at)
-        return _row(rid, text)
+            return Failure(expected, f"no read of {name} for {gap:.1f} s {what}, from t = {at:.2f} s "
+                           f"to t = {at + gap:.2f} s ({len(times)} reads in {last - first:.1f} s)", at)
+        return None
     return check
 
 
-def every_request_accepted(rid: str, text: str) -> Callable[[Replay], Row]:
-    def check(r: Replay) -> Row:
-        nothing = _no_traffic(r)
-        if nothing:
-            return _row(rid, text, "requests the stand accepts", nothing)
-        refused = [x for x in r.exchanges if x.refusal is not None]
-        if not refused:
-            return _row(rid, text)
-        named = "; ".join(x.refused_text() for x in refused[:NAMED_REFUSALS])
-        more = f"; and {len(refused) - NAMED_REFUSALS} more" if len(refused) > NAMED_REFUSALS else ""
-        return _row(rid, text, "every request accepted (no Modbus exception)",
-                    f"{len(refused)} of {len(r.exchanges)} requests refused: {named}{more}", refused[0].time)
-    return check
+def every_request_accepted(r: Replay) -> Optional[Failure]:
+    nothing = _no_traffic(r)
+    if nothing:
+        return Failure("requests the stand accepts", nothing, None)
+    refused = [x for x in r.exchanges if x.refusal is not None]
+    if not refused:
+        return None
+    named = "; ".join(x.refused_text() for x in refused[:NAMED_REFUSALS])
+    more = f"; and {len(refused) - NAMED_REFUSALS} more" if len(refused) > NAMED_REFUSALS else ""
+    return Failure("every request accepted (no Modbus exception)",
+                   f"{len(refused)} of {len(r.exchanges)} requests refused: {named}{more}", refused[0].time)
 
 
-def sets_heater(rid: str, text: str) -> Callable[[Replay], Row]:
+def sets_heater(r: Replay) -> Optional[Failure]:
     """An accepted write of %MW2 and the plant's heater output at that value one scan later."""
-    def check(r: Replay) -> Row:
-        expected = "a write of %MW2 (holding register 2) that the stand accepts; the heater output %QW1 takes it"
-        accepted = [x for x in r.exchanges if x.written(HEATER) is not None and x.refusal is None]
-        if not accepted:
-            observed, t = _why_not_written(r)
-            return _row(rid, text, expected, observed, t)
-        tick = r.session.tick
-        trace = r.session.trace
-        writes = [x for x in r.exchanges if x.refusal is None and
-                  (x.written(HEATER) is not None or x.written(MODE) is not None)]
-        for x in accepted:
-            later = [y.time for y in writes if y.time > x.time]
-            if later and later[0] < x.time + tick + 1e-9:
-                continue                    # overtaken within the scan: nothing to follow
-            value = x.written(HEATER)
-            heater = trace.value_at("HEATER", x.time + tick)
-            if heater != value:
-                return _row(rid, text, f"heater output %QW1 = {value} one scan ({tick:g} s) after %MW2 = {value}",
-                            f"%QW1 = {heater} at t = {x.time + tick:.2f} s after %MW2 = {value} was accepted at "
-                            f"t = {x.time:.2f} s", x.time + tick)
-        return _row(rid, text)
-    return check
+    expected = "a write of %MW2 (holding register 2) that the stand accepts; the heater output %QW1 takes it"
+    accepted = [x for x in r.exchanges if x.written(HEATER) is not None and x.refusal is None]
+    if not accepted:
+        observed, t = _why_not_written(r)
+        return Failure(expected, observed, t)
+    tick = r.session.tick
+    trace = r.session.trace
+    writes = [x for x in r.exchanges if x.refusal is None and
+              (x.written(HEATER) is not None or x.written(MODE) is not None)]
+    for x in accepted:
+        later = [y.time for y in writes if y.time > x.time]
+        if later and later[0] < x.time + tick + 1e-9:
+            continue                    # overtaken within the scan: nothing to follow
+        value = x.written(HEATER)
+        heater = trace.value_at("HEATER", x.time + tick)
+        if heater != value:
+            return Failure(f"heater output %QW1 = {value} one scan ({tick:g} s) after %MW2 = {value}",
+                           f"%QW1 = {heater} at t = {x.time + tick:.2f} s after %MW2 = {value} was accepted at "
+                           f"t = {x.time:.2f} s", x.time + tick)
+    return None
 
 
 def _why_not_written(r: Replay) -> tuple[str, Optional[float]]:
@@ -262,78 +270,107 @@ def _why_not_written(r: Replay) -> tuple[str, Optional[float]]:
     return f"writes to {_registers(targets)} only, never %MW2{hint}", writes[0].time
 
 
-def _not_checked(r: Replay, rid: str, text: str) -> Row:
+def _not_checked(r: Replay) -> Failure:
     """A rule about the writes of %MW2 when there is none: not passed for free."""
     why, t = _why_not_written(r)
-    return _row(rid, text, "writes of %MW2 to check", f"not checked: {why}", t)
+    return Failure("writes of %MW2 to check", f"not checked: {why}", t)
 
 
-def heater_in_range(rid: str, text: str) -> Callable[[Replay], Row]:
-    def check(r: Replay) -> Row:
-        writes = [x for x in r.exchanges if x.written(HEATER) is not None]
-        if not writes:
-            return _not_checked(r, rid, text)
-        bad = [x for x in writes if x.written(HEATER) not in HEATER_RANGE]
-        if not bad:
-            return _row(rid, text)
-        x = bad[0]
-        fate = f"refused with exception {int(x.refusal.code):02d}" if x.refusal is not None else "accepted"
-        return _row(rid, text, f"%MW2 within {HEATER_RANGE.start}..{HEATER_RANGE.stop - 1} (2000 is full power, 40 W)",
-                    f"%MW2 = {x.written(HEATER)} written at t = {x.time:.2f} s, {fate}; {len(bad)} of {len(writes)} "
-                    f"writes of %MW2 out of range", x.time)
-    return check
+def heater_in_range(r: Replay) -> Optional[Failure]:
+    writes = [x for x in r.exchanges if x.written(HEATER) is not None]
+    if not writes:
+        return _not_checked(r)
+    bad = [x for x in writes if x.written(HEATER) not in HEATER_RANGE]
+    if not bad:
+        return None
+    x = bad[0]
+    fate = f"refused with exception {int(x.refusal.code):02d}" if x.refusal is not None else "accepted"
+    return Failure(f"%MW2 within {HEATER_RANGE.start}..{HEATER_RANGE.stop - 1} (2000 is full power, 40 W)",
+                   f"%MW2 = {x.written(HEATER)} written at t = {x.time:.2f} s, {fate}; {len(bad)} of {len(writes)} "
+                   f"writes of %MW2 out of range", x.time)
 
 
-def heater_in_manual(rid: str, text: str) -> Callable[[Replay], Row]:
-    def check(r: Replay) -> Row:
-        if not any(x.written(HEATER) is not None for x in r.exchanges):
-            return _not_checked(r, rid, text)
-        bad = [x for x in r.exchanges if x.written(HEATER) in HEATER_RANGE and x.refusal is not None
-               and (x.written(MODE) if x.written(MODE) is not None else x.mode) != 0]
-        if not bad:
-            return _row(rid, text)
-        x = bad[0]
-        return _row(rid, text, "%MW0 = 0 (manual mode) set before %MW2 is written",
-                    f"%MW2 = {x.written(HEATER)} written at t = {x.time:.2f} s while %MW0 = {x.mode} "
-                    f"({MODE_NAMES.get(x.mode, 'unknown mode')}): refused with exception "
-                    f"{int(x.refusal.code):02d}; {len(bad)} such write{'s' if len(bad) > 1 else ''}", x.time)
-    return check
+def heater_in_manual(r: Replay) -> Optional[Failure]:
+    if not any(x.written(HEATER) is not None for x in r.exchanges):
+        return _not_checked(r)
+    bad = [x for x in r.exchanges if x.written(HEATER) in HEATER_RANGE and x.refusal is not None
+           and (x.written(MODE) if x.written(MODE) is not None else x.mode) != 0]
+    if not bad:
+        return None
+    x = bad[0]
+    return Failure("%MW0 = 0 (manual mode) set before %MW2 is written",
+                   f"%MW2 = {x.written(HEATER)} written at t = {x.time:.2f} s while %MW0 = {x.mode} "
+                   f"({MODE_NAMES.get(x.mode, 'unknown mode')}): refused with exception "
+                   f"{int(x.refusal.code):02d}; {len(bad)} such write{'s' if len(bad) > 1 else ''}", x.time)
 
 
 # --------------------------------------------------------------------------- the tasks
-@dataclass(frozen=True)
-class ScadaTask:
-    task: str
-    title: str
-    checks: tuple[Callable[[Replay], Row], ...]
+def _judged(judges: tuple[tuple[Requirement, Judge], ...]) -> Callable[[Replay, Checks], None]:
+    """The replay scenario: each requirement judged over the replayed exchanges and trace."""
+    def run(r: Replay, c: Checks) -> None:
+        for req, judge in judges:
+            with c.requirement(req) as rid:
+                miss = judge(r)
+                if miss is not None:
+                    c.fail(rid, miss.expected, miss.observed, miss.time)
+    return run
 
 
-_ALL_ACCEPTED = "Every request the client sends is accepted (no Modbus exception); refused ones are counted and named."
+def read_log(sources: list[tuple[str, str]]) -> Traffic:
+    """The submission of a SCADA task: one traffic log (the engine has read it as text)."""
+    if len(sources) != 1:
+        raise PlcLabError(f"grade: a SCADA task grades one traffic log, got {len(sources)}: "
+                          + ", ".join(name for name, _ in sources))
+    name, text = sources[0]
+    return parse_traffic(text, name)
 
-TASKS = {
-    "scada1": ScadaTask("scada1", "Thermostabilization stand, SCADA Task 1: read and display the heat-sink "
-                        "temperature (%MW3).", (
-        reads_register("S1.1", "The client reads the heat-sink temperature %MW3 (holding register 3, offset 3 "
-                       "from start address 0).", TEMPERATURE, "%MW3"),
-        reads_periodically("S1.2", f"It reads %MW3 periodically, at least every {READ_PERIOD_S:g} s, as long as "
-                           "it is connected (the display follows the temperature).", TEMPERATURE, "%MW3"),
-        every_request_accepted("G1", _ALL_ACCEPTED),
+
+def _make_session(sources: list[tuple[str, str]], retain_path: Optional[Path], traffic: Traffic) -> Replay:
+    """The stand as the student's client drove it: the log replayed (the engine's "session":
+    it reads `now` and `trace`)."""
+    return replay(traffic)
+
+
+TRAFFIC_LOG = Submission("traffic log", ".csv", "the traffic log cannot be read:", read_log)
+TRACE_NAMES = ["MODE", "HEATER_CTRL", "TEMPERATURE", "SETPOINT", "HEATER", "FAN", "TEMP_ADC"]
+
+G1 = Requirement("G1", "Every request the client sends is accepted (no Modbus exception); refused ones are "
+                 "counted and named.", SCENARIO)
+S1_1 = Requirement("S1.1", f"The client reads the heat-sink temperature %MW3 (holding register {TEMPERATURE}, "
+                   f"offset {TEMPERATURE} from start address 0).", SCENARIO)
+S1_2 = Requirement("S1.2", f"It reads %MW3 periodically, at least every {READ_PERIOD_S:g} s, as long as it is "
+                   "connected (the display follows the temperature).", SCENARIO)
+S2_1 = Requirement("S2.1", f"The client displays the heater power: it reads %MW2 at least every "
+                   f"{READ_PERIOD_S:g} s.", SCENARIO)
+S2_2 = Requirement("S2.2", "It sets the heater power: the stand accepts a write of %MW2 and the plant's heater "
+                   "follows (heater output %QW1 = the value, one scan later).", SCENARIO)
+S2_3 = Requirement("S2.3", f"Every heater power it writes is within {HEATER_RANGE.start}..{HEATER_RANGE.stop - 1}.",
+                   SCENARIO)
+S2_4 = Requirement("S2.4", "It writes %MW2 in manual mode only (%MW0 = 0): in an automatic mode the regulator "
+                   "owns the heater and the stand refuses the write.", SCENARIO)
+
+JUDGES = {
+    "scada1": ("Thermostabilization stand, SCADA Task 1: read and display the heat-sink temperature (%MW3).", (
+        (S1_1, reads_register(TEMPERATURE, "%MW3")),
+        (S1_2, reads_periodically(TEMPERATURE, "%MW3")),
+        (G1, every_request_accepted),
     )),
-    "scada2": ScadaTask("scada2", "Thermostabilization stand, SCADA Task 2: display and control the heater "
-                        "power (%MW2, 0..2000).", (
-        reads_periodically("S2.1", f"The client displays the heater power: it reads %MW2 at least every "
-                           f"{READ_PERIOD_S:g} s.", HEATER, "%MW2"),
-        sets_heater("S2.2", "It sets the heater power: the stand accepts a write of %MW2 and the plant's heater "
-                    "follows (heater output %QW1 = the value, one scan later)."),
-        heater_in_range("S2.3", "Every heater power it writes is within 0..2000."),
-        heater_in_manual("S2.4", "It writes %MW2 in manual mode only (%MW0 = 0): in an automatic mode the "
-                         "regulator owns the heater and the stand refuses the write."),
-        every_request_accepted("G1", _ALL_ACCEPTED),
+    "scada2": ("Thermostabilization stand, SCADA Task 2: display and control the heater power (%MW2, 0..2000).", (
+        (S2_1, reads_periodically(HEATER, "%MW2")),
+        (S2_2, sets_heater),
+        (S2_3, heater_in_range),
+        (S2_4, heater_in_manual),
+        (G1, every_request_accepted),
     )),
 }
+TASKS = {task: register(RequirementSet(
+    stand=STAND, task=task, title=title, requirements=tuple(req for req, _ in judges),
+    scenarios=(Scenario(SCENARIO, _judged(judges)),), make_session=_make_session,
+    trace_names=lambda s: TRACE_NAMES, submission=TRAFFIC_LOG)) for task, (title, judges) in JUDGES.items()}
 
 
-def scada_task(task: str) -> ScadaTask:
+def scada_task(task: str) -> RequirementSet:
+    """The task's requirement set; an unknown task is one line that says what the SCADA tasks are."""
     found = TASKS.get(task)
     if found is None:
         raise PlcLabError(f"grade: stand '{STAND}' has no task '{task}' (one of {', '.join(TASKS)}: the SCADA "
@@ -343,18 +380,10 @@ def scada_task(task: str) -> ScadaTask:
 
 def grade_traffic(task: str, traffic: Traffic, source: str = "<traffic>",
                   out_dir: Optional[str | Path] = None) -> GradeReport:
-    """Grade a SCADA task from a traffic log; the replay's trace goes to `out_dir`."""
-    spec = scada_task(task)
-    r = replay(traffic)
-    report = GradeReport(STAND, task, spec.title, [source], rows=[check(r) for check in spec.checks])
-    if out_dir is not None:
-        base = Path(out_dir) / f"{STAND}-{task}-{SCENARIO}"
-        files = [base.with_suffix(".csv"), base.with_suffix(".vcd")]
-        names = ["MODE", "HEATER_CTRL", "TEMPERATURE", "SETPOINT", "HEATER", "FAN", "TEMP_ADC"]
-        write_csv(r.session.trace, files[0], names=names)
-        write_vcd(r.session.trace, files[1], names=names)
-        report.traces[SCENARIO] = files
-    return report
+    """Grade a SCADA task from a traffic log in memory (as `grade` grades it from the file);
+    the replay's trace goes to `out_dir`."""
+    scada_task(task)
+    return grade_sources(STAND, task, [(source, traffic.csv_text())], None if out_dir is None else str(out_dir))
 
 
 # --------------------------------------------------------------------------- live
@@ -406,14 +435,14 @@ def grade_live(task: str, host: str, port: int, duration_s: Optional[float], out
     log = fileio.check_output(traffic_log_path(task, out_dir))     # refused before the session, not after
     traffic = record_session(host, port, duration_s, on_listening, stop)
     fileio.write_text(log, traffic.csv_text())
-    return grade_traffic(task, traffic, str(log), out_dir), traffic, log
+    return grade_log(task, log, out_dir), traffic, log          # the file as it will be graded again
 
 
 def grade_log(task: str, path: str | Path, out_dir: Optional[str | Path] = None) -> GradeReport:
     """`plclab grade thermo TASK --traffic FILE`: grade a recorded traffic log."""
     scada_task(task)
-    return grade_traffic(task, read_traffic(path), str(path), out_dir)
+    return grade(STAND, task, [str(path)], None if out_dir is None else str(out_dir))
 
 
-__all__ = ["READ_PERIOD_S", "TASKS", "Replay", "grade_live", "grade_log", "grade_traffic", "record_session",
-           "replay", "scada_task", "traffic_log_path"]
+__all__ = ["READ_PERIOD_S", "TASKS", "TRAFFIC_LOG", "Replay", "grade_live", "grade_log", "grade_traffic",
+           "read_log", "record_session", "replay", "scada_task", "traffic_log_path"]

@@ -146,6 +146,8 @@ class TrafficRecorder:
 
 def parse_traffic(text: str, name: str = "<traffic>") -> Traffic:
     """Read a traffic log; a bad line is one error `name:line: error: ...`."""
+    if "\x00" in text or "\ufffd" in text:      # bytes that are no UTF-8 text, decoded with replacement
+        raise PlcLabError(f"{name}:1: error: not a text file (a plclab traffic log is UTF-8 CSV)")
     lines = text.splitlines()
     duration: Optional[float] = None
     body_start = 0
@@ -187,11 +189,7 @@ def read_traffic(path: str | Path) -> Traffic:
         data = Path(path).read_bytes()
     except OSError as e:
         raise PlcLabError(f"{path}: cannot read the traffic log: {e.strerror}") from None
-    try:
-        text = data.decode("utf-8")
-    except UnicodeDecodeError:
-        raise PlcLabError(f"{path}:1: error: not a text file (a plclab traffic log is UTF-8 CSV)") from None
-    return parse_traffic(text, str(path))
+    return parse_traffic(data.decode("utf-8", errors="replace"), str(path))
 
 
 def _number(text: str, name: str, line: int, what: str) -> float:
