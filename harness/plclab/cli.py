@@ -247,7 +247,8 @@ def _cmd_grade(args: argparse.Namespace) -> int:
 
 
 def _cmd_grade_scada(args: argparse.Namespace) -> int:
-    from plclab.grader.thermo import grade_live, grade_log, scada_task
+    from plclab.grader import grade
+    from plclab.grader.thermo import grade_live, scada_task
 
     scada_task(args.task)
     if args.files:
@@ -257,7 +258,7 @@ def _cmd_grade_scada(args: argparse.Namespace) -> int:
     if args.traffic:
         if args.listen or args.duration is not None:
             raise PlcLabError("grade: --traffic grades a recording, --listen/--duration make one: give one or the other")
-        report = grade_log(args.task, args.traffic, args.out)
+        report = grade(args.stand, args.task, [args.traffic], out_dir=args.out)
     else:
         host, port = _host_port(args.listen or "127.0.0.1:5020", "--listen")
         until = f"grading after {args.duration:g} s or Ctrl-C" if args.duration else "Ctrl-C ends it and grades"
@@ -280,7 +281,7 @@ def _cmd_grade_class(args: argparse.Namespace) -> int:
     report = grade_class(args.stand, args.task, args.folder, args.out, jobs=args.jobs,
                          time_limit_s=args.time_limit, on_result=progress)
     for path in report.ignored:
-        print(f"ignored {path}: not a .st file or a folder")
+        print(f"ignored {path}: not a {report.suffix} file or a folder")
     counts = {s: sum(r.status == s for r in report.results) for s in ("PASS", "FAIL", "ERROR")}
     print(f"{len(report.results)} submissions: {counts['PASS']} pass, {counts['FAIL']} fail, "
           f"{counts['ERROR']} not graded")
@@ -372,11 +373,13 @@ def build_parser() -> argparse.ArgumentParser:
     c.add_argument("--traffic", metavar="FILE.csv", help="thermo SCADA tasks: grade a recorded traffic log")
     c.set_defaults(func=_cmd_grade)
 
-    c = sub.add_parser("grade-class", help="grade a folder of submissions (a .st file or a folder per student) "
-                                           "in parallel: results.csv, junit.xml, report.html")
+    c = sub.add_parser("grade-class", help="grade a folder of submissions (a .st file or a folder per student; "
+                                           "thermo: a traffic log .csv) in parallel: results.csv, junit.xml, "
+                                           "report.html")
     c.add_argument("stand", choices=stands)
-    c.add_argument("task", metavar="TASK", help="task1, task2 or task3")
-    c.add_argument("folder", metavar="DIR", help="one .st file or one folder of .st files per student")
+    c.add_argument("task", metavar="TASK", help="task1, task2 or task3; thermo: scada1 or scada2")
+    c.add_argument("folder", metavar="DIR", help="one .st file or one folder of .st files per student "
+                                                 "(thermo: one traffic log .csv, or a folder holding it)")
     c.add_argument("--jobs", type=int, metavar="N", help="submissions graded at once (default: CPU count)")
     c.add_argument("--out", default="out/grade-class", metavar="DIR",
                    help="results.csv, junit.xml, report.html and traces/<student>/ (default out/grade-class)")

@@ -6,6 +6,7 @@ from __future__ import annotations
 
 import csv
 import io
+import multiprocessing
 import shutil
 from urllib.parse import unquote
 import sys
@@ -21,7 +22,7 @@ pytest.register_assert_rewrite("grader_helpers")      # its asserts report like 
 from plclab.cli import main  # noqa: E402
 from plclab.grader import grade  # noqa: E402
 from plclab.grader.classroom import (find_submissions, grade_class, junit_xml, report_html,  # noqa: E402
-                                     results_csv, write_class_outputs)
+                                     results_csv, row_message, write_class_outputs)
 from plclab.stands import get_stand, sources  # noqa: E402
 from classroom_faults import grade_or_misbehave  # noqa: E402
 from grader_helpers import FIXTURES_DIR, fixtures  # noqa: E402
@@ -87,6 +88,56 @@ def test_class_gives_the_verdicts_of_grading_one_by_one(mp9c_class, tmp_path):
                 assert f"scenario '{row.scenario}'" in csv_row["message"]
             else:
                 assert csv_row["message"] == ""
+
+
+ROBOT_CLASSES = [(stand, task) for stand in ("mp9c", "tur10") for task in sorted({t for _, t, _ in fixtures(stand)})]
+
+
+@pytest.mark.parametrize("stand, task", ROBOT_CLASSES, ids=[f"{s}-{t}" for s, t in ROBOT_CLASSES])
+def test_every_tasks_fixtures_as_a_class_get_the_verdicts_of_grading_one_by_one(stand, task, tmp_path):
+    """Every wrong-solution fixture of every task of both robots (whatever fixtures/<stand>/
+    holds: their first lines name the task), graded as a class with 2 jobs, gets exactly the
+    rows `plclab grade` gives it alone, and fails the row its header names."""
+    folder = tmp_path / "class"
+    folder.mkdir()
+    mine = [(name, rid) for name, t, rid in fixtures(stand) if t == task]
+    for name, _ in mine:
+        shutil.copy(FIXTURES_DIR / stand / name, folder / name)
+    out = tmp_path / "out"
+    report = grade_class(stand, task, folder, out, jobs=2)
+    write_class_outputs(report, out)
+    assert_class_is_one_by_one(stand, task, report, read_csv(out / "results.csv"), tmp_path / "alone")
+    rows = {(r["student"], r["requirement"]): r["result"] for r in read_csv(out / "results.csv")}
+    for name, rid in mine:
+        assert rows[(Path(name).stem, rid)] == "FAIL", (name, rid)
+    assert_valid_junit(out / "junit.xml")
+
+
+def assert_class_is_one_by_one(stand: str, task: str, report, rows: list[dict[str, str]], alone_dir: Path) -> None:
+    """Each student's results.csv rows are the rows of `grade` on their files alone: same
+    requirements, same PASS/FAIL/ERROR, the same expected/observed/scenario in the message.
+    (The gradings alone are independent `grade` calls, two at a time: the machine has 2 cores.)"""
+    assert report.complete
+    graded = [r for r in report.results if r.submission.files]
+    with multiprocessing.get_context("fork").Pool(2) as pool:
+        alones = pool.starmap(grade, [(stand, task, [str(f) for f in r.submission.files], str(alone_dir / r.student))
+                                      for r in graded])
+    by_student = {r.student: alone for r, alone in zip(graded, alones)}
+    for result in report.results:
+        mine = [r for r in rows if r["student"] == result.student]
+        if not result.submission.files:            # an empty folder: nothing `plclab grade` could be given
+            assert result.status == "FAIL"
+            assert all(r["result"] == "FAIL" and r["message"].endswith(" file in this folder") for r in mine), mine
+            continue
+        alone = by_student[result.student]
+        assert result.status == ("PASS" if alone.passed else "FAIL"), alone.text()
+        if alone.errors:
+            why = f"not checked: {alone.unreadable} " + "; ".join(alone.errors)
+            assert [(r["result"], r["message"]) for r in mine] == [("FAIL", why)] * len(report.requirements)
+            continue
+        assert [(r["requirement"], r["result"]) for r in mine] == [(row.id, row.result) for row in alone.rows]
+        for csv_row, row in zip(mine, alone.rows):
+            assert csv_row["message"] == row_message(row)
 
 
 def test_each_fixture_fails_the_row_its_header_names_in_the_class(mp9c_class):
@@ -273,6 +324,105 @@ def test_html_escapes_names_and_links_survive_odd_characters(tmp_path):
     assert (out / unquote(href)) == trace
 
 
+# --------------------------------------------------------------------------- the thermo SCADA tasks
+SCADA_TASKS = ("scada1", "scada2")
+
+
+@pytest.fixture(scope="module", params=SCADA_TASKS)
+def scada_class(request, tmp_path_factory):
+    """A class of SCADA clients' traffic logs (tests/grader/fixtures/thermo/TASK: a log per
+    student, or a folder holding it), plus a corrupt file (zed), a log with a garbled line
+    (yan), a folder of two logs (xia), a folder without a log (wes) and a note that is no
+    submission; graded with 2 jobs."""
+    task = request.param
+    root = tmp_path_factory.mktemp(f"class-{task}")
+    folder = root / "logs"
+    shutil.copytree(FIXTURES_DIR / "thermo" / task, folder)
+    (folder / "zed.csv").write_bytes(b"\x00\xffPK\x03\x04 not text\n")
+    (folder / "yan.csv").write_text("time_s,unit,request,response,what\n0.5,1,0300000007,,\n1.0,1,zz,,\n",
+                                    encoding="utf-8")
+    (folder / "xia").mkdir()
+    for name in ("monday.csv", "tuesday.csv"):
+        shutil.copy(FIXTURES_DIR / "thermo" / task / "ann.csv", folder / "xia" / name)
+    (folder / "wes").mkdir()
+    (folder / "wes" / "notes.txt").write_text("my client config\n", encoding="utf-8")
+    (folder / "grading-notes.txt").write_text("not a submission\n", encoding="utf-8")
+    out = root / "out"
+    report = grade_class("thermo", task, folder, out, jobs=2)
+    write_class_outputs(report, out)
+    return task, folder, out, report
+
+
+def test_a_class_of_traffic_logs_gets_the_verdicts_of_grading_each_log_alone(scada_class, tmp_path, capsys):
+    task, folder, out, report = scada_class
+    rows = read_csv(out / "results.csv")
+    assert_class_is_one_by_one("thermo", task, report, rows, tmp_path)
+    for result in report.results:                     # and `plclab grade thermo TASK --traffic LOG` agrees
+        if len(result.submission.files) == 1:
+            code = main(["grade", "thermo", task, "--traffic", str(result.submission.files[0]),
+                         "--out", str(tmp_path / "cli" / result.student)])
+            assert code == {"PASS": 0, "FAIL": 1}[result.status], (result.student, capsys.readouterr().out)
+    assert [p.name for p in report.ignored] == ["grading-notes.txt"]
+    assert_valid_junit(out / "junit.xml")
+
+
+def test_each_log_fails_exactly_the_rows_of_its_mistake(scada_class):
+    task, _, out, report = scada_class
+    from make_scada_fixtures import FIXTURES
+
+    rows = read_csv(out / "results.csv")
+    expected = {Path(f.path).parts[1].removesuffix(".csv"): f.fails for f in FIXTURES if f.task == task}
+    assert len(expected) >= 5 and any(not fails for fails in expected.values())
+    for student, fails in expected.items():
+        mine = [r for r in rows if r["student"] == student]
+        assert [r["requirement"] for r in mine if r["result"] == "FAIL"] == list(fails), (student, mine)
+        assert all(r["message"].startswith("expected: ") and "observed: " in r["message"] for r in mine
+                   if r["result"] == "FAIL")
+        assert {r["result"] for r in mine} <= {"PASS", "FAIL"}
+    traces = out / "traces" / "ann"
+    assert sorted(p.name for p in traces.iterdir()) == [f"thermo-{task}-replay.csv", f"thermo-{task}-replay.vcd"]
+
+
+def test_a_corrupt_log_costs_only_its_student_with_one_clear_message(scada_class):
+    task, folder, out, report = scada_class
+    rows = read_csv(out / "results.csv")
+    status = {r.student: r.status for r in report.results}
+    assert status["ann"] == "PASS" and report.complete      # the others were graded
+    ids = [rid for rid, _ in report.requirements]
+    why = {
+        "zed": f"not checked: the traffic log cannot be read: {folder / 'zed.csv'}:1: error: not a text file "
+               "(a plclab traffic log is UTF-8 CSV)",
+        "yan": f"not checked: the traffic log cannot be read: {folder / 'yan.csv'}:3: error: unit must be a whole "
+               "number and request/response hexadecimal PDUs",
+        "xia": f"not checked: the traffic log cannot be read: grade: a SCADA task grades one traffic log, got 2: "
+               f"{folder / 'xia' / 'monday.csv'}, {folder / 'xia' / 'tuesday.csv'}",
+        "wes": f"not checked: {folder / 'wes'}: no .csv file in this folder",
+    }
+    for student, message in why.items():
+        assert status[student] == "FAIL"
+        assert [(r["requirement"], r["result"], r["message"]) for r in rows if r["student"] == student] == \
+               [(rid, "FAIL", message) for rid in ids]
+    page = lhtml.fromstring((out / "report.html").read_text(encoding="utf-8"))
+    (cell,) = page.xpath("//tr[@id='yan']/td[@colspan]")      # one cell says it for the whole row
+    assert "the traffic log cannot be read:" in cell.text_content() and ":3: error: unit" in cell.text_content()
+
+
+def test_cli_grades_a_class_of_traffic_logs(tmp_path, capsys):
+    folder = tmp_path / "logs"
+    shutil.copytree(FIXTURES_DIR / "thermo" / "scada2", folder)
+    (folder / "zed.csv").write_text("hello\n", encoding="utf-8")
+    out = tmp_path / "out"
+    assert main(["grade-class", "thermo", "scada2", str(folder), "--out", str(out), "--jobs", "2"]) == 0
+    printed = capsys.readouterr().out.splitlines()
+    assert f"[6/6] " in "\n".join(printed)
+    assert "ben: FAIL   3 of 5 requirements passed" in [line.split("] ", 1)[1] for line in printed if "] " in line]
+    assert (f"zed: FAIL   the traffic log cannot be read: {folder / 'zed.csv'}:1: error: not a plclab traffic "
+            "log: the header must be time_s,unit,request,response,what") in [line.split("] ", 1)[1]
+                                                                          for line in printed if "] " in line]
+    assert "6 submissions: 1 pass, 5 fail, 0 not graded" in printed
+    assert {r["student"] for r in read_csv(out / "results.csv")} == {"ann", "ben", "cat", "dan", "eli", "zed"}
+
+
 # --------------------------------------------------------------------------- crash, hang, bug
 def test_a_crash_a_hang_and_a_grader_bug_stop_nobody_else(tmp_path):
     folder = tmp_path / "class"
@@ -340,9 +490,9 @@ def test_cli_grades_the_folder_prints_progress_and_writes_the_files(tmp_path, ca
     progress = [line for line in printed if line.startswith("[")]
     assert [line[:6] for line in progress] == ["[1/2] ", "[2/2] "]
     assert sorted(line[6:] for line in progress) == [
-        f"yan: FAIL   does not compile: {folder / 'yan.st'}:1:1: error: no CONFIGURATION: "
+        f"yan: FAIL   the program does not compile: {folder / 'yan.st'}:1:1: error: no CONFIGURATION: "
         "hand in the complete program (the bundle you were given, with its CONFIGURATION Config0)",
-        f"zoe: FAIL   does not compile: {folder / 'zoe' / 'main.st'}:3:6: error: missing "
+        f"zoe: FAIL   the program does not compile: {folder / 'zoe' / 'main.st'}:3:6: error: missing "
         "expression after ':=' (before ';')"], printed
     assert "2 submissions: 0 pass, 2 fail, 0 not graded" in printed
     assert {p.name for p in out.iterdir()} >= {"results.csv", "junit.xml", "report.html"}
@@ -367,8 +517,7 @@ def test_cli_refuses_to_replace_what_is_not_a_regular_file(tmp_path, capsys):
 @pytest.mark.parametrize("argv, message", [
     (["mp9c", "task9"], "grade: stand 'mp9c' has no task 'task9' (one of task1, task2, task3)"),
     (["mp9c", "task1", "--jobs", "0"], "grade-class: --jobs must be at least 1 (got 0)"),
-    (["thermo", "scada1"], "grade-class: the thermo stand's tasks are graded from each student's SCADA client "
-                           "traffic: plclab grade thermo scada1|scada2 --traffic LOG.csv"),
+    (["thermo", "task1"], "grade: stand 'thermo' has no task 'task1' (one of scada1, scada2)"),
 ])
 def test_cli_bad_arguments_are_one_line(argv, message, tmp_path, capsys):
     (tmp_path / "eve.st").write_text(BROKEN, encoding="utf-8")

@@ -1,7 +1,9 @@
 """`grade-class STAND TASK DIR`: grade a whole class, one submission per student, in parallel.
 
 Each `.st` file of DIR (student = the file name without `.st`) or each folder of DIR (student =
-the folder name; every `.st` file under it is one program) is one submission. Each is graded by
+the folder name; every `.st` file under it is one program) is one submission; for the thermo
+SCADA tasks, each traffic log `.csv` (or a folder holding one) is (the task's
+`RequirementSet.submission` says which files). Each is graded by
 `grade()` -- exactly what `plclab grade` does for one student -- in a process of its own, so a
 submission that crashes the grader or runs past the time limit costs that student a "not
 graded" row and nothing else. The results go to three files an instructor and their tools read:
@@ -37,8 +39,8 @@ from plclab import fileio
 from plclab.errors import PlcLabError
 
 from .engine import grade, grade_sources, requirement_table
+from .registry import ST_PROGRAM, Submission as SubmissionKind, requirement_set
 from .report import GradeReport, Row
-from .thermo import STAND as SCADA_STAND, TASKS as SCADA_TASKS
 
 DEFAULT_TIME_LIMIT_S = 300.0        # one submission; normal grading takes seconds
 OUTPUT_FILES = ("results.csv", "junit.xml", "report.html")
@@ -79,7 +81,8 @@ class StudentResult:
         if self.report is None:
             return f"ERROR  {self.not_graded}"
         if self.report.errors:
-            return f"FAIL   does not compile: {self.report.errors[0]}"
+            what = self.report.unreadable if self.submission.files else "nothing to grade:"
+            return f"FAIL   {what} {self.report.errors[0]}"
         n_pass = sum(r.passed for r in self.report.rows)
         return f"{self.status:<5}  {n_pass} of {len(self.report.rows)} requirements passed"
 
@@ -93,6 +96,7 @@ class ClassReport:
     results: list[StudentResult]                # sorted by student
     ignored: list[Path] = field(default_factory=list)   # entries of DIR that are no submission
     started: str = ""                           # ISO time of the run (UTC, no zone suffix)
+    suffix: str = ".st"                         # the files a submission is made of (thermo: .csv)
 
     @property
     def complete(self) -> bool:
@@ -101,15 +105,17 @@ class ClassReport:
 
 
 # ---------------------------------------------------------------------------- submissions
-def find_submissions(folder: str | Path, exclude: Sequence[str | Path] = ()) -> tuple[list[Submission], list[Path]]:
-    """The submissions in `folder` and the entries that are none (other files).
+def find_submissions(folder: str | Path, exclude: Sequence[str | Path] = (),
+                     kind: SubmissionKind = ST_PROGRAM) -> tuple[list[Submission], list[Path]]:
+    """The submissions in `folder` and the entries that are none (other files): a file with
+    the `kind`'s suffix, or a folder (all such files under it: one submission).
 
     Hidden entries (a leading dot) are skipped silently; so is any folder that holds one of
     `exclude` (the output folder, when an instructor puts it inside the class folder).
     """
     root = Path(folder)
     if not root.is_dir():
-        raise PlcLabError(f"grade-class: {folder}: not a folder (give the folder holding one .st file "
+        raise PlcLabError(f"grade-class: {folder}: not a folder (give the folder holding one {kind.suffix} file "
                           f"or one folder per student)")
     excluded = [Path(e).resolve() for e in exclude]
     submissions: dict[str, Submission] = {}
@@ -121,11 +127,11 @@ def find_submissions(folder: str | Path, exclude: Sequence[str | Path] = ()) -> 
             here = entry.resolve()
             if any(e == here or here in e.parents for e in excluded):
                 continue
-            files = tuple(sorted((p for p in entry.rglob("*") if _is_st(p)
+            files = tuple(sorted((p for p in entry.rglob("*") if _is_a(p, kind)
                                   and not any(part.startswith(".") for part in p.relative_to(entry).parts)),
                                  key=lambda p: p.relative_to(entry).as_posix()))
             student = entry.name
-        elif _is_st(entry):
+        elif _is_a(entry, kind):
             files, student = (entry,), entry.stem
         else:
             ignored.append(entry)
@@ -135,13 +141,13 @@ def find_submissions(folder: str | Path, exclude: Sequence[str | Path] = ()) -> 
                               f"'{student}': rename one")
         submissions[student] = Submission(student, files, entry)
     if not submissions:
-        raise PlcLabError(f"grade-class: no submission in {folder} (one .st file or one folder of .st "
-                          f"files per student)")
+        raise PlcLabError(f"grade-class: no submission in {folder} (one {kind.suffix} file or one folder of "
+                          f"{kind.suffix} files per student)")
     return list(submissions.values()), ignored
 
 
-def _is_st(p: Path) -> bool:
-    return p.suffix.lower() == ".st" and p.is_file()
+def _is_a(p: Path, kind: SubmissionKind) -> bool:
+    return p.suffix.lower() == kind.suffix and p.is_file()
 
 
 # ---------------------------------------------------------------------------- grading
@@ -156,23 +162,21 @@ def grade_class(stand: str, task: str, folder: str | Path, out_dir: str | Path,
 
     Writes nothing but the traces; `write_class_outputs` writes the three result files.
     """
-    if stand == SCADA_STAND:
-        raise PlcLabError(f"grade-class: the {SCADA_STAND} stand's tasks are graded from each student's SCADA "
-                          f"client traffic: plclab grade {SCADA_STAND} {'|'.join(SCADA_TASKS)} --traffic LOG.csv")
     requirements = requirement_table(stand, task)         # unknown stand / task: one line, before any work
+    kind = requirement_set(stand, task).submission
     if jobs is not None and jobs < 1:
         raise PlcLabError(f"grade-class: --jobs must be at least 1 (got {jobs})")
     if not time_limit_s > 0:
         raise PlcLabError(f"grade-class: the time limit must be more than 0 s (got {time_limit_s:g})")
     check_class_outputs(out_dir)                          # a bad --out refused before the work
     out = Path(out_dir).resolve()
-    submissions, ignored = find_submissions(folder, exclude=[out])
+    submissions, ignored = find_submissions(folder, exclude=[out], kind=kind)
     started = datetime.now(timezone.utc).replace(tzinfo=None, microsecond=0).isoformat()
     title = grade_sources(stand, task, [("warm-up.st", "")]).title   # also builds the parser once, before forking
     results = _run_parallel(stand, task, title, submissions, out, jobs or os.cpu_count() or 1, time_limit_s,
-                            on_result, grade_one, _context(start_method))
+                            on_result, grade_one, _context(start_method), kind)
     results.sort(key=lambda r: r.student)
-    return ClassReport(stand, task, title, requirements, results, ignored, started)
+    return ClassReport(stand, task, title, requirements, results, ignored, started, kind.suffix)
 
 
 def _grade_in_child(conn, grade_one: GradeOne, stand: str, task: str, files: list[str],
@@ -210,7 +214,8 @@ class _Running:
 
 
 def _run_parallel(stand: str, task: str, title: str, submissions: list[Submission], out: Path, jobs: int,
-                  time_limit_s: float, on_result, grade_one: GradeOne, ctx) -> list[StudentResult]:
+                  time_limit_s: float, on_result, grade_one: GradeOne, ctx,
+                  handed_in: SubmissionKind = ST_PROGRAM) -> list[StudentResult]:
     pending = deque(submissions)
     running: list[_Running] = []
     results: list[StudentResult] = []
@@ -233,7 +238,8 @@ def _run_parallel(stand: str, task: str, title: str, submissions: list[Submissio
             while pending and len(running) < jobs:
                 sub = pending.popleft()
                 if not sub.files:                    # nothing to run: a verdict without a process
-                    empty = GradeReport(stand, task, title, [], errors=[f"{sub.source}: no .st file in this folder"])
+                    empty = GradeReport(stand, task, title, [], noun=handed_in.noun, unreadable=handed_in.unreadable,
+                                        errors=[f"{sub.source}: no {handed_in.suffix} file in this folder"])
                     running.append(_Running(sub, None, None, time.monotonic()))
                     finish(running[-1], empty, "")
                     continue
@@ -310,7 +316,7 @@ def cells(result: StudentResult, requirements: Sequence[tuple[str, str]]) -> lis
     if report is None:
         return [Cell(rid, "ERROR", result.not_graded) for rid, _ in requirements]
     if report.errors:
-        why = "not checked: " + ("" if result.submission.files == () else "the program does not compile: ") \
+        why = "not checked: " + ("" if result.submission.files == () else f"{report.unreadable} ") \
             + "; ".join(report.errors)
         return [Cell(rid, "FAIL", why) for rid, _ in requirements]
     by_id = {r.id: r for r in report.rows}
@@ -419,8 +425,11 @@ def report_html(report: ClassReport, out_dir: str | Path) -> str:
               f'<td class="{r.status} verdict">{r.status} ({n_pass}/{len(row_cells)})</td>']
         if r.report is None or r.report.errors:      # one message for the whole row
             cls = "ERROR" if r.report is None else "FAIL"
-            what = "does not compile:" if r.submission.files else "nothing to grade:"
-            text = r.not_graded if r.report is None else what + "\n" + "\n".join(r.report.errors)
+            if r.report is None:
+                text = r.not_graded
+            else:
+                what = r.report.unreadable if r.submission.files else "nothing to grade:"
+                text = what + "\n" + "\n".join(r.report.errors)
             tr.append(f'<td class="{cls}" colspan="{len(ids)}"><pre>{e(text)}</pre></td>')
         else:
             for c in row_cells:
