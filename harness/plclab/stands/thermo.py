@@ -13,7 +13,7 @@ from __future__ import annotations
 
 import math
 from dataclasses import dataclass
-from typing import Callable, Iterable, Optional
+from typing import Callable, Iterable, Iterator, Optional
 
 from plclab.modbus.maps import TwidoMap
 from plclab.modbus.profiles import AUTO1, AUTO2, MANUAL, THERMO_MODES, THERMO_RULES, twido_profile, valid_range
@@ -345,21 +345,30 @@ def auto1_step(s: Session) -> None:
     expect(s, r.settle is not None, f"setpoint step 50 -> 40 C: {r.text()}")
 
 
+def disturbance_responses(s: Session, target: float, actuator: str,
+                          values: dict[bool, int]) -> Iterator[tuple[str, Response]]:
+    """Switch the disturbance on, then off, 600 s each: after each, the disturbing `actuator`
+    must hold its value for the switch (`values`); yields ('on' / 'off', the response)."""
+    for on in (True, False):
+        switch = "on" if on else "off"
+        disturbance(s, on)
+        start = s.now
+        s.run(600.0)
+        r = response(s, start, target)
+        s.log(f"{actuator.lower()} disturbance {switch}: {r.text()}")
+        expect(s, s.value(actuator) == values[on], f"{actuator.lower()} {s.value(actuator)} with the switch {switch}")
+        yield switch, r
+
+
 def auto1_disturbance(s: Session) -> None:
     """Automatic-1 steady at 40 C; the fan disturbance is switched on (fan 500): the deviation
     stays under 1.5 C and the temperature returns within +/-1 C; switched off: the same."""
     settle_at(s, AUTO1, 40)
-    for on in (True, False):
-        disturbance(s, on)
-        start = s.now
-        s.run(600.0)
-        r = response(s, start, 40)
-        s.log(f"fan disturbance {'on' if on else 'off'}: {r.text()}")
-        expect(s, s.value("FAN") == (500 if on else 0), f"fan {s.value('FAN')} with the switch {'on' if on else 'off'}")
+    for switch, r in disturbance_responses(s, 40, "FAN", {True: 500, False: 0}):
         expect(s, r.deviation < DISTURBANCE_DEVIATION_C,
-               f"fan disturbance {'on' if on else 'off'}: deviation {r.deviation:.1f} C, the goal is under "
+               f"fan disturbance {switch}: deviation {r.deviation:.1f} C, the goal is under "
                f"{DISTURBANCE_DEVIATION_C:g} C")
-        expect(s, r.settle is not None, f"fan disturbance {'on' if on else 'off'}: {r.text()}")
+        expect(s, r.settle is not None, f"fan disturbance {switch}: {r.text()}")
 
 
 def auto2_disturbance(s: Session) -> None:
@@ -368,16 +377,9 @@ def auto2_disturbance(s: Session) -> None:
     300 s; switched off: back again."""
     settle_at(s, AUTO1, 45, hold=30.0)
     settle_at(s, AUTO2, 45, hold=120.0)
-    for on in (True, False):
-        disturbance(s, on)
-        start = s.now
-        s.run(600.0)
-        r = response(s, start, 45)
-        s.log(f"heater disturbance {'on' if on else 'off'}: {r.text()}")
-        expect(s, s.value("HEATER") == (2000 if on else 1000),
-               f"heater {s.value('HEATER')} with the switch {'on' if on else 'off'}")
+    for switch, r in disturbance_responses(s, 45, "HEATER", {True: 2000, False: 1000}):
         expect(s, r.settle is not None and r.settle < AUTO2_RECOVERY_S,
-               f"heater disturbance {'on' if on else 'off'}: {r.text()}; the goal is back within +/-1 C in "
+               f"heater disturbance {switch}: {r.text()}; the goal is back within +/-1 C in "
                f"under {AUTO2_RECOVERY_S:g} s")
 
 
