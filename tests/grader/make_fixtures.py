@@ -35,6 +35,41 @@ class Fixture:
     stand: str = "mp9c"                  # written to fixtures/<stand>/
 
 
+# ---------------------------------------------------------------------------- shared mistakes
+# FB_FrameSequencer is the references' one automatic-mode block (continuous and step-by-step
+# subroutines in one CASE); each edit below is one mistake in it, made on either stand.
+
+STEP_KEEPS_1S = (
+    ("            Pause(Start := TRUE, Duration := Cp.Frames[Ptr].Pause, Cancel := FALSE);",
+     "            Pause(Start := TRUE, Duration := SEL(G := StepMode, IN0 := Cp.Frames[Ptr].Pause, IN1 := T#1s),\n"
+     "                  Cancel := FALSE);"),
+    ("            Pause(Start := FALSE, Duration := Cp.Frames[Ptr].Pause, Cancel := FALSE);",
+     "            Pause(Start := FALSE, Duration := SEL(G := StepMode, IN0 := Cp.Frames[Ptr].Pause, IN1 := T#1s),\n"
+     "                  Cancel := FALSE);"),
+)
+NEXT_FRAMES_PAUSE = (
+    ("            Pause(Start := TRUE, Duration := Cp.Frames[Ptr].Pause, Cancel := FALSE);",
+     "            Pause(Start := TRUE, Duration := Cp.Frames[Ptr MOD Cp.Count + 1].Pause, Cancel := FALSE);"),
+    ("            Pause(Start := FALSE, Duration := Cp.Frames[Ptr].Pause, Cancel := FALSE);",
+     "            Pause(Start := FALSE, Duration := Cp.Frames[Ptr MOD Cp.Count + 1].Pause, Cancel := FALSE);"),
+)
+WATCHDOG_WHOLE_RUN = (("Watchdog(Watch := InFrame AND NOT StartFrame,", "Watchdog(Watch := Running,"),)
+STEP_WRAPS = (("                IF Ptr >= Cp.Count AND NOT RunEnable THEN",
+               "                IF Ptr >= Cp.Count AND NOT RunEnable AND NOT StepMode THEN"),)
+ENABLE_AT_REACHED = (
+    ("    Watchdog : FB_FrameWatchdog;\nEND_VAR",
+     "    Watchdog : FB_FrameWatchdog;\n    StopAtEnd : BOOL;           (* the last frame reached with RunEnable 0 *)\n"
+     "END_VAR"),
+    ("        ELSIF FrameDone THEN\n            State := IN_PAUSE;\n",
+     "        ELSIF FrameDone THEN\n            State := IN_PAUSE;\n"
+     "            StopAtEnd := Ptr >= Cp.Count AND NOT RunEnable;\n"),
+    ("                IF Ptr >= Cp.Count AND NOT RunEnable THEN", "                IF StopAtEnd THEN"),
+)
+
+HL1_LATCHED = (("ELSE\n    Q := Empty;\nEND_IF;", "ELSIF Empty THEN\n    Q := TRUE;                  (* ON while empty *)\nEND_IF;"),)
+RECORD_ON_PRESS = (("Short := WasHeld AND NOT Held AND NOT LongGiven;", "Short := Press;"),)
+
+
 MANUAL_TASK1 = """    L1 := SA2;
     L2 := NOT SA5;
     L3 := SA5;
@@ -90,6 +125,15 @@ FIXTURES = (
              ("Robot(RecordPause := SEL(G := I07, IN0 := PAUSE_SHORT, IN1 := PAUSE_LONG),",
               "Pause := SEL(G := I07, IN0 := PAUSE_SHORT, IN1 := PAUSE_LONG);\n"
               "Robot(RecordPause := T#1s,"))),
+    Fixture("task2_step_pause_ignored", "task2", "T2.2",
+            "the recorded pause is used in continuous mode only: step mode (SA6 = 1) keeps the starting "
+            "program's fixed 1 s.", "task2", STEP_KEEPS_1S),
+    Fixture("task2_pause_off_by_one", "task2", "T2.2",
+            "off by one: after each frame the pause recorded with the next frame (Ptr MOD Count + 1).",
+            "task2", NEXT_FRAMES_PAUSE),
+    Fixture("task2_watchdog_whole_run", "task2", "G10",
+            "the frame watchdog times the whole run (Watch := Running), not each frame: normal playback "
+            "stops with a fault 10 s after the start.", "task2", WATCHDOG_WHOLE_RUN),
     Fixture("task2_short_pause_1s", "task2", "T2.1",
             "the short pause kept the baseline value: I0.7 = 0 gives 1 s instead of 0.5 s.", "task2",
             (("PAUSE_SHORT : TIME := T#500ms;", "PAUSE_SHORT : TIME := T#1s;"),)),
@@ -108,6 +152,17 @@ FIXTURES = (
              ("Robot(RecordPause := PAUSE,\n      RunEnable := I07 ",
               "IF SB1 AND NOT Sb1Before THEN\n    Enable := I07;\nEND_IF;\nSb1Before := SB1;\n"
               "Robot(RecordPause := PAUSE,\n      RunEnable := Enable "))),
+    Fixture("task3_step_wraps_with_i07_0", "task3", "T3.5",
+            "the enable only stops continuous mode: in step mode, after the last frame with I0.7 = 0, a "
+            "press starts frame 1 again.", "task3", STEP_WRAPS),
+    Fixture("task3_enable_read_when_reached", "task3", "T3.7",
+            "I0.7 read when the last frame is reached instead of when its pause is over: switched to 0 "
+            "inside that pause, execution goes on to frame 1.", "task3", ENABLE_AT_REACHED),
+    Fixture("task3_hl1_never_off", "task3", "G3",
+            "HL1 switched ON while the program is empty but never switched OFF again (no ELSE branch).",
+            "task3", HL1_LATCHED),
+    Fixture("task2_record_on_press", "task2", "G3",
+            "a frame is recorded on the (debounced) press of SB1, not at its release.", "task2", RECORD_ON_PRESS),
     Fixture("task3_stops_at_once", "task3", "T3.4",
             "I0.7 = 0 stops execution at once instead of after the last frame and its pause.", "task3",
             (("ELSIF Fault THEN\n    State := STOPPED;",
@@ -197,6 +252,12 @@ TUR10_FIXTURES = (
            "    Robot : FB_Tur10Robot;\n    Pause : TIME;                   (* chosen by I1.5 *)\nEND_VAR"),
           ("Robot(RecordPause := SEL(G := I15, IN0 := PAUSE_SHORT, IN1 := PAUSE_LONG),",
            "Pause := SEL(G := I15, IN0 := PAUSE_SHORT, IN1 := PAUSE_LONG);\nRobot(RecordPause := T#1s,")),
+    tur10("task2_pause_off_by_one", "task2", "T2.2",
+          "off by one: after each frame the pause recorded with the next frame (Ptr MOD Count + 1).",
+          "task2", *NEXT_FRAMES_PAUSE),
+    tur10("task2_watchdog_whole_run", "task2", "G11",
+          "the frame watchdog times the whole run (Watch := Running), not each frame: normal playback "
+          "stops with a fault 20 s after the start.", "task2", *WATCHDOG_WHOLE_RUN),
     tur10("task2_short_pause_1s", "task2", "T2.1",
           "the short pause kept the baseline value: I1.5 = 0 gives 1 s instead of 0.5 s.", "task2",
           ("PAUSE_SHORT : TIME := T#500ms;", "PAUSE_SHORT : TIME := T#1s;")),
@@ -217,6 +278,17 @@ TUR10_FIXTURES = (
           ("Robot(RecordPause := PAUSE,\n      RunEnable := I15,",
            "IF SB1 AND NOT Sb1Before THEN\n    Enable := I15;\nEND_IF;\nSb1Before := SB1;\n"
            "Robot(RecordPause := PAUSE,\n      RunEnable := Enable,")),
+    tur10("task3_enable_read_when_reached", "task3", "T3.7",
+          "I1.5 read when the last frame is reached instead of when its pause is over: switched to 0 "
+          "inside that pause, execution goes on to frame 1.", "task3", *ENABLE_AT_REACHED),
+    tur10("task1_admissible_160", "task1", "G8",
+          "the admissible error written as 160 codes instead of 16: the references go to 0 while the link "
+          "is still far from the frame and moving.", "task1",
+          ("    Admissible : INT := 16;     (* admissible error, codes *)",
+           "    Admissible : INT := 160;    (* admissible error, codes *)")),
+    tur10("task2_hl1_never_off", "task2", "G5",
+          "HL1 switched ON while the program is empty but never switched OFF again (no ELSE branch).",
+          "task2", *HL1_LATCHED),
     tur10("task3_stops_at_once", "task3", "T3.4",
           "I1.5 = 0 stops execution at once instead of after the last frame and its pause.", "task3",
           ("ELSIF Fault THEN\n    State := STOPPED;", "ELSIF Fault OR NOT RunEnable THEN\n    State := STOPPED;")),

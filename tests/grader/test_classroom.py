@@ -83,7 +83,7 @@ def test_class_gives_the_verdicts_of_grading_one_by_one(mp9c_class, tmp_path):
         assert [(r["requirement"], r["result"]) for r in mine] == [(row.id, row.result) for row in alone.rows]
         for csv_row, row in zip(mine, alone.rows):
             if not row.passed:
-                assert f"expected: {row.expected}" in csv_row["message"]
+                assert f"expected: {row.expected}" in csv_row["message"] or not row.expected
                 assert f"observed: {row.observed}" in csv_row["message"]
                 assert f"scenario '{row.scenario}'" in csv_row["message"]
             else:

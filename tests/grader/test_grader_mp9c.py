@@ -17,11 +17,12 @@ from plclab.grader import GradeReport, Row, grade, grade_sources, requirement_ta
 from plclab.stands import bundle, sources
 from plclab.stands.mp9c import STAND
 from grader_helpers import (FIXTURES_DIR, TASKS, assert_fails_exactly, assert_fails_with,
-                            assert_traces_written, fixtures, fixtures_per_task)
+                            assert_traces_written, failed_ids, fixtures, fixtures_per_task)
 
 FIXTURES = FIXTURES_DIR / "mp9c"
 DIAGNOSTIC = re.compile(r"^.+:\d+:\d+: error: .+$")
-SCENARIOS = {"task1": ("manual", "playback"), "task2": ("pauses",), "task3": ("enable",)}
+SCENARIOS = {"task1": ("manual", "playback", "playback_step"), "task2": ("pauses", "pauses_step"),
+             "task3": ("enable", "enable_step", "last_pause", "last_pause_step")}
 GENERAL_SCENARIOS = ("basics", "automatic", "restart", "timeout", "memory")
 
 
@@ -63,7 +64,7 @@ def test_program_of_several_files_is_one_unit():
 BASELINE_FAILS = {
     "task1": ["T1.1", "T1.2", "T1.3", "T1.5"],     # SA2..SA4 ignored; the lift (T1.4) works
     "task2": ["T2.1", "T2.2"],                     # always 1 s; nothing live to detect (T2.3)
-    "task3": ["T3.1", "T3.5", "T3.6"],             # starts with I0.7 = 0, always wraps
+    "task3": ["T3.1", "T3.5", "T3.6", "T3.7"],     # starts with I0.7 = 0, always wraps
 }
 
 
@@ -76,7 +77,8 @@ def test_baseline_fails_each_task_by_its_own_rows(task, tmp_path):
 def test_baseline_rows_say_why(tmp_path):
     report = grade("mp9c", "task2", [write_bundle(tmp_path, "baseline")])
     row = report.row("T2.2")
-    assert "3.0 s pause" in row.expected and row.observed == "1.00 s"
+    assert "3.0 s pause" in row.expected and row.observed == ("1.00 s: every frame got the same 1.00 s pause: the pause "
+                                                          "recorded with each frame is not used")
     assert row.time is not None and row.scenario == "pauses"
 
 
@@ -193,3 +195,40 @@ def test_trace_shows_console_inputs_the_program_does_not_declare(tmp_path):
     report = grade("mp9c", "task1", [path], out_dir=str(out))
     assert report.passed, report.text()
     assert "%IX0.7" in (out / "mp9c-task1-playback.csv").read_text(encoding="utf-8")
+
+
+# --------------------------------------------------------------------------- rows that name the mistake
+
+NAMED = {   # fixture: (its row, words the row must say, the only rows that may fail)
+    "task3_reset_on_release": ("G5", "the program was reset at the release, not while SB1 was held", None),
+    "task2_pauses_swapped": ("T2.1", "the pauses are swapped", None),
+    "task2_pause_off_by_one": ("T2.2", "off by one: after each frame came the pause recorded with the next frame",
+                               None),
+    "task2_step_pause_ignored": ("T2.2", "step mode: a 3.0 s pause", None),
+    "task2_watchdog_whole_run": ("G10", "the watchdog timed the whole run (10 s from the start), not each frame",
+                                 None),
+    "task2_record_on_press": ("G3", "the frame was recorded on the press, not at its release", ["G3", "G11"]),
+    "task3_step_wraps_with_i07_0": ("T3.5", "step mode: no frame starts after frame 4 (the last)", None),
+    "task3_enable_read_when_reached": ("T3.7", "I0.7 was read when frame 4 was reached, not when its pause was "
+                                       "over", ["T3.7"]),
+    "task3_hl1_never_off": ("G3", "HL1 still 1", ["G3"]),
+}
+
+
+@pytest.mark.parametrize("name", sorted(NAMED))
+def test_wrong_solution_row_names_its_mistake(name):
+    rid, words, only = NAMED[name]
+    task = next(t for n, t, _ in fixtures("mp9c") if n == f"{name}.st")
+    report = grade("mp9c", task, [str(FIXTURES / f"{name}.st")])
+    row = report.row(rid)
+    assert not row.passed and words in row.expected + " | " + row.observed, row
+    if only is not None:
+        assert failed_ids(report) == only, report.text()
+
+
+def test_a_fault_stop_is_not_taken_for_a_task_mistake():
+    """The whole-run watchdog stops playback with HL1 blinking: the task's row says so and
+    points at G10 instead of blaming I0.7."""
+    report = grade("mp9c", "task2", [str(FIXTURES / "task2_watchdog_whole_run.st")])
+    task_rows = [r for r in report.failed() if r.id.startswith("T2") and not r.observed.startswith("not checked")]
+    assert task_rows and all("stopped with a fault" in r.observed and "see G10" in r.observed for r in task_rows)

@@ -17,10 +17,10 @@ from plclab.grader.tur10 import POS, make_session
 from plclab.stands import bundle, sources
 from plclab.stands.tur10 import STAND
 from grader_helpers import (FIXTURES_DIR, TASKS, assert_fails_exactly, assert_fails_with,
-                            assert_traces_written, fixtures, fixtures_per_task)
+                            assert_traces_written, failed_ids, fixtures, fixtures_per_task)
 
 FIXTURES = FIXTURES_DIR / "tur10"
-SCENARIOS = {"task1": ("jog",), "task2": ("pauses",), "task3": ("enable",)}
+SCENARIOS = {"task1": ("jog",), "task2": ("pauses",), "task3": ("enable", "last_pause")}
 GENERAL_SCENARIOS = ("basics", "automatic", "restart", "timeout")
 GENERAL_IDS = [f"G{i}" for i in range(1, 12)]
 
@@ -72,7 +72,7 @@ def test_tolerance_follows_the_slowest_task():
 BASELINE_FAILS = {
     "task1": ["T1.1", "T1.2"],             # drives 2-5 not jogged; none moves wrongly (T1.3, T1.4)
     "task2": ["T2.1", "T2.2"],             # always 1 s; nothing live to detect (T2.3)
-    "task3": ["T3.1", "T3.5", "T3.6"],     # starts with I1.5 = 0, always wraps
+    "task3": ["T3.1", "T3.5", "T3.6", "T3.7"],     # starts with I1.5 = 0, always wraps
 }
 
 
@@ -87,7 +87,7 @@ def test_baseline_rows_say_why():
     assert t1.observed == "DRIVE2 = 0 (drive 2 is not jogged)"
     assert t1.time is not None and t1.scenario == "jog"
     t2 = graded("task2", "baseline").row("T2.2")
-    assert "3.0 s pause" in t2.expected and t2.observed == "1.01 s" and t2.scenario == "pauses"
+    assert "3.0 s pause" in t2.expected and t2.observed.startswith("1.01 s: every frame got the same") and t2.scenario == "pauses"
     t3 = graded("task3", "baseline").row("T3.5")
     assert t3.observed.startswith("execution went on to frame 1: DRIVE1=-")
 
@@ -146,3 +146,39 @@ def test_plant_positions_are_traced_across_a_restart(tmp_path):
     s.run(0.3)
     assert s.trace.value_at(POS[0], s.now - s.tick) == moved
     assert s.trace.value_at(POS[1], s.now - s.tick) == s.plant.true_code(2) < 15000
+
+
+# --------------------------------------------------------------------------- rows that name the mistake
+
+NAMED = {   # fixture: (its row, words the row must say, the only rows that may fail)
+    "task3_reset_on_release": ("G7", "the program was reset at the release, not while SB1 was held", None),
+    "task2_pauses_swapped": ("T2.1", "the pauses are swapped", None),
+    "task2_pause_off_by_one": ("T2.2", "off by one: after each frame came the pause recorded with the next frame",
+                               None),
+    "task2_watchdog_whole_run": ("G11", "the watchdog timed the whole run (20 s from the start), not each frame",
+                                 None),
+    "task3_enable_read_when_reached": ("T3.7", "I1.5 was read when frame 3 was reached, not when its pause was "
+                                       "over", ["T3.7"]),
+    "task2_hl1_never_off": ("G5", "HL1 still 1", ["G5"]),
+    "task1_admissible_160": ("G8", "every reference 0 at t = 4.57 s with link 1 at 16137 (+137 codes from the "
+                             "target, beyond the admissible 16); the link was still moving", None),
+}
+
+
+@pytest.mark.parametrize("name", sorted(NAMED))
+def test_wrong_solution_row_names_its_mistake(name):
+    rid, words, only = NAMED[name]
+    task = next(t for n, t, _ in fixtures("tur10") if n == f"{name}.st")
+    report = grade("tur10", task, [str(FIXTURES / f"{name}.st")])
+    row = report.row(rid)
+    assert not row.passed and words in row.expected + " | " + row.observed, row
+    if only is not None:
+        assert failed_ids(report) == only, report.text()
+
+
+def test_a_fault_stop_is_not_taken_for_a_task_mistake():
+    """The whole-run watchdog stops playback with HL1 blinking: the task's row says so and
+    points at G11 instead of blaming I1.5."""
+    report = grade("tur10", "task2", [str(FIXTURES / "task2_watchdog_whole_run.st")])
+    task_rows = [r for r in report.failed() if r.id.startswith("T2") and not r.observed.startswith("not checked")]
+    assert task_rows and all("stopped with a fault" in r.observed and "see G11" in r.observed for r in task_rows)

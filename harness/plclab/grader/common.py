@@ -13,7 +13,7 @@ stand words it, so that one flow judges both and a fix reaches both.
 from __future__ import annotations
 
 from abc import ABC, abstractmethod
-from dataclasses import dataclass
+from dataclasses import dataclass, field
 from typing import Any, Callable, ClassVar, Generic, Optional, Self, Sequence, TypeVar
 
 from plclab.scenario import ScenarioFailure, Session
@@ -27,6 +27,9 @@ PAUSE_SHORT = 0.5        # Task 2: frame recorded with the pause input = 0
 PAUSE_LONG = 3.0         # Task 2: frame recorded with the pause input = 1
 NEXT_WAIT = PAUSE_LONG + 1.0   # the next frame starts within this after one is done
 REFUSED = 2.0            # s watched for a start that must not happen
+TAP_PERIOD = 0.1         # step mode: the grader taps SB1 this often to find when a pause ends
+TAP_HOLD = 0.07          # s each tap is held (over the 50 ms debounce plus a scan)
+BLINK_GAP = 1.0          # s: two HL1 changes this close while playing are a blinking HL1
 EPS = 1e-6
 
 F = TypeVar("F")         # a stand's frame, as its grader teaches it
@@ -56,6 +59,8 @@ class Op(ABC, Generic[F]):
 
     s: Session
     c: Checks
+    runs: list[FrameRun] = field(default_factory=list)  # every frame seen played, in order
+    step: bool = False             # step mode: the flows tap SB1 to go on to the next frame
 
     auto: ClassVar[str]            # the mode switch: 0 manual, 1 automatic
     enable: ClassVar[str]          # the pause / run-enable input by its console name ("I07")
@@ -63,6 +68,9 @@ class Op(ABC, Generic[F]):
     wind_down: ClassVar[float]     # s run on after a scenario's last step (the trace shows the stop)
     press_window: ClassVar[str]    # the start tolerance and ...
     started: ClassVar[str]         # ... how a start is seen, as the stand's failure messages word them
+    watchdog: ClassVar[str]        # the frame-timeout requirement ("G10")
+    frame_timeout: ClassVar[float]  # s a frame may take before the watchdog stops execution
+    timeout_tol: ClassVar[str]     # its tolerance as rows print it ("+/- 0.1 s")
 
     @classmethod
     def begin(cls, s: Session, c: Checks) -> Self:
@@ -162,6 +170,88 @@ class Op(ABC, Generic[F]):
 
     # ----------------------------------------------------------------- shared checks
 
+    @property
+    def mode(self) -> str:
+        """How the rows name the playback mode: '' (continuous) or 'step mode: '."""
+        return "step mode: " if self.step else ""
+
+    def ran(self, run: FrameRun) -> FrameRun:
+        """Note a frame seen played (for the story of a fault stop); returns it."""
+        self.runs.append(run)
+        return run
+
+    def fault_blink(self, after: float) -> Optional[float]:
+        """When HL1 began blinking at or after `after` (two changes less than 1 s apart, which
+        while playing back only a fault stop does), or None."""
+        edges = self.s.trace.edges("HL1", "any", after=after, until=self.now)
+        return next((a for a, b in zip(edges, edges[1:]) if b - a <= BLINK_GAP), None)
+
+    def missed(self, rid: str, expected: str, observed: str, since: float) -> None:
+        """`rid` fails: the frame expected after `since` did not come. If the program had
+        stopped with a fault (HL1 blinking), the row says so and the watchdog requirement gets
+        the fault's story, so a fault stop is never taken for the task's input mistake."""
+        if not self.fault_explains(rid, expected, observed, since):
+            self.c.fail(rid, expected, observed, since)
+
+    def fault_explains(self, rid: str, expected: str, observed: str, since: float) -> bool:
+        """If the program stopped with a fault (HL1 blinking) since the last frame started or
+        `since`: `rid` fails saying so, the watchdog requirement gets the story; True."""
+        look = min([since] + [r.start for r in self.runs[-1:]])
+        self.run_until(max(self.now, since + BLINK_GAP + 0.2))
+        blink = self.fault_blink(look)
+        if blink is None:
+            return False
+        self.c.fail(rid, expected, f"{observed}: execution had stopped with a fault at t = {blink:.2f} s "
+                    f"(HL1 blinking; see {self.watchdog})", blink)
+        self.fault_story(blink)
+        return True
+
+    def fault_story(self, blink: float) -> None:
+        """The watchdog requirement fails with what the fault stop at `blink` interrupted:
+        the frame in progress, how long frames took, how long playback had run."""
+        w = self.frame_timeout
+        runs = [r for r in self.runs if r.start <= blink]
+        chain = runs[-1:]
+        for r in reversed(runs[:-1]):       # the run of frames played one after the other
+            if chain[0].start - r.done > NEXT_WAIT + 0.5:
+                break
+            chain.insert(0, r)
+        seen = [f"a fault stop (HL1 blinking) at t = {blink:.2f} s"]
+        if chain:
+            last, began = chain[-1], chain[0].start
+            longest = max(r.done - r.start for r in chain)
+            seen.append(f"{blink - last.start:.2f} s after the last frame started at t = {last.start:.2f} s "
+                        f"(every frame was reached within {longest:.2f} s)")
+            seen.append(f"{blink - began:.2f} s after playback began at t = {began:.2f} s")
+            if abs(blink - began - w) <= 0.5 and blink - last.start < w - 0.5:
+                seen.append(f"the watchdog timed the whole run ({w:g} s from the start), not each frame")
+        self.c.fail(self.watchdog, f"no fault stop while every frame is reached in time: the watchdog times "
+                    f"each frame, {w:g} s from its start ({self.timeout_tol})", "; ".join(seen), blink)
+
+    def advance(self, rid: str, frame: F, label: str, since: float,
+                on_start: Optional[Callable[[], object]] = None) -> Optional[FrameRun]:
+        """The next frame after the one done at `since`: in continuous mode it follows by
+        itself; in step mode the grader taps SB1 every 0.1 s from `since` until it starts
+        (presses during the pause are ignored), so the pause is measured to 0.1 s."""
+        if self.step:
+            self.tap(since, NEXT_WAIT)
+        return self.follow(rid, frame, f"{self.mode}{label}", since, NEXT_WAIT, on_start)
+
+    def tap(self, since: float, seconds: float) -> None:
+        """Tap SB1 every TAP_PERIOD from `since` until the robot is driven or `seconds` are over."""
+        self.run_until(since)
+        t0 = self.now
+        while self.now < since + seconds and self.motion(t0, self.now) is None:
+            self.press(TAP_HOLD)
+            self.run(TAP_PERIOD - TAP_HOLD)
+
+    def quiet_after(self, rid: str, after: float, seconds: float, expected: str, what: str) -> bool:
+        """`quiet`, in step mode with SB1 tapped every 0.1 s meanwhile (no press may start a frame)."""
+        if self.step:
+            self.tap(after, seconds)
+            expected += " (SB1 tapped every 0.1 s)"
+        return self.quiet(rid, after, seconds, f"{self.mode}{expected}", what)
+
     def press_starts(self, rid: str, frame: F, label: str, pressed: float) -> Optional[FrameRun]:
         """The SB1 press at `pressed` must start `frame` on the debounced press (50 ms + one scan)."""
         run = self.follow(rid, frame, label, pressed, DEBOUNCE + 1.0)
@@ -192,12 +282,12 @@ NO_FAULT = Requirement("G1", "The program runs without a PLC fault (division by 
 
 
 def no_fault(s: Session, c: Checks) -> None:
-    f = s.fault
-    if f is None or f.internal:     # a bug of the harness is not charged: the rows it stopped say so
-        c.ok("G1")
-        return
-    offset = s.now - s.plc.now_ns / 1e9
-    c.fail("G1", "no runtime fault", str(f), offset + f.time_ns / 1e9)
+    with c.requirement(NO_FAULT) as rid:
+        f = s.fault
+        if f is None or f.internal:  # a bug of the harness is not charged: the rows it stopped say so
+            return
+        offset = s.now - s.plc.now_ns / 1e9
+        c.fail(rid, "no runtime fault", str(f), offset + f.time_ns / 1e9)
 
 
 # --------------------------------------------------------------------------- general flows
@@ -223,38 +313,56 @@ def within_scan(op: "Op[Any]") -> str:
 def basics_flow(op: Op[Any], ids: tuple[str, str, str], record: Callable[[], float],
                 record_another: Callable[[], object]) -> None:
     """The `lamp_requirements` (`ids`), in manual mode from power-up: `record` records a frame
-    where the robot is and returns when SB1 was released, `record_another` moves the robot
-    and records a second frame, so that the reset has a program to empty."""
+    where the robot is with a 0.2 s press and returns when SB1 was released, `record_another`
+    moves the robot and records a second frame, so that the reset has a program to empty."""
     lamp, bounce, reset = ids
     c = op.c
     with c.requirement(lamp):
         c.check(lamp, op.hl1() == 1, "HL1=1 at power-up (no frame recorded)", "HL1=0", op.now)
         with c.requirement(bounce):
+            lit = op.hl1() == 1
             t = op.press(0.03)
             op.run(0.5)
             off = op.s.trace.first(lambda st: not st.HL1, after=t, default=None)
-            c.check(bounce, off is None, "HL1 stays 1 after a 30 ms SB1 press (nothing recorded)",
-                    "HL1 went 0: the bounce recorded a frame", off)
+            if lit:
+                c.check(bounce, off is None, "HL1 stays 1 after a 30 ms SB1 press (nothing recorded)",
+                        "HL1 went 0: the bounce recorded a frame", off)
+            else:                    # a dark HL1 cannot show what the bounce did
+                c.fail(bounce, "", f"not checked: HL1 is 0 at power-up (see {lamp}), so it cannot show whether "
+                       "the 30 ms press recorded a frame", t)
         released = record()
+        went_off = op.s.trace.first(lambda st: not st.HL1, after=released - 0.2, until=released + 2 * op.tol,
+                                    default=None)
+        if went_off is not None and went_off < released - op.tol:
+            c.fail(lamp, "HL1=0 once a frame is recorded, at the release of a short SB1 press (+/- one scan)",
+                   f"HL1 went 0 at t = {went_off:.2f} s, {released - went_off:.2f} s before SB1 was released: "
+                   "the frame was recorded on the press, not at its release", went_off)
         c.check(lamp, op.hl1(at=released + 2 * op.tol) == 0,
-                "HL1=0 once a frame is recorded (short SB1 press)", "HL1 still 1", released + 2 * op.tol)
+                "HL1=0 once a frame is recorded (short SB1 press), within two scans of the release", "HL1 still 1",
+                released + 2 * op.tol)
     record_another()
     with c.requirement(reset):
-        _long_press_resets(op, reset)
+        _long_press_resets(op, reset, lamp)
     op.set(**{op.auto: 0})
     op.run(0.2)
 
 
-def _long_press_resets(op: Op[Any], rid: str) -> None:
-    """SB1 held: HL1 ON at 3.0 s while still held, the release records nothing, and an SB1
-    press in automatic mode then finds nothing to play."""
+def _long_press_resets(op: Op[Any], rid: str, lamp: str) -> None:
+    """SB1 held: the program is reset at 3.0 s while still held (HL1 ON then), the release
+    records nothing, and an SB1 press in automatic mode then finds nothing to play. What HL1
+    shows is judged with the reset only where the lamp works: an HL1 that never shows the
+    reset of a program that was emptied is the lamp's failure (`lamp`), not the reset's."""
     c, s = op.c, op.s
     pressed = op.now
+    lit_before = op.hl1() == 1
     s.console.hold("SB1")
     on = op.wait(lambda st: st.HL1, LONG_PRESS + 1.0)
-    if on is None:
-        c.fail(rid, "HL1=1 (program reset) 3.0 s after SB1 is pressed, while it is held",
-               f"HL1 still 0 after holding SB1 {LONG_PRESS + 1:g} s", pressed + LONG_PRESS)
+    lamp_seen = ""
+    if lit_before:
+        lamp_seen = "HL1 was already 1 before SB1 was held (see the lamp requirement)"
+        op.run_until(pressed + LONG_PRESS + 0.5)
+    elif on is None:
+        lamp_seen = f"HL1 still 0 after holding SB1 {LONG_PRESS + 1:g} s"
         op.run_until(pressed + LONG_PRESS + 1.5)
     else:
         held = on - pressed
@@ -266,89 +374,162 @@ def _long_press_resets(op: Op[Any], rid: str) -> None:
     released = op.now
     s.console.release("SB1")
     op.run(0.5)
-    off = s.trace.first(lambda st: not st.HL1, after=released, default=None)
-    c.check(rid, off is None, "HL1 stays 1 after the release (the release records nothing)",
-            "HL1 went 0: a frame was recorded (or the reset never happened)", off or released)
+    if on is not None and not lit_before:
+        off = s.trace.first(lambda st: not st.HL1, after=released, default=None)
+        c.check(rid, off is None, "HL1 stays 1 after the release (the release records nothing)",
+                "HL1 went 0: a frame was recorded (or the reset never happened)", off or released)
+    late = None if on is not None or lit_before else s.trace.first(lambda st: st.HL1, after=released, default=None)
+    if late is not None:
+        c.fail(rid, f"the reset (HL1=1) {LONG_PRESS:.1f} s after SB1 is pressed (+ up to {DEBOUNCE * 1000:.0f} ms "
+               f"debounce, {within_scan(op)}), while it is held",
+               f"HL1=1 only when SB1 was released (t = {late:.2f} s, {late - pressed:.2f} s after the press): "
+               "the program was reset at the release, not while SB1 was held", late)
+        return
     op.start_auto()
-    op.quiet(rid, op.press(), REFUSED, "after the reset an SB1 press in automatic mode starts nothing",
-             "a frame started: the program was not empty")
+    emptied = op.quiet(rid, op.press(), REFUSED, "after the reset an SB1 press in automatic mode starts nothing",
+                       "a frame started: the program was not empty")
+    if emptied and on is None and not lit_before:
+        c.fail(lamp, "HL1=1 once the program is reset (SB1 held 3.0 s)",
+               f"{lamp_seen}, although the program was emptied (an SB1 press in automatic mode then started "
+               "nothing)", pressed + LONG_PRESS)
+    elif not emptied and lamp_seen:
+        c.fail(rid, f"the program reset {LONG_PRESS:.1f} s after SB1 is pressed", lamp_seen, pressed + LONG_PRESS)
 
 
-def restart_flow(op: Op[F], rid: str, first: F, second: F, off_time: float) -> bool:
+def restart_flow(op: Op[F], rid: str, first: F, second: F, off_time: float, lamp: str) -> bool:
     """Two taught frames, a PLC restart (power off `off_time` s): HL1 stays OFF and an SB1
-    press plays the frames back. False if the program was lost (nothing was started)."""
+    press plays the frames back. False if the program was lost (nothing was started). An HL1
+    ON after the restart while the frames still play back is the lamp's failure (`lamp`)."""
     with op.c.requirement(rid):
         t = op.now
         op.s.restart_plc(off_time=off_time)
         op.run(0.3)
-        if not op.c.check(rid, op.hl1() == 0, "HL1=0 after the restart (the program is kept)",
-                          "HL1=1: the program is empty after the restart", t):
-            return False
+        lit = op.hl1() == 1
         op.start_auto()
-        r1 = op.press_starts(rid, first, "frame 1 after the restart", op.press())
-        if r1:
-            op.follow(rid, second, "frame 2 after the restart", r1.done, NEXT_WAIT)
+        label = "frame 1 after the restart" + (" (HL1 is 1: is the program empty?)" if lit else "")
+        r1 = op.press_starts(rid, first, label, op.press())
+        if r1 is None:
+            return False
+        if lit:
+            op.c.fail(lamp, "HL1=0 after the restart: the program is kept",
+                      "HL1=1 although the program was kept (it plays back): HL1 does not show the program", t)
+        op.follow(rid, second, "frame 2 after the restart", r1.done, NEXT_WAIT)
     return True
 
 
 # --------------------------------------------------------------------------- Task 2
 
-def task2_requirements(enable: str, measured: str) -> tuple[Requirement, ...]:
+def task2_requirements(enable: str, measured: str, modes: str = "") -> tuple[Requirement, ...]:
     """Task 2 with the pause input `enable` ("I0.7"); `measured` says where the stand's pause
-    starts and ends."""
+    starts and ends; `modes` where the textbook has both playback modes (" in continuous and
+    in step mode"), checked in each."""
     return (
         Requirement("T2.1", f"A frame recorded with {enable} = 0 is followed by a {PAUSE_SHORT:.1f} s pause "
-                    f"({measured}).", "pauses"),
-        Requirement("T2.2", f"A frame recorded with {enable} = 1 is followed by a {PAUSE_LONG:.1f} s pause.",
+                    f"({measured}){modes}.", "pauses"),
+        Requirement("T2.2", f"A frame recorded with {enable} = 1 is followed by a {PAUSE_LONG:.1f} s pause{modes}.",
                     "pauses"),
-        Requirement("T2.3", f"{enable} changes nothing in automatic mode: switched during execution, every "
-                    "frame keeps the pause recorded with it.", "pauses"),
+        Requirement("T2.3", f"{enable} changes nothing in automatic mode: switched at every phase of execution "
+                    "(a frame's start, the frame reached, inside its pause), every frame keeps the pause "
+                    f"recorded with it{modes}.", "pauses"),
     )
 
 
-def pauses_flow(op: Op[F], first: F, second: F, start_checked: bool = True) -> None:
-    """Task 2 on two taught frames, `first` recorded with the input at 1 (3 s), `second` with 0
-    (0.5 s): a cycle with the input at 1, then a cycle during which it is 0 (frame 1) and 1
-    again (frame 2). `start_checked=False` leaves out the check that frame 1 starts on the
-    press (MP-9C's Task 2 never made it; G6 does)."""
-    c, name = op.c, op.enable_label
+def pauses_flow(op: Op[F], frames: Sequence[F], recorded: Sequence[int], start_checked: bool = True) -> None:
+    """Task 2 on the taught `frames`, recorded with the input at `recorded` (1: 3 s, 0: 0.5 s;
+    a pattern where swapped pauses, the next frame's and the previous frame's pauses all
+    differ): a cycle with the input at 1 checks each pause (T2.1, T2.2) and names the
+    pattern of a wrong one; then cycles with the input switched at every phase boundary
+    (T2.3) until playback has run longer than the frame watchdog. In step mode (`op.step`)
+    the grader taps SB1 to go on. `start_checked=False` leaves out the check that frame 1
+    starts on the press (a general requirement makes it)."""
+    c, name, n = op.c, op.enable_label, len(frames)
+    wanted = [PAUSE_LONG if r else PAUSE_SHORT for r in recorded]
     op.start_auto()
-    with c.requirement("T2.2"):
+    with c.requirement("T2.1", "T2.2"):
+        label = f"{op.mode}frame 1"
         if start_checked:
-            r1 = op.press_starts("T2.2", first, "frame 1", op.press())
+            run = op.press_starts("T2.2", frames[0], label, op.press())
         else:
-            r1 = op.follow("T2.2", first, "frame 1", op.press(), DEBOUNCE + 1.0)
-        r2 = r1 and op.follow("T2.2", second, "frame 2", r1.done, NEXT_WAIT)
-        if not r1 or not r2:
+            run = op.follow("T2.2", frames[0], label, op.press(), DEBOUNCE + 1.0)
+        if run is None:
             return
-        _paused(op, "T2.2", r1, r2, PAUSE_LONG, f"after frame 1 (recorded with {name} = 1)")
-    with c.requirement("T2.1"):
-        r3 = op.follow("T2.1", first, "frame 1 after frame 2", r2.done, NEXT_WAIT,
-                       on_start=lambda: op.set_enable(0))
-        if not r3:
-            return
-        _paused(op, "T2.1", r2, r3, PAUSE_SHORT, f"after frame 2 (recorded with {name} = 0)")
+        first = [run]
+        for k in range(1, n + 1):
+            run = op.advance(_pause_req(recorded[k - 1]), frames[k % n], f"frame {k % n + 1} after frame {k}",
+                             run.done)
+            if run is None:
+                return
+            first.append(run)
+        seen = [b.start - a.done for a, b in zip(first, first[1:])]
+        why = _pause_pattern(seen, wanted, op.tol + (TAP_PERIOD if op.step else 0.0), name)
+        for k in range(n):
+            _paused(op, _pause_req(recorded[k]), first[k], first[k + 1], wanted[k],
+                    f"after frame {k + 1} (recorded with {name} = {recorded[k]})", why)
     with c.requirement("T2.3"):
-        r4 = op.follow("T2.3", second, "frame 2 (second cycle)", r3.done, NEXT_WAIT,
-                       on_start=lambda: op.set_enable(1))
-        if not r4:
-            return
-        p1, p2 = r2.start - r1.done, r3.start - r2.done
-        if not _paused(op, "T2.3", r3, r4, p1, f"after frame 1, as in the first cycle although {name} is now 0"):
-            return
-        r5 = op.follow("T2.3", first, "frame 1 (third cycle)", r4.done, NEXT_WAIT)
-        if not r5:
-            return
-        _paused(op, "T2.3", r4, r5, p2, f"after frame 2, as in the first cycle although {name} is now 1")
+        began, run, k, cycle = first[0].start, first[n], 0, 2     # run: frame 1 of cycle 2
+        while not (k == 0 and cycle > 2 and run.done - began > op.frame_timeout + 1.0):
+            nk, done, value = (k + 1) % n, run.done, (k + cycle) % 2
+            op.set_enable(1 - value)                          # as frame k + 1 is reached
+            op.run_until(done + PAUSE_SHORT * 0.3)
+            op.set_enable(value)                              # inside its pause
+            if nk == 0:                                       # 1 at the end of the last pause: a program
+                op.run_until(done + PAUSE_SHORT * 0.7)        # that also does Task 3 goes on to frame 1
+                op.set_enable(1)
+            nxt = op.advance("T2.3", frames[nk], f"frame {nk + 1} (cycle {cycle + (nk == 0)})", done,
+                             on_start=lambda v=value: op.set_enable(1 - v))   # as the next frame starts
+            if nxt is None:
+                return
+            live = PAUSE_LONG if value else PAUSE_SHORT
+            why = (f"the pause followed {name} (switched to {value} inside it) instead of keeping the one recorded "
+                   "with the frame" if abs(nxt.start - done - live) <= op.tol + TAP_PERIOD * op.step else "")
+            if not _paused(op, "T2.3", run, nxt, seen[k], f"after frame {k + 1} in cycle {cycle}, as in the first "
+                           f"cycle, {name} being switched as the frame started, as it was reached and inside its "
+                           f"pause (to {value})", why):
+                return
+            run, k = nxt, nk
+            cycle += k == 0
     op.stop_playback()
 
 
-def _paused(op: Op[Any], rid: str, before: FrameRun, after: FrameRun, seconds: float, where: str) -> bool:
-    """The pause from `before` done to `after` starting lasts `seconds` (+/- one scan); the
-    expected value names the pause, its tolerance and `where` it is."""
+def _pause_req(recorded: int) -> str:
+    return "T2.2" if recorded else "T2.1"
+
+
+def _pause_pattern(seen: Sequence[float], wanted: Sequence[float], tol: float, name: str) -> str:
+    """What a cycle's wrong pauses `seen` (against `wanted`) look like: swapped, the next or
+    the previous frame's pause, one fixed pause; '' if none of these."""
+    n = len(wanted)
+
+    def like(want: Sequence[float], ks: range) -> bool:
+        return all(abs(seen[k] - want[k]) <= tol for k in ks)
+
+    swapped = [PAUSE_SHORT if w == PAUSE_LONG else PAUSE_LONG for w in wanted]
+    if like(wanted, range(n)):
+        return ""
+    if like(swapped, range(n)):
+        return (f"the pauses are swapped: frames recorded with {name} = 0 got {_secs(PAUSE_LONG)} s, those "
+                f"recorded with {name} = 1 got {_secs(PAUSE_SHORT)} s")
+    if max(seen) - min(seen) <= 2 * tol:
+        return f"every frame got the same {seen[0]:.2f} s pause: the pause recorded with each frame is not used"
+    if like([wanted[(k + 1) % n] for k in range(n)], range(n - 1)):
+        return "off by one: after each frame came the pause recorded with the next frame"
+    if like([wanted[k - 1] for k in range(n)], range(1, n)):
+        return "off by one: after each frame came the pause recorded with the frame before it"
+    return ""
+
+
+def _paused(op: Op[Any], rid: str, before: FrameRun, after: FrameRun, seconds: float, where: str,
+            why: str = "") -> bool:
+    """The pause from `before` done to `after` starting lasts `seconds` (+/- one scan; in step
+    mode +/- the tap period too); the expected value names the pause, its tolerance and
+    `where` it is, the observed one what the wrong pauses look like (`why`)."""
     pause = after.start - before.done
-    return op.c.check(rid, abs(pause - seconds) <= op.tol, f"a {_secs(seconds)} s pause {within_scan(op)} {where}",
-                      f"{pause:.2f} s", before.done)
+    tol = op.tol + (TAP_PERIOD if op.step else 0.0)
+    within = (f"+/- {TAP_PERIOD:g} s (SB1 tapped every {TAP_PERIOD:g} s) + one scan ({op.scan * 1000:.0f} ms)"
+              if op.step else within_scan(op))
+    good = abs(pause - seconds) <= tol
+    return op.c.check(rid, good, f"{op.mode}a {_secs(seconds)} s pause {within} {where}",
+                      f"{pause:.2f} s" + (f": {why}" if why and not good else ""), before.done)
 
 
 def _secs(seconds: float) -> str:
@@ -358,11 +539,13 @@ def _secs(seconds: float) -> str:
 
 # --------------------------------------------------------------------------- Task 3
 
-def task3_requirements(enable: str, remaining: str, stops: str, restarts: str) -> tuple[Requirement, ...]:
+def task3_requirements(enable: str, remaining: str, stops: str, restarts: str,
+                       modes: str = "") -> tuple[Requirement, ...]:
     """Task 3 with the run-enable input `enable` ("I0.7"), in each stand's words for what runs
     after the input drops (`remaining`), how the stop shows (`stops`) and what must not
-    restart it (`restarts`)."""
-    return (
+    restart it (`restarts`); `modes` where the textbook has both playback modes (" in
+    continuous and in step mode"), checked in each."""
+    return tuple(Requirement(r.id, r.text[:-1] + f"{modes}.", r.scenario) for r in (
         Requirement("T3.1", f"Automatic mode: an SB1 press with {enable} = 0 starts nothing.", "enable"),
         Requirement("T3.2", f"An SB1 press with {enable} = 1 starts frame 1.", "enable"),
         Requirement("T3.3", f"With {enable} = 1 the frames run in order and frame 1 follows the last frame "
@@ -373,7 +556,9 @@ def task3_requirements(enable: str, remaining: str, stops: str, restarts: str) -
                     "enable"),
         Requirement("T3.6", f"After that stop nothing restarts {restarts}; an SB1 press with {enable} = 1 "
                     "starts again from frame 1.", "enable"),
-    )
+        Requirement("T3.7", f"{enable} is read when the last frame's pause is over, not when the last frame is "
+                    f"reached: switched to 0 inside that pause, execution stops after it.", "last_pause"),
+    ))
 
 
 def enable_flow(op: Op[F], frames: Sequence[F], refused_start: Callable[[], None],
@@ -397,15 +582,15 @@ def _enabled_cycle(op: Op[F], frames: Sequence[F]) -> Optional[FrameRun]:
     and frame 1 follows the last; that frame 1's run, or None."""
     c, name, n = op.c, op.enable_label, len(frames)
     with c.requirement("T3.2"):
-        run = op.press_starts("T3.2", frames[0], f"frame 1 (SB1 pressed with {name} = 1)", op.press())
+        run = op.press_starts("T3.2", frames[0], f"{op.mode}frame 1 (SB1 pressed with {name} = 1)", op.press())
         if run is None:
             return None
     with c.requirement("T3.3"):
         for k in range(1, n):
-            run = op.follow("T3.3", frames[k], f"frame {k + 1}", run.done, NEXT_WAIT)
+            run = op.advance("T3.3", frames[k], f"frame {k + 1}", run.done)
             if run is None:
                 return None
-        return op.follow("T3.3", frames[0], f"frame 1 after frame {n} ({name} = 1)", run.done, NEXT_WAIT)
+        return op.advance("T3.3", frames[0], f"frame 1 after frame {n} ({name} = 1)", run.done)
 
 
 def _dropped_cycle(op: Op[F], frames: Sequence[F], first: FrameRun,
@@ -415,12 +600,11 @@ def _dropped_cycle(op: Op[F], frames: Sequence[F], first: FrameRun,
     dropped: list[float] = []
     frame2, later = labels
     with op.c.requirement("T3.4"):
-        run = op.follow("T3.4", frames[1], frame2, first.done, NEXT_WAIT,
-                        on_start=lambda: dropped.append(op.set_enable(0)))
+        run = op.advance("T3.4", frames[1], frame2, first.done, on_start=lambda: dropped.append(op.set_enable(0)))
         for k in range(2, len(frames)):
             if run is None:
                 return None
-            run = op.follow("T3.4", frames[k], later.format(k=k + 1, dropped=dropped[0]), run.done, NEXT_WAIT)
+            run = op.advance("T3.4", frames[k], later.format(k=k + 1, dropped=dropped[0]), run.done)
         return run
 
 
@@ -429,18 +613,41 @@ def _stops_after_last(op: Op[F], frames: Sequence[F], done: float) -> None:
     `done`) and its pause, and only an SB1 press with the input at 1 starts it again."""
     c, name, n = op.c, op.enable_label, len(frames)
     with c.requirement("T3.5"):
-        if not op.quiet("T3.5", done, PAUSE_LONG + REFUSED, f"no frame starts after frame {n} (the last) and "
-                        f"its pause, {name} being 0", "execution went on to frame 1"):
+        if not op.quiet_after("T3.5", done, PAUSE_LONG + REFUSED, f"no frame starts after frame {n} (the last) "
+                              f"and its pause, {name} being 0", "execution went on to frame 1"):
             c.fail("T3.6", "", "not checked: execution did not stop after the last frame (see T3.5)", None)
             return
     with c.requirement("T3.6"):
-        if not op.quiet("T3.6", op.press(), REFUSED, f"after the stop, an SB1 press with {name} = 0 starts "
-                        "nothing", "the program started"):
-            return
-        if not op.quiet("T3.6", op.set_enable(1), REFUSED, f"after the stop, {name} = 1 alone (no press) "
+        if not op.quiet("T3.6", op.press(), REFUSED, f"{op.mode}after the stop, an SB1 press with {name} = 0 "
                         "starts nothing", "the program started"):
             return
-        op.press_starts("T3.6", frames[0], f"frame 1 (a new start: SB1 with {name} = 1)", op.press())
+        if not op.quiet("T3.6", op.set_enable(1), REFUSED, f"{op.mode}after the stop, {name} = 1 alone (no "
+                        "press) starts nothing", "the program started"):
+            return
+        op.press_starts("T3.6", frames[0], f"{op.mode}frame 1 (a new start: SB1 with {name} = 1)", op.press())
+    op.back_to_manual()
+
+
+def last_pause_flow(op: Op[F], frames: Sequence[F]) -> None:
+    """T3.7: a cycle with the input at 1 up to the last frame; the input switched to 0 inside
+    the last frame's pause (halfway through the shortest pause): execution stops after it. A
+    program that read the input when the last frame was reached goes on to frame 1."""
+    c, name, n = op.c, op.enable_label, len(frames)
+    op.start_auto()
+    with c.requirement("T3.7") as rid:
+        run = op.press_starts(rid, frames[0], f"{op.mode}frame 1 (SB1 pressed with {name} = 1)", op.press())
+        for k in range(1, n):
+            run = run and op.advance(rid, frames[k], f"frame {k + 1} ({name} = 1)", run.done)
+        if not run:
+            return
+        op.run_until(run.done + PAUSE_SHORT / 2)
+        dropped = op.set_enable(0)
+        op.quiet_after(rid, run.done, PAUSE_LONG + REFUSED,
+                       f"no frame after frame {n} (the last) and its pause, {name} being switched to 0 inside "
+                       f"that pause (t = {dropped:.2f} s, {dropped - run.done:.2f} s after frame {n} was reached)",
+                       "execution went on to frame 1 (it never stops after the last frame: see T3.5)"
+                       if c.failed("T3.5") else f"{name} was read when frame {n} was reached, not when its "
+                       "pause was over: execution went on to frame 1")
     op.back_to_manual()
 
 

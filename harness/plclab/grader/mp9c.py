@@ -20,8 +20,8 @@ from plclab.scenario import ScenarioFailure, Session
 from plclab.stands.mp9c import STAND, labels
 
 from .common import (DEBOUNCE, NEXT_WAIT, NO_FAULT, REFUSED, FrameRun, Op, basics_flow, enable_flow,
-                     lamp_requirements, no_fault, pauses_flow, register_tasks, restart_flow,
-                     task2_requirements, task3_requirements)
+                     lamp_requirements, last_pause_flow, no_fault, pauses_flow, register_tasks, restart_flow,
+                     task2_requirements, task3_requirements, within_scan)
 from .registry import EVERY, Checks, Requirement, Scenario
 
 VALVES = tuple(f"L{i}" for i in range(1, 8))
@@ -90,6 +90,9 @@ class Mp9cOp(Op[Frame]):
     wind_down = 1.0
     press_window = "50 ms debounce, +/- one scan"
     started = "it started"
+    watchdog = "G10"
+    frame_timeout = FRAME_TIMEOUT
+    timeout_tol = f"+/- {TIMEOUT_TOL:g} s"
 
     def start_manual(self) -> None:
         self.set(SA1=0, SA2=0, SA3=0, SA4=0, SA5=0, SA6=0, I07=0)
@@ -141,8 +144,7 @@ class Mp9cOp(Op[Frame]):
             before = self.values(VALVES)
             start = self.wait(lambda io: _changed(io, before), since + timeout - self.now)
         if start is None:
-            self.c.fail(rid, f"{label} starts within {timeout:g} s of t = {since:.2f} s: "
-                        f"valves {fmt(frame.valves)}",
+            self.missed(rid, f"{label} starts within {timeout:g} s of t = {since:.2f} s: valves {fmt(frame.valves)}",
                         f"no valve changed: the valves stayed {fmt(self.values(frame.valves))}", since)
             return None
         got = self.settled(start, frame.valves)
@@ -156,7 +158,7 @@ class Mp9cOp(Op[Frame]):
             self.c.fail(rid, f"{label} done: sensors {fmt(frame.sensors)} within {DONE_WAIT:g} s",
                         f"sensors {fmt(self.values(frame.sensors))}", start)
             return None
-        return FrameRun(start, done)
+        return self.ran(FrameRun(start, done))
 
 
 def _changed(io: Any, before: dict[str, int]) -> bool:
@@ -174,6 +176,13 @@ def teach(op: Mp9cOp, frames: list[Frame]) -> list[float]:
         releases.append(op.press(0.2) + 0.2)
         op.run(0.2)
     return releases
+
+
+def step_mode(op: Mp9cOp) -> Mp9cOp:
+    """The operator plays back in step mode (SA6 = 1): SB1 taps go on to each next frame."""
+    op.set(SA6=1)
+    op.step = True
+    return op
 
 
 # --------------------------------------------------------------------------- every scenario
@@ -259,7 +268,7 @@ def sc_restart(s: Session, c: Checks) -> None:
     """The recorded program survives a PLC restart."""
     op = Mp9cOp.begin(s, c)
     teach(op, [DOWN, UP])
-    restart_flow(op, G9.id, DOWN, UP, off_time=1.0)
+    restart_flow(op, G9.id, DOWN, UP, off_time=1.0, lamp="G3")
 
 
 def sc_timeout(s: Session, c: Checks) -> None:
@@ -276,17 +285,24 @@ def sc_timeout(s: Session, c: Checks) -> None:
         if start is None or op.values(DOWN.valves, at=start + op.tol) != DOWN.valves:
             c.fail(rid, f"frame 1 starts ({fmt(DOWN.valves)})", "it did not start", pressed)
             return
-        blink = op.when(lambda io: io.HL1, after=start, timeout=FRAME_TIMEOUT + 2.0)
+        lit = op.hl1(at=start) == 1        # a lamp already ON (G3's failure) shows a blink as its first OFF
+        if lit:
+            fall = op.when(lambda io: not io.HL1, after=start, timeout=FRAME_TIMEOUT + 2.0)
+            blink = None if fall is None else fall - 1 / (2 * FAULT_BLINK_HZ)
+        else:
+            blink = op.when(lambda io: io.HL1, after=start, timeout=FRAME_TIMEOUT + 2.0)
         if not c.check(rid, blink is not None and abs(blink - start - FRAME_TIMEOUT) <= TIMEOUT_TOL,
                        f"HL1 starts blinking {FRAME_TIMEOUT:g} s (+/- {TIMEOUT_TOL:g} s) after frame 1 started "
                        "(the frame is not done)",
-                       "HL1 stayed 0" if blink is None else f"HL1=1 {blink - start:.2f} s after the start",
+                       f"HL1 stayed {int(lit)}" if blink is None else
+                       f"HL1 started blinking {blink - start:.2f} s after the start",
                        blink or start + FRAME_TIMEOUT):
             return
         op.run_until(blink + 2.0)
         edges = s.trace.edges("HL1", "rising", after=blink, until=blink + 2.0 - op.tol)
-        if not c.check(rid, 3 <= len(edges) <= 5, f"HL1 blinks at {FAULT_BLINK_HZ:g} Hz: "
-                       f"{2 * FAULT_BLINK_HZ:g} flashes in 2 s (3..5)", f"{len(edges)} flashes in 2 s", blink):
+        flashes = len(edges) + lit
+        if not c.check(rid, 3 <= flashes <= 5, f"HL1 blinks at {FAULT_BLINK_HZ:g} Hz: "
+                       f"{2 * FAULT_BLINK_HZ:g} flashes in 2 s (3..5)", f"{flashes} flashes in 2 s", blink):
             return
         cleared = op.now
         s.clear_faults()
@@ -296,7 +312,7 @@ def sc_timeout(s: Session, c: Checks) -> None:
         manual = op.set(SA1=0)
         op.run(1.5)
         late = s.trace.edges("HL1", "rising", after=manual + 2 * op.tol)
-        c.check(rid, not late and op.hl1() == 0, "HL1 stops blinking (0) once SA1 = 0 (manual mode)",
+        c.check(rid, not late and (op.hl1() == 0 or lit), "HL1 stops blinking (0) once SA1 = 0 (manual mode)",
                 f"HL1 {'still blinking' if late else '=1'} in manual mode", manual)
 
 
@@ -309,22 +325,31 @@ def sc_memory(s: Session, c: Checks) -> None:
             op.run(0.1)
             op.press(0.1)
         op.run(0.3)
-        flash = s.trace.first(lambda st: st.HL1, after=first + 0.1 + 2 * op.tol, default=None)
-        if not c.check(rid, flash is None, f"HL1 stays 0 while frames 1..{CAPACITY} are recorded",
-                       "HL1 went 1", flash):
+        lit = op.hl1() == 1                # a lamp stuck ON (G3's failure): flashes show as its OFF phases
+        flash = s.trace.first(lambda st: st.HL1 != lit, after=first + 0.1 + 2 * op.tol, default=None)
+        if not c.check(rid, flash is None, f"HL1 stays {int(lit)} while frames 1..{CAPACITY} are recorded",
+                       f"HL1 went {int(not lit)}", flash):
             return
-        released = op.press(0.1) + 0.1
+        pressed = op.press(0.1)
+        released = pressed + 0.1
         op.run(3.0)
+        early = s.trace.edges("HL1", "rising", after=pressed, until=released - op.tol)
         edges = s.trace.edges("HL1", "rising", after=released - op.tol, until=released + 2.0 - op.tol)
         after = s.trace.edges("HL1", "rising", after=released + 2.0, until=op.now)
-        ok = len(edges) == 2 and edges[0] - released <= 2 * op.tol and not after and op.hl1() == 0
-        seen = f"{len(edges)} flash(es) in 2 s"
-        if edges:
+        flashes = len(edges) + (lit and op.hl1(at=released + op.tol) == 1)
+        if early:
+            c.fail(rid, f"after the {CAPACITY + 1}rd short press: HL1 flashes from the release of SB1 (+/- one scan)",
+                   f"HL1 began flashing {released - early[0]:.2f} s before the release: the press was taken when SB1 "
+                   "was pressed, not at its release", early[0])
+            return
+        ok = flashes == 2 and (lit or edges[0] - released <= 2 * op.tol) and not after and op.hl1() == 0
+        seen = f"{flashes} flash(es) in 2 s"
+        if edges and not lit:
             seen += f" starting {edges[0] - released:.2f} s after the release"
         if after:
             seen += f", {len(after)} more after 2 s"
         c.check(rid, ok, f"after the {CAPACITY + 1}rd short press: HL1 flashes at 1 Hz for 2 s (2 flashes "
-                "from the release), then 0", seen, released)
+                f"from the release, {within_scan(op)}), then 0", seen, released)
 
 
 G2 = Requirement("G2", "Never a valve conflict: the two coils of one valve (L2/L3, L4/L5, L6/L7) are never "
@@ -387,20 +412,29 @@ def sc_manual(s: Session, c: Checks) -> None:
 PICK_AND_PLACE = (arm(0, 0, 0, 1), arm(1, 0, 0, 0), arm(1, 1, 1, 1), arm(0, 0, 0, 0))
 
 
-def sc_playback(s: Session, c: Checks) -> None:
+def sc_playback(s: Session, c: Checks, step: bool = False) -> None:
     """A pick-and-place taught with all four switches plays back."""
     op = Mp9cOp.begin(s, c)
     teach(op, list(PICK_AND_PLACE))
+    if step:
+        step_mode(op)
     op.start_auto()
     with c.requirement("T1.5") as rid:
-        since = op.press()
-        for k, frame in enumerate(PICK_AND_PLACE + PICK_AND_PLACE[:1]):
-            label = f"frame {k % 4 + 1}" + (" after frame 4" if k == 4 else "")
-            run = op.follow(rid, frame, label, since, DEBOUNCE + 1.0 if k == 0 else NEXT_WAIT)
-            if run is None:
-                return
-            since = run.done
-    op.stop_playback()
+        run = op.follow(rid, PICK_AND_PLACE[0], f"{op.mode}frame 1", op.press(), DEBOUNCE + 1.0)
+        for k, frame in enumerate(PICK_AND_PLACE[1:] + PICK_AND_PLACE[:1], 1):
+            run = run and op.advance(rid, frame, f"frame {k % 4 + 1}" + (" after frame 4" if k == 4 else ""),
+                                     run.done)
+        if not run:
+            return
+    if step:
+        op.back_to_manual()
+    else:
+        op.stop_playback()
+
+
+def sc_playback_step(s: Session, c: Checks) -> None:
+    """The pick-and-place in step mode (SA6 = 1)."""
+    sc_playback(s, c, step=True)
 
 
 TASK1 = (
@@ -414,22 +448,37 @@ TASK1 = (
                 "raises it (L2 = 1, L3 = 0, SQ1 reached).", "manual"),
     Requirement("T1.5", "A 4-frame pick-and-place taught with all four switches plays back in "
                 "automatic mode: each frame drives the valves its switches selected and waits for "
-                "the sensors; frame 1 follows frame 4.", "playback"),
+                "the sensors; frame 1 follows frame 4; in continuous and in step mode.", "playback"),
 )
 
 
 # --------------------------------------------------------------------------- Task 2
 
-def sc_pauses(s: Session, c: Checks) -> None:
-    """Frame 1 recorded with I0.7 = 1 (3 s), frame 2 with I0.7 = 0 (0.5 s); a cycle with I0.7 = 1,
-    then a cycle during which I0.7 is 0 (frame 1) and 1 again (frame 2)."""
+PAUSE_PATTERN = (1, 0, 0, 1)     # I0.7 when each frame is recorded: 3 s, 0.5 s, 0.5 s, 3 s
+
+
+def pause_frames() -> list[Frame]:
+    """Four lift frames (down, up, down, up) recorded with I0.7 as PAUSE_PATTERN says: swapped
+    pauses, the next frame's and the previous frame's pause all give different pauses."""
+    return [lift(k % 2 == 0, i07=v) for k, v in enumerate(PAUSE_PATTERN)]
+
+
+def sc_pauses(s: Session, c: Checks, step: bool = False) -> None:
+    """Four lift frames with the pauses 3, 0.5, 0.5, 3 s; a cycle with I0.7 = 1, then cycles
+    with I0.7 switched at every phase boundary, longer than the frame watchdog."""
     op = Mp9cOp.begin(s, c)
-    f1, f2 = lift(True, i07=1), lift(False, i07=0)
-    teach(op, [f1, f2])
-    pauses_flow(op, f1, f2, start_checked=False)
+    frames = pause_frames()
+    teach(op, frames)
+    pauses_flow(step_mode(op) if step else op, frames, PAUSE_PATTERN, start_checked=False)
 
 
-TASK2 = task2_requirements("I0.7", "from the sensors showing the frame done to the next valve change")
+def sc_pauses_step(s: Session, c: Checks) -> None:
+    """The pauses in step mode (SA6 = 1)."""
+    sc_pauses(s, c, step=True)
+
+
+TASK2 = task2_requirements("I0.7", "from the sensors showing the frame done to the next valve change",
+                           modes=", in continuous and in step mode")
 
 
 # --------------------------------------------------------------------------- Task 3
@@ -438,7 +487,7 @@ def refused_start(op: Mp9cOp) -> None:
     """T3.1: an SB1 press with I0.7 = 0 starts nothing. A program that starts is stopped in
     manual mode, where the arm goes back up (SA5 = 0), before the enabled start."""
     with op.c.requirement("T3.1") as rid:
-        if op.quiet(rid, op.press(), REFUSED, "an SB1 press with I0.7 = 0 starts nothing",
+        if op.quiet(rid, op.press(), REFUSED, f"{op.mode}an SB1 press with I0.7 = 0 starts nothing",
                     "the program started"):
             return
     op.set(SA1=0)
@@ -447,23 +496,44 @@ def refused_start(op: Mp9cOp) -> None:
     op.run(0.3)
 
 
-def sc_enable(s: Session, c: Checks) -> None:
+def sc_enable(s: Session, c: Checks, step: bool = False) -> None:
     """Four lift frames; start refused / accepted, wrap with I0.7 = 1, I0.7 dropped in frame 2."""
     op = Mp9cOp.begin(s, c)
     frames = [DOWN, UP, DOWN, UP]
     teach(op, frames)
-    enable_flow(op, frames, lambda: refused_start(op),
+    enable_flow(step_mode(op) if step else op, frames, lambda: refused_start(op),
                 ("frame 2 (second cycle)", "frame {k} (I0.7 dropped to 0 at t = {dropped:.2f} s)"))
 
 
+def sc_enable_step(s: Session, c: Checks) -> None:
+    """Task 3 in step mode (SA6 = 1)."""
+    sc_enable(s, c, step=True)
+
+
+def sc_last_pause(s: Session, c: Checks, step: bool = False) -> None:
+    """Four lift frames; I0.7 switched to 0 inside the last frame's pause."""
+    op = Mp9cOp.begin(s, c)
+    frames = [DOWN, UP, DOWN, UP]
+    teach(op, frames)
+    last_pause_flow(step_mode(op) if step else op, frames)
+
+
+def sc_last_pause_step(s: Session, c: Checks) -> None:
+    """The last pause in step mode (SA6 = 1)."""
+    sc_last_pause(s, c, step=True)
+
+
 TASK3 = task3_requirements("I0.7", remaining="frames 3 and 4", stops="execution stops there",
-                           restarts="by itself or on a press with I0.7 = 0")
+                           restarts="by itself or on a press with I0.7 = 0",
+                           modes=", in continuous and in step mode")
 
 
 # --------------------------------------------------------------------------- registration
 
 register_tasks(STAND, {
-    "task1": (TASK1, (Scenario("manual", sc_manual), Scenario("playback", sc_playback))),
-    "task2": (TASK2, (Scenario("pauses", sc_pauses),)),
-    "task3": (TASK3, (Scenario("enable", sc_enable),)),
+    "task1": (TASK1, (Scenario("manual", sc_manual), Scenario("playback", sc_playback),
+                      Scenario("playback_step", sc_playback_step))),
+    "task2": (TASK2, (Scenario("pauses", sc_pauses), Scenario("pauses_step", sc_pauses_step))),
+    "task3": (TASK3, (Scenario("enable", sc_enable), Scenario("enable_step", sc_enable_step),
+                      Scenario("last_pause", sc_last_pause), Scenario("last_pause_step", sc_last_pause_step))),
 }, GENERAL, GENERAL_SCENARIOS, make_session, every=(no_fault, no_conflict))

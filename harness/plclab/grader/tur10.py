@@ -30,7 +30,7 @@ from plclab.stands.tur10 import STAND, labels
 from plclab.trace import Trace
 
 from .common import (DEBOUNCE, EPS, NEXT_WAIT, NO_FAULT, FrameRun, Op, basics_flow, enable_flow,
-                     lamp_requirements, no_fault, pauses_flow, register_tasks, restart_flow,
+                     lamp_requirements, last_pause_flow, no_fault, pauses_flow, register_tasks, restart_flow,
                      task2_requirements, task3_requirements)
 from .registry import EVERY, Checks, Requirement, Scenario
 
@@ -148,6 +148,9 @@ class Tur10Op(Op[Frame]):
     wind_down = 0.5
     press_window = "50 ms debounce + one scan"
     started = "its first nonzero reference came"
+    watchdog = "G11"
+    frame_timeout = FRAME_TIMEOUT
+    timeout_tol = f"+/- {TIMEOUT_TOL:g} s + one scan"
 
     @property
     def scan(self) -> float:
@@ -233,18 +236,44 @@ class Tur10Op(Op[Frame]):
         start = self.when(moving, after=since, timeout=timeout)
         if start is None:
             pos = self.positions()
-            self.c.fail(rid, f"{label} starts within {timeout:g} s of t = {since:.2f} s (a nonzero reference "
-                        f"towards {frame.where()})",
-                        f"every reference stayed 0 (link 1 at {pos[1]})", since)
+            self.missed(rid, f"{label} starts within {timeout:g} s of t = {since:.2f} s (a nonzero reference "
+                        f"towards {frame.where()})", f"every reference stayed 0 (link 1 at {pos[1]})", since)
             return None
         if on_start is not None:
             on_start()
+        expected = (f"{label} reached within {DONE_WAIT:g} s: {frame.where()} (+/- {ADMISSIBLE} codes), every "
+                    "reference back to 0")
+        stop = self.when(still, after=start, timeout=DONE_WAIT)
+        if stop is not None and not frame.reached(self.s.trace.state_at(stop)) and self.stays_still(stop):
+            if not self.fault_explains(rid, expected, f"every reference 0 at t = {stop:.2f} s", start):
+                self.c.fail(rid, f"{label}: every reference back to 0 only once every link is within "
+                            f"{ADMISSIBLE} codes of the frame ({frame.where()})", self.stopped_short(frame, stop),
+                            stop)
+            return None
         done = self.when(frame.reached, after=start, timeout=DONE_WAIT)
         if done is None:
-            self.c.fail(rid, f"{label} reached within {DONE_WAIT:g} s: {frame.where()} (+/- 16 codes), every "
-                        "reference back to 0", self.explain_miss(frame, start), start)
+            if not self.fault_explains(rid, expected, self.explain_miss(frame, start), start):
+                self.c.fail(rid, expected, self.explain_miss(frame, start), start)
             return None
-        return FrameRun(start, done)
+        return self.ran(FrameRun(start, done))
+
+    def stays_still(self, t: float) -> bool:
+        """Every reference stays 0 for a while from `t` (more than a zero crossing)."""
+        return self.when(moving, after=t + EPS, timeout=SETTLE) is None
+
+    def stopped_short(self, frame: Frame, t: float) -> str:
+        """Where the links were when every reference went to 0 at `t`, short of `frame`."""
+        tr = self.s.trace
+        at = tr.state_at(t)
+        later = tr.state_at(t + SETTLE)
+        off = [k for k in AXES if abs(at[POS[k - 1]] - frame.codes[k - 1]) > ADMISSIBLE]
+        where = ", ".join(f"link {k} at {at[POS[k - 1]]} ({at[POS[k - 1]] - frame.codes[k - 1]:+d} codes from "
+                          f"the target, beyond the admissible {ADMISSIBLE})" for k in off)
+        moving_links = [k for k in AXES if abs(later[POS[k - 1]] - at[POS[k - 1]]) > STILL]
+        if moving_links:
+            k = moving_links[0]
+            where += f"; the link was still moving (link {k} at {later[POS[k - 1]]} {SETTLE:g} s later)"
+        return f"every reference 0 at t = {t:.2f} s with {where}"
 
     def explain_miss(self, frame: Frame, start: float) -> str:
         """Why `frame` was not reached: where the links are and what the references did."""
@@ -280,11 +309,12 @@ def teach_two(op: Tur10Op, first_i15: Optional[int] = None,
     return f1, op.record(i15=second_i15)
 
 
-def teach_three(op: Tur10Op) -> list[Frame]:
-    """Three frames of drive 1: where it is (16000), 3000 codes forward, 1000 back."""
-    f1, f2 = teach_two(op)
+def teach_three(op: Tur10Op, i15: tuple[Optional[int], ...] = (None, None, None)) -> list[Frame]:
+    """Three frames of drive 1: where it is (16000), 3000 codes forward, 1000 back (I1.5 set
+    first where `i15` gives it)."""
+    f1, f2 = teach_two(op, i15[0], i15[1])
     op.jog_to(1, f2.codes[0] - 1000)
-    return [f1, f2, op.record()]
+    return [f1, f2, op.record(i15=i15[2])]
 
 
 # --------------------------------------------------------------------------- every scenario
@@ -384,7 +414,7 @@ def sc_restart(s: Session, c: Checks) -> None:
     """The recorded program survives a PLC restart."""
     op = Tur10Op.begin(s, c)
     f1, f2 = teach_two(op)
-    if restart_flow(op, G10.id, f1, f2, off_time=1.0):
+    if restart_flow(op, G10.id, f1, f2, off_time=1.0, lamp="G5"):
         op.stop_playback()
 
 
@@ -488,7 +518,7 @@ def jog_check(op: Tur10Op, k: int, direction: int, low: bool) -> None:
         expected = want * op.plant.gain * HOLD
         moved = after[k] - before[k]
         c.check(rid, abs(moved - expected) <= TRAVEL * abs(expected),
-                f"{what}: link {k} moves about {expected:+.0f} codes in {HOLD:g} s",
+                f"{what}: link {k} moves about {expected:+.0f} codes in {HOLD:g} s (+/- {TRAVEL:.0%})",
                 f"link {k} moved {moved:+d} codes", t)
     others = [j for j in AXES if j != k]
     other_ref = op.s.trace.first(lambda st: any(ref(st, j) for j in others), after=t,
@@ -563,11 +593,15 @@ TASK1 = (
 
 # --------------------------------------------------------------------------- Task 2
 
+PAUSE_PATTERN = (1, 0, 0)        # I1.5 when each frame is recorded: 3 s, 0.5 s, 0.5 s
+
+
 def sc_pauses(s: Session, c: Checks) -> None:
-    """Frame 1 recorded with I1.5 = 1 (3 s), frame 2 with I1.5 = 0 (0.5 s); a cycle with
-    I1.5 = 1, then a cycle during which I1.5 is 0 (frame 1) and 1 again (frame 2)."""
+    """Three frames with the pauses 3, 0.5, 0.5 s (swapped, next-frame and previous-frame
+    pauses all differ); a cycle with I1.5 = 1, then cycles with I1.5 switched at every phase
+    boundary, longer than the frame watchdog."""
     op = Tur10Op.begin(s, c)
-    pauses_flow(op, *teach_two(op, first_i15=1, second_i15=0))
+    pauses_flow(op, teach_three(op, PAUSE_PATTERN), PAUSE_PATTERN)
 
 
 TASK2 = task2_requirements("I1.5", "from the frame being reached, every reference back to 0 with the links "
@@ -601,6 +635,12 @@ def sc_enable(s: Session, c: Checks) -> None:
                  "frame {k} (the last; I1.5 dropped to 0 at t = {dropped:.2f} s)"))
 
 
+def sc_last_pause(s: Session, c: Checks) -> None:
+    """Three frames; I1.5 switched to 0 inside the last frame's pause."""
+    op = Tur10Op.begin(s, c)
+    last_pause_flow(op, teach_three(op))
+
+
 TASK3 = task3_requirements("I1.5", remaining="frame 3 (the last)",
                            stops="execution stops there (every reference 0)",
                            restarts="by itself, on a press with I1.5 = 0 or on I1.5 = 1 alone")
@@ -611,5 +651,5 @@ TASK3 = task3_requirements("I1.5", remaining="frame 3 (the last)",
 register_tasks(STAND, {
     "task1": (TASK1, (Scenario("jog", sc_jog),)),
     "task2": (TASK2, (Scenario("pauses", sc_pauses),)),
-    "task3": (TASK3, (Scenario("enable", sc_enable),)),
+    "task3": (TASK3, (Scenario("enable", sc_enable), Scenario("last_pause", sc_last_pause))),
 }, GENERAL, GENERAL_SCENARIOS, make_session, every=(no_fault, no_overvoltage, no_contention, no_collision))
