@@ -68,3 +68,20 @@ def assert_traces_written(report: GradeReport, out: Path, scenarios: Sequence[st
         assert vcd.read_text(encoding="utf-8").startswith("$")
         assert report.traces[scenario] == [csv, vcd]
     return texts
+
+
+def assert_row_names_mistake(report: GradeReport, rid: str, words: str, only: list[str] | None) -> None:
+    """Row `rid` fails and says `words` (in what it expected or observed); with `only`, those
+    are the only failing rows (the mistake is not charged to other requirements)."""
+    row = report.row(rid)
+    assert not row.passed and words in row.expected + " | " + row.observed, row
+    if only is not None:
+        assert failed_ids(report) == only, report.text()
+
+
+def assert_fault_stop_named(report: GradeReport, task_prefix: str, watchdog: str) -> None:
+    """A program stopped by its own frame watchdog: every task row that failed on it says so
+    and points at the watchdog requirement, instead of blaming the task's input."""
+    rows = [r for r in report.failed() if r.id.startswith(task_prefix) and not r.observed.startswith("not checked")]
+    assert rows and all("stopped with a fault" in r.observed and f"see {watchdog}" in r.observed for r in rows), rows
+    assert not report.row(watchdog).passed

@@ -67,6 +67,7 @@ ENABLE_AT_REACHED = (
 )
 
 HL1_LATCHED = (("ELSE\n    Q := Empty;\nEND_IF;", "ELSIF Empty THEN\n    Q := TRUE;                  (* ON while empty *)\nEND_IF;"),)
+HL1_INVERTED = (("HL1 := Indicator.Q;", "HL1 := NOT Indicator.Q;"),)
 RECORD_ON_PRESS = (("Short := WasHeld AND NOT Held AND NOT LongGiven;", "Short := Press;"),)
 
 
@@ -100,6 +101,9 @@ FIXTURES = (
             (("IF NOT SA1 THEN\n    (* manual mode: every valve follows its switch (Task 1) *)\n"
               + MANUAL_TASK1 + "END_IF;\n",
               "(* every valve follows its switch (Task 1) *)\n" + MANUAL_TASK1.replace("    L", "L")),)),
+    Fixture("task1_hl1_inverted", "task1", "G3",
+            "HL1 := NOT Indicator.Q: the lamp is OFF while the program is empty and ON once it holds frames.",
+            "task1", HL1_INVERTED),
     # ---------------------------------------------------------------- Task 2
     Fixture("task2_pauses_swapped", "task2", "T2.1",
             "pauses swapped: I0.7 = 0 gives 3 s, I0.7 = 1 gives 0.5 s.", "task2",
@@ -134,6 +138,8 @@ FIXTURES = (
     Fixture("task2_watchdog_whole_run", "task2", "G10",
             "the frame watchdog times the whole run (Watch := Running), not each frame: normal playback "
             "stops with a fault 10 s after the start.", "task2", WATCHDOG_WHOLE_RUN),
+    Fixture("task2_record_on_press", "task2", "G3",
+            "a frame is recorded on the (debounced) press of SB1, not at its release.", "task2", RECORD_ON_PRESS),
     Fixture("task2_short_pause_1s", "task2", "T2.1",
             "the short pause kept the baseline value: I0.7 = 0 gives 1 s instead of 0.5 s.", "task2",
             (("PAUSE_SHORT : TIME := T#500ms;", "PAUSE_SHORT : TIME := T#1s;"),)),
@@ -161,8 +167,6 @@ FIXTURES = (
     Fixture("task3_hl1_never_off", "task3", "G3",
             "HL1 switched ON while the program is empty but never switched OFF again (no ELSE branch).",
             "task3", HL1_LATCHED),
-    Fixture("task2_record_on_press", "task2", "G3",
-            "a frame is recorded on the (debounced) press of SB1, not at its release.", "task2", RECORD_ON_PRESS),
     Fixture("task3_stops_at_once", "task3", "T3.4",
             "I0.7 = 0 stops execution at once instead of after the last frame and its pause.", "task3",
             (("ELSIF Fault THEN\n    State := STOPPED;",
@@ -286,6 +290,9 @@ TUR10_FIXTURES = (
           "is still far from the frame and moving.", "task1",
           ("    Admissible : INT := 16;     (* admissible error, codes *)",
            "    Admissible : INT := 160;    (* admissible error, codes *)")),
+    tur10("task2_hl1_inverted", "task2", "G5",
+          "HL1 := NOT Indicator.Q: the lamp is OFF while the program is empty and ON once it holds frames.",
+          "task2", *HL1_INVERTED),
     tur10("task2_hl1_never_off", "task2", "G5",
           "HL1 switched ON while the program is empty but never switched OFF again (no ELSE branch).",
           "task2", *HL1_LATCHED),

@@ -17,7 +17,8 @@ from plclab.grader import GradeReport, Row, grade, grade_sources, requirement_ta
 from plclab.stands import bundle, sources
 from plclab.stands.mp9c import STAND
 from grader_helpers import (FIXTURES_DIR, TASKS, assert_fails_exactly, assert_fails_with,
-                            assert_traces_written, failed_ids, fixtures, fixtures_per_task)
+                            assert_fault_stop_named, assert_row_names_mistake, assert_traces_written,
+                            fixtures, fixtures_per_task)
 
 FIXTURES = FIXTURES_DIR / "mp9c"
 DIAGNOSTIC = re.compile(r"^.+:\d+:\d+: error: .+$")
@@ -200,6 +201,7 @@ def test_trace_shows_console_inputs_the_program_does_not_declare(tmp_path):
 # --------------------------------------------------------------------------- rows that name the mistake
 
 NAMED = {   # fixture: (its row, words the row must say, the only rows that may fail)
+    "task1_hl1_inverted": ("G3", "HL1=1 at power-up (no frame recorded)", ["G3", "G4"]),
     "task3_reset_on_release": ("G5", "the program was reset at the release, not while SB1 was held", None),
     "task2_pauses_swapped": ("T2.1", "the pauses are swapped", None),
     "task2_pause_off_by_one": ("T2.2", "off by one: after each frame came the pause recorded with the next frame",
@@ -217,18 +219,12 @@ NAMED = {   # fixture: (its row, words the row must say, the only rows that may 
 
 @pytest.mark.parametrize("name", sorted(NAMED))
 def test_wrong_solution_row_names_its_mistake(name):
-    rid, words, only = NAMED[name]
     task = next(t for n, t, _ in fixtures("mp9c") if n == f"{name}.st")
-    report = grade("mp9c", task, [str(FIXTURES / f"{name}.st")])
-    row = report.row(rid)
-    assert not row.passed and words in row.expected + " | " + row.observed, row
-    if only is not None:
-        assert failed_ids(report) == only, report.text()
+    assert_row_names_mistake(grade("mp9c", task, [str(FIXTURES / f"{name}.st")]), *NAMED[name])
 
 
 def test_a_fault_stop_is_not_taken_for_a_task_mistake():
     """The whole-run watchdog stops playback with HL1 blinking: the task's row says so and
     points at G10 instead of blaming I0.7."""
     report = grade("mp9c", "task2", [str(FIXTURES / "task2_watchdog_whole_run.st")])
-    task_rows = [r for r in report.failed() if r.id.startswith("T2") and not r.observed.startswith("not checked")]
-    assert task_rows and all("stopped with a fault" in r.observed and "see G10" in r.observed for r in task_rows)
+    assert_fault_stop_named(report, "T2", "G10")

@@ -17,7 +17,8 @@ from plclab.grader.tur10 import POS, make_session
 from plclab.stands import bundle, sources
 from plclab.stands.tur10 import STAND
 from grader_helpers import (FIXTURES_DIR, TASKS, assert_fails_exactly, assert_fails_with,
-                            assert_traces_written, failed_ids, fixtures, fixtures_per_task)
+                            assert_fault_stop_named, assert_row_names_mistake, assert_traces_written,
+                            fixtures, fixtures_per_task)
 
 FIXTURES = FIXTURES_DIR / "tur10"
 SCENARIOS = {"task1": ("jog",), "task2": ("pauses",), "task3": ("enable", "last_pause")}
@@ -151,6 +152,7 @@ def test_plant_positions_are_traced_across_a_restart(tmp_path):
 # --------------------------------------------------------------------------- rows that name the mistake
 
 NAMED = {   # fixture: (its row, words the row must say, the only rows that may fail)
+    "task2_hl1_inverted": ("G5", "HL1=1 at power-up (no frame recorded)", ["G5", "G6"]),
     "task3_reset_on_release": ("G7", "the program was reset at the release, not while SB1 was held", None),
     "task2_pauses_swapped": ("T2.1", "the pauses are swapped", None),
     "task2_pause_off_by_one": ("T2.2", "off by one: after each frame came the pause recorded with the next frame",
@@ -167,18 +169,12 @@ NAMED = {   # fixture: (its row, words the row must say, the only rows that may 
 
 @pytest.mark.parametrize("name", sorted(NAMED))
 def test_wrong_solution_row_names_its_mistake(name):
-    rid, words, only = NAMED[name]
     task = next(t for n, t, _ in fixtures("tur10") if n == f"{name}.st")
-    report = grade("tur10", task, [str(FIXTURES / f"{name}.st")])
-    row = report.row(rid)
-    assert not row.passed and words in row.expected + " | " + row.observed, row
-    if only is not None:
-        assert failed_ids(report) == only, report.text()
+    assert_row_names_mistake(grade("tur10", task, [str(FIXTURES / f"{name}.st")]), *NAMED[name])
 
 
 def test_a_fault_stop_is_not_taken_for_a_task_mistake():
     """The whole-run watchdog stops playback with HL1 blinking: the task's row says so and
     points at G11 instead of blaming I1.5."""
     report = grade("tur10", "task2", [str(FIXTURES / "task2_watchdog_whole_run.st")])
-    task_rows = [r for r in report.failed() if r.id.startswith("T2") and not r.observed.startswith("not checked")]
-    assert task_rows and all("stopped with a fault" in r.observed and "see G11" in r.observed for r in task_rows)
+    assert_fault_stop_named(report, "T2", "G11")

@@ -445,21 +445,20 @@ def pauses_flow(op: Op[F], frames: Sequence[F], recorded: Sequence[int], start_c
     c, name, n = op.c, op.enable_label, len(frames)
     wanted = [PAUSE_LONG if r else PAUSE_SHORT for r in recorded]
     op.start_auto()
-    with c.requirement("T2.1", "T2.2"):
-        label = f"{op.mode}frame 1"
-        if start_checked:
-            run = op.press_starts("T2.2", frames[0], label, op.press())
-        else:
-            run = op.follow("T2.2", frames[0], label, op.press(), DEBOUNCE + 1.0)
+    label = f"{op.mode}frame 1"           # a frame that does not come fails the row of the pause before it
+    if start_checked:
+        run = op.press_starts("T2.2", frames[0], label, op.press())
+    else:
+        run = op.follow("T2.2", frames[0], label, op.press(), DEBOUNCE + 1.0)
+    if run is None:
+        return
+    first = [run]
+    for k in range(1, n + 1):
+        run = op.advance(_pause_req(recorded[k - 1]), frames[k % n], f"frame {k % n + 1} after frame {k}", run.done)
         if run is None:
             return
-        first = [run]
-        for k in range(1, n + 1):
-            run = op.advance(_pause_req(recorded[k - 1]), frames[k % n], f"frame {k % n + 1} after frame {k}",
-                             run.done)
-            if run is None:
-                return
-            first.append(run)
+        first.append(run)
+    with c.requirement("T2.1", "T2.2"):
         seen = [b.start - a.done for a, b in zip(first, first[1:])]
         why = _pause_pattern(seen, wanted, op.tol + (TAP_PERIOD if op.step else 0.0), name)
         for k in range(n):
@@ -550,8 +549,8 @@ def task3_requirements(enable: str, remaining: str, stops: str, restarts: str,
         Requirement("T3.2", f"An SB1 press with {enable} = 1 starts frame 1.", "enable"),
         Requirement("T3.3", f"With {enable} = 1 the frames run in order and frame 1 follows the last frame "
                     "and its pause.", "enable"),
-        Requirement("T3.4", f"{enable} dropped to 0 during frame 2: frame 2 and the remaining {remaining} "
-                    "still run to completion.", "enable"),
+        Requirement("T3.4", f"{enable} dropped to 0 during frame 2 (also as frame 1 is reached or inside its "
+                    f"pause): frame 2 and the remaining {remaining} still run to completion.", "enable"),
         Requirement("T3.5", f"Then, after the last frame and its pause, no transition to frame 1: {stops}.",
                     "enable"),
         Requirement("T3.6", f"After that stop nothing restarts {restarts}; an SB1 press with {enable} = 1 "
@@ -648,7 +647,34 @@ def last_pause_flow(op: Op[F], frames: Sequence[F]) -> None:
                        "execution went on to frame 1 (it never stops after the last frame: see T3.5)"
                        if c.failed("T3.5") else f"{name} was read when frame {n} was reached, not when its "
                        "pause was over: execution went on to frame 1")
+    for phase in ("as frame 1 was reached", "inside frame 1's pause"):
+        op.set(**{op.auto: 0})                       # whatever happened, a fresh start from manual mode
+        op.run(op.wind_down + 1.0)
+        op.start_auto()
+        _dropped_at(op, frames, phase)
     op.back_to_manual()
+
+
+def _dropped_at(op: Op[F], frames: Sequence[F], phase: str) -> None:
+    """T3.4 and T3.5 with the input dropped to 0 at another phase boundary of frame 1 (`phase`:
+    as it is reached, or inside its pause): the remaining frames still run, then execution
+    stops after the last one and its pause."""
+    c, name, n = op.c, op.enable_label, len(frames)
+    with c.requirement("T3.4"):
+        run = op.press_starts("T3.4", frames[0], f"{op.mode}frame 1 (SB1 pressed with {name} = 1)", op.press())
+        if run is None:
+            return
+        if phase.startswith("inside"):
+            op.run_until(run.done + PAUSE_SHORT / 2)
+        dropped = op.set_enable(0)
+        for k in range(1, n):
+            run = op.advance("T3.4", frames[k], f"frame {k + 1} ({name} dropped to 0 {phase}, t = {dropped:.2f} s)",
+                             run.done)
+            if run is None:
+                return
+    with c.requirement("T3.5"):
+        op.quiet_after("T3.5", run.done, PAUSE_LONG + REFUSED, f"no frame starts after frame {n} (the last) and "
+                       f"its pause, {name} having been dropped to 0 {phase}", "execution went on to frame 1")
 
 
 # --------------------------------------------------------------------------- registration
