@@ -31,7 +31,7 @@ from typing import Callable, Optional
 from plclab import fileio
 from plclab.errors import PlcLabError
 from plclab.modbus.maps import TwidoMap
-from plclab.modbus.profiles import THERMO
+from plclab.modbus.profiles import MANUAL, THERMO, THERMO_MODES, THERMO_RULES, valid_range
 from plclab.modbus.protocol import ModbusException, Request, Table
 from plclab.modbus.server import answer_pdu
 from plclab.modbus.traffic import Exchange, Traffic, TrafficRecorder, describe, exception_name, parse_traffic
@@ -44,9 +44,8 @@ from .report import GradeReport
 STAND = "thermo"
 SCENARIO = "replay"                 # the one "scenario": the recorded traffic replayed
 TEMPERATURE, HEATER, MODE = 3, 2, 0          # %MWn of the register contract
-HEATER_RANGE = range(0, 2001)
+HEATER_RANGE = valid_range(THERMO_RULES, "HEATER_CTRL")     # what the stand accepts in %MW2
 READ_PERIOD_S = 10.0                # a display that shows the value reads it at least this often
-MODE_NAMES = {0: "manual", 1: "automatic-1", 2: "automatic-2"}
 NAMED_REFUSALS = 3                  # refused requests named one by one in a row; the rest counted
 
 
@@ -285,7 +284,7 @@ def heater_in_range(r: Replay) -> Optional[Failure]:
         return None
     x = bad[0]
     fate = f"refused with exception {int(x.refusal.code):02d}" if x.refusal is not None else "accepted"
-    return Failure(f"%MW2 within {HEATER_RANGE.start}..{HEATER_RANGE.stop - 1} (2000 is full power, 40 W)",
+    return Failure(f"%MW2 within {HEATER_RANGE} ({HEATER_RANGE.high} is full power, 40 W)",
                    f"%MW2 = {x.written(HEATER)} written at t = {x.time:.2f} s, {fate}; {len(bad)} of {len(writes)} "
                    f"writes of %MW2 out of range", x.time)
 
@@ -294,13 +293,13 @@ def heater_in_manual(r: Replay) -> Optional[Failure]:
     if not any(x.written(HEATER) is not None for x in r.exchanges):
         return _not_checked(r)
     bad = [x for x in r.exchanges if x.written(HEATER) in HEATER_RANGE and x.refusal is not None
-           and (x.written(MODE) if x.written(MODE) is not None else x.mode) != 0]
+           and (x.written(MODE) if x.written(MODE) is not None else x.mode) != MANUAL]
     if not bad:
         return None
     x = bad[0]
     return Failure("%MW0 = 0 (manual mode) set before %MW2 is written",
                    f"%MW2 = {x.written(HEATER)} written at t = {x.time:.2f} s while %MW0 = {x.mode} "
-                   f"({MODE_NAMES.get(x.mode, 'unknown mode')}): refused with exception "
+                   f"({THERMO_MODES.get(x.mode, 'unknown mode')}): refused with exception "
                    f"{int(x.refusal.code):02d}; {len(bad)} such write{'s' if len(bad) > 1 else ''}", x.time)
 
 
@@ -344,7 +343,7 @@ S2_1 = Requirement("S2.1", f"The client displays the heater power: it reads %MW2
                    f"{READ_PERIOD_S:g} s.", SCENARIO)
 S2_2 = Requirement("S2.2", "It sets the heater power: the stand accepts a write of %MW2 and the plant's heater "
                    "follows (heater output %QW1 = the value, one scan later).", SCENARIO)
-S2_3 = Requirement("S2.3", f"Every heater power it writes is within {HEATER_RANGE.start}..{HEATER_RANGE.stop - 1}.",
+S2_3 = Requirement("S2.3", f"Every heater power it writes is within {HEATER_RANGE}.",
                    SCENARIO)
 S2_4 = Requirement("S2.4", "It writes %MW2 in manual mode only (%MW0 = 0): in an automatic mode the regulator "
                    "owns the heater and the stand refuses the write.", SCENARIO)
