@@ -337,7 +337,7 @@ def build_parser() -> argparse.ArgumentParser:
     c.set_defaults(func=_cmd_sim)
 
     stands = ("mp9c", "tur10", "thermo")
-    every_stand = stands + ("cnc",)          # cnc has no serve config, Modbus register face or grader yet
+    every_stand = stands + ("cnc",)          # cnc has no serve config or Modbus register face yet
 
     c = sub.add_parser("build", help="write the OpenPLC bundle (.st) and a PLCopen TC6 XML project")
     c.add_argument("stand", choices=every_stand)
@@ -363,8 +363,8 @@ def build_parser() -> argparse.ArgumentParser:
     c.set_defaults(func=_cmd_run)
 
     c = sub.add_parser("grade", help="grade a program on a lab task: one row per requirement")
-    c.add_argument("stand", choices=stands)
-    c.add_argument("task", metavar="TASK", help="task1, task2 or task3; thermo: scada1 or scada2")
+    c.add_argument("stand", choices=every_stand)
+    c.add_argument("task", metavar="TASK", help="task1, task2 or task3; thermo: scada1 or scada2; cnc: task4")
     c.add_argument("files", nargs="*", metavar="FILE.st")
     c.add_argument("--out", default="out/grade", metavar="DIR", help="trace files (CSV + VCD per scenario)")
     c.add_argument("--listen", metavar="HOST:PORT",

@@ -17,14 +17,15 @@ sys.path.insert(0, str(REPO / "tests" / "runtime"))
 
 from st_helpers import load  # noqa: E402
 
-from plclab.stands import PLC_DIR  # noqa: E402
+from plclab.stands import pou_path  # noqa: E402
 
 MAX_POINTS = 20000
 
 
 def pou(*stems: str) -> str:
-    """The text of shipped POU files, in order."""
-    return "\n".join((PLC_DIR / "POUs" / f"{s}.st").read_text(encoding="utf-8") for s in stems)
+    """The text of the POU files, in order: the reference version where the students get a
+    stub (FB_CncEvalLinear: solutions/POUs)."""
+    return "\n".join(pou_path(s, reference=True).read_text(encoding="utf-8") for s in stems)
 
 
 class Runner:

@@ -314,7 +314,25 @@ TUR10_FIXTURES = (
           "frame timeout copied from the MP-9C lab: 10 s instead of 20 s.", "task3",
           ("    FRAME_TIMEOUT : TIME := T#20s;", "    FRAME_TIMEOUT : TIME := T#10s;")),
 )
-ALL_FIXTURES = FIXTURES + TUR10_FIXTURES
+# The CNC lab's Task 4: the student's FB_CncEvalLinear, each with one mistake (base: the
+# reference program, whose FB_CncEvalLinear is the model answer).
+CNC_FIXTURES = (
+    Fixture("task4_wrong_quadrant_sign", "task4", "E3",
+            "DirY := DY > 0: the Y direction bit inverted, so Y steps away from the end point in every "
+            "quadrant.", "full", (("    DirY := DY < 0;", "    DirY := DY > 0;"),), stand="cnc"),
+    Fixture("task4_no_end_point_stop", "task4", "E1",
+            "Busy is never cleared: the block goes on stepping past the end point and the frame never "
+            "ends.", "full",
+            (("    Busy := FALSE;\n    FOR i := 0 TO 2 DO", "    FOR i := 0 TO 2 DO"),), stand="cnc"),
+    Fixture("task4_two_steps_per_fine_cycle", "task4", "E4",
+            "F < 0 steps beta and alpha together: two unit steps in one iteration of the plain method.",
+            "full", (("(* eq. (2) *)", "(* eq. (2) *)\n        Stepped[Lead] := TRUE;"),), stand="cnc"),
+    Fixture("task4_wrong_evaluation_sign", "task4", "E2",
+            "F <= 0 instead of F >= 0 steps alpha: the leading coordinate runs ahead to its end and the "
+            "path leaves the line.", "full",
+            (("    ELSIF F[Other] >= 0 THEN", "    ELSIF F[Other] <= 0 THEN"),), stand="cnc"),
+)
+ALL_FIXTURES = FIXTURES + TUR10_FIXTURES + CNC_FIXTURES
 
 
 def header(f: Fixture) -> str:

@@ -82,10 +82,10 @@ def _error(f: Frame, start, end, q, h: float) -> float:
         cx, cy = start[0] + grid(f.centre[0], h) - grid(f.start[0], h), start[1] + grid(f.centre[1], h) - grid(f.start[1], h)
         r = math.hypot(start[0] - cx, start[1] - cy)
         return abs(math.hypot(q[0] - cx, q[1] - cy) - r)
-    return _segment_distance(start, end, q)
+    return segment_distance(start, end, q)
 
 
-def _segment_distance(a, b, q) -> float:
+def segment_distance(a, b, q) -> float:
     d = [bi - ai for ai, bi in zip(a, b)]
     dd = sum(c * c for c in d)
     if dd == 0:

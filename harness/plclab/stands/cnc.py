@@ -23,13 +23,17 @@ FINE_CYCLE_S = 0.001
 MAX_FRAMES = 200
 METHODS = {"evalfn": 0, "dda": 1, "integration": 2}
 
+TASKS = (Task("FineTask", "T#1ms", 0, (("Main", "PRG_CncStand"),)),)
 STAND = Stand(
     name="cnc",
     title="CNC stand (X-Y-Z table, step/direction drives)",
     gvl=("GVL_CNC",),
     variants={
-        "full": Variant("full", POUS, (Task("FineTask", "T#1ms", 0, (("Main", "PRG_CncStand"),)),),
-                        "Part program from the frame table; interpolators of textbook chapter 4."),
+        "baseline": Variant("baseline", POUS, TASKS,
+                            "The students' start: FB_CncEvalLinear is theirs to write, Task 4."),
+        "full": Variant("full", POUS, TASKS,
+                        "Part program from the frame table; interpolators of textbook chapter 4.",
+                        reference=True),
     },
 )
 
