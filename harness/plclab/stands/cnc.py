@@ -15,6 +15,7 @@ from plclab.cnc.gcode import Frame, parse
 from plclab.scenario import ScenarioFailure, Session
 from plclab.stands import Stand, Task, Variant
 from plclab.stands.base import Fault, FaultParam, StandSpec
+from plclab.trace import Trace
 
 POUS = ("FC_CncArcQuadrant", "FC_CncAngle", "FB_CncEvalLinear", "FB_CncEvalCircular", "FB_CncDdaPulses",
         "FB_CncDdaLinear", "FB_CncIntegLinear", "FB_CncIntegCircular", "FB_CncToolCorner", "FB_CncToolRadius",
@@ -341,6 +342,32 @@ def timeline(s: Session) -> list[str]:
     rows.append(f"{s.now:8.3f}  table at X {axes['X'].steps * s.plant.step_mm:.3f} "
                 f"Y {axes['Y'].steps * s.plant.step_mm:.3f} Z {axes['Z'].steps * s.plant.step_mm:.3f} mm")
     return rows
+
+
+SUMMARY_SIGNALS = ("SB1", "SB3", "HL1", "HL2", "KM1", "Frame", "ProgramEnd", "DIR_X", "DIR_Y")
+
+
+def summary_trace(s: Session) -> Trace:
+    """A scenario's trace without the step lines (a change every fine cycle): the console, the
+    lamps, KM1, the frame, the directions, and TableX / TableY, the table's position (steps)
+    whenever the frame changes. What the golden traces keep (tests/cnc/test_cnc_golden.py)."""
+    src = s.trace
+    out = Trace()
+    for name in SUMMARY_SIGNALS:
+        if name not in src:
+            continue
+        changes = src.changes(name)
+        info = src.info(name)
+        out.declare(name, info.kind, changes[0][1], changes[0][0], width=info.width)
+        for t, v in changes[1:]:
+            out.change(t, name, v)
+    for axis in "XY":
+        counter = f"CNT_{axis}"
+        out.declare(f"Table{axis}", "int", src.value_at_ns(counter, 0), width=16)
+        for t, _frame in src.changes("Frame")[1:]:
+            out.change(t, f"Table{axis}", src.value_at_ns(counter, t))
+    out.advance(src.end_ns)
+    return out
 
 
 SPEC = StandSpec(

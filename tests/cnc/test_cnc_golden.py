@@ -1,0 +1,36 @@
+"""Golden traces of the CNC stand's scenarios (tests/stands/golden/cnc-full-*.csv): the
+console, lamps, KM1, the frame, the direction bits and the table's position at each frame
+change, compared with a fresh run in virtual time (tolerance: one scan). After an intended
+change of behaviour regenerate with PLCLAB_UPDATE_GOLDEN=1 and review the diff."""
+from __future__ import annotations
+
+import sys
+from pathlib import Path
+
+import pytest
+
+sys.path.insert(0, str(Path(__file__).resolve().parents[1] / "stands"))
+from golden import check_golden  # noqa: E402
+
+from plclab.stands import cnc  # noqa: E402
+
+SCENARIOS = ("square", "circle", "star", "pocket", "backlash", "blank", "estop")
+
+
+@pytest.mark.parametrize("name", SCENARIOS)
+def test_scenario_matches_its_golden_trace(name):
+    s = cnc.session()
+    cnc.SCENARIOS[name](s)                # raises ScenarioFailure if the scenario's own checks fail
+    cnc.check_never(s)
+    summary = cnc.summary_trace(s)
+    assert summary.change_count("Frame") >= (1 if name == "estop" else 2)   # estop: frame 1 only
+    check_golden(summary, f"cnc-full-{name}", s.tick)
+
+
+def test_summary_keeps_the_table_position_at_every_frame_change():
+    s = cnc.session()
+    cnc.SCENARIOS["square"](s)
+    summary = cnc.summary_trace(s)
+    starts = [(summary.value_at_ns("TableX", t), summary.value_at_ns("TableY", t))
+              for t, _ in summary.changes("Frame")[1:]]
+    assert starts == [(2000, 0), (2000, 2000), (0, 2000)]          # frames 2, 3, 4 of the 20 mm square
