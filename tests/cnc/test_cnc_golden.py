@@ -34,3 +34,15 @@ def test_summary_keeps_the_table_position_at_every_frame_change():
     starts = [(summary.value_at_ns("TableX", t), summary.value_at_ns("TableY", t))
               for t, _ in summary.changes("Frame")[1:]]
     assert starts == [(2000, 0), (2000, 2000), (0, 2000)]          # frames 2, 3, 4 of the 20 mm square
+
+
+def test_docs_show_every_plotted_scenario(tmp_path):
+    from plclab.cnc.run import PLOTTED_SCENARIOS, plot_scenario
+
+    docs = Path(__file__).resolve().parents[2] / "docs"
+    text = (docs / "cnc.md").read_text(encoding="utf-8")
+    for name in PLOTTED_SCENARIOS:
+        assert f"](img/cnc-{name}.png)" in text
+        assert (docs / "img" / f"cnc-{name}.png").stat().st_size > 10_000
+    out = plot_scenario("square", str(tmp_path / "square.png"))
+    assert out.read_bytes()[:8] == b"\x89PNG\r\n\x1a\n"

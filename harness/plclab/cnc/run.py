@@ -93,6 +93,26 @@ def run_cnc(part: str, method: str = "evalfn", step_mm: float = 0.01, feed: Opti
     return result
 
 
+PLOTTED_SCENARIOS = ("square", "circle", "star", "pocket", "backlash", "blank")
+
+
+def plot_scenario(name: str, path: str) -> Path:
+    """Run scenario `name` of the CNC stand and draw its tool path, the error per frame and the
+    feed (the pictures of docs/cnc.md: docs/img/cnc-NAME.png)."""
+    from plclab.stands import cnc
+
+    if name not in PLOTTED_SCENARIOS:
+        raise PlcLabError(f"no tool path to plot in scenario '{name}' (one of {', '.join(PLOTTED_SCENARIOS)})")
+    check_output(path)
+    s = cnc.session()
+    cnc.SCENARIOS[name](s)
+    run = s.cnc_run                       # type: ignore[attr-defined]
+    blocks = check_blocks(run.executed, run.points, run.step_mm, run.method, run.frames_start, run.origin,
+                          drive=run.drive)
+    return _plot(path, run.frames, run.executed, path_mm(run.points, run.step_mm), blocks, run.step_mm,
+                 f"scenario {name}", run.method)
+
+
 def _check_travel(frames: list[Frame], plant) -> None:
     lo, hi = plant.travel[0] * plant.step_mm, plant.travel[1] * plant.step_mm
     for f in frames:
@@ -142,9 +162,9 @@ def _plot(path: str, frames, executed, points, blocks, h, part, method) -> Path:
     ax, ax_err, ax_feed = fig.subplots(3, 1, gridspec_kw={"height_ratios": [3, 1, 1]})
     cx, cy = zip(*contour(frames))
     ax.plot(cx, cy, "k--", lw=0.8, label="programmed contour")
-    if any(f.comp for f in frames):
+    if any(f.comp for f in frames) or executed[-1].end != frames[-1].end:
         ex, ey = zip(*contour(executed))
-        ax.plot(ex, ey, ":", color="tab:orange", lw=1.0, label="equidistant (corrected frames)")
+        ax.plot(ex, ey, ":", color="tab:orange", lw=1.0, label="executed frames (corrected)")
     if points:
         ax.plot([p[1] for p in points], [p[2] for p in points], "b-", lw=0.8, label="tool path")
     ax.set_aspect("equal")

@@ -97,6 +97,8 @@ class PartRun:
     prep_error: int = 0        # frame whose tool-radius correction the PLC could not build
     origin: tuple[int, int, int] = (0, 0, 0)   # steps: where frame 1 started (after a measuring cycle)
     frames_start: float = 0.0  # s: when frame 1 started
+    method: str = "evalfn"
+    drive: str = "step"
 
 
 def run_part(s: Session, frames: list[Frame], method: str = "evalfn", diagonal: bool = False,
@@ -104,7 +106,7 @@ def run_part(s: Session, frames: list[Frame], method: str = "evalfn", diagonal: 
     """Load the frames, press SB1 and run until the program ends (or `timeout` s) and the
     pulse generator has spread its last counts."""
     load_frames(s, frames, method, diagonal, drive)
-    run = PartRun(frames, s.plant.step_mm, start=s.now, frames_start=s.now,
+    run = PartRun(frames, s.plant.step_mm, start=s.now, frames_start=s.now, method=method, drive=drive,
                   origin=tuple(s.plant.axes[a].steps for a in "XYZ"))
     s.console.press("SB1", hold=0.005)
     record_until(s, run, "ProgramEnd", timeout)
