@@ -149,7 +149,7 @@ def test_unknown_stand_or_task_is_one_line_error(tmp_path):
         grade("mp9c", "task4", [write_bundle(tmp_path, "task1")])
     with pytest.raises(PlcLabError, match=r"stand 'thermo' has no task 'task1' \(one of scada1, scada2\)"):
         grade("thermo", "task1", [write_bundle(tmp_path, "task1")])
-    with pytest.raises(PlcLabError, match="no requirements for stand 'cnc'"):
+    with pytest.raises(PlcLabError, match=r"stand 'cnc' has no task 'task1' \(one of task4\)"):
         grade("cnc", "task1", [write_bundle(tmp_path, "task1")])
 
 
