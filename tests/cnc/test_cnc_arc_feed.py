@@ -37,3 +37,12 @@ def test_contour_speed_on_an_arc_stays_the_feed(diagonal):
     assert min(speeds) >= 300 * chord / 1.25 * 0.97 and max(speeds) <= 300 * 1.02, (min(speeds), max(speeds))
     # the whole circle in 2 pi R / V (within a scan per quadrant)
     assert arc[-1][0] - arc[0][0] == pytest.approx(2 * math.pi * 10 / 5.0, abs=0.01)
+
+
+@pytest.mark.parametrize("method", ["dda", "integration"])
+def test_dda_and_integration_arcs_run_at_the_programmed_feed(method):
+    s = cnc.session()
+    run = cnc.run_part(s, parse("G21 G90 G17 F600\nG03 X0 Y0 I3 J0\n").frames, method)
+    took = run.points[-1][0] - run.start
+    ideal = 2 * math.pi * 3 / 10.0                       # 18.85 mm at 10 mm/s
+    assert ideal <= took <= ideal + 0.1, took            # + acceleration and deceleration (200 mm/s^2)
