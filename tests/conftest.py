@@ -1,5 +1,6 @@
 """Setup shared by the whole suite: the helper modules that live beside the tests
-(runtime/st_helpers.py, grader/grader_helpers.py, stands/golden.py, modbus/modbus_support.py)
+(runtime/st_helpers.py, grader/grader_helpers.py, stands/golden.py, modbus/modbus_support.py,
+cnc/cnc_st.py)
 import by their plain names, with pytest's assertion rewriting so their asserts report like
 the tests' own. One place instead of a sys.path line in each test file."""
 from __future__ import annotations
@@ -10,10 +11,10 @@ from pathlib import Path
 import pytest
 
 TESTS = Path(__file__).resolve().parent
-for folder in ("runtime", "grader", "stands", "modbus"):
+for folder in ("runtime", "grader", "stands", "modbus", "cnc"):
     if str(TESTS / folder) not in sys.path:
         sys.path.insert(0, str(TESTS / folder))
-pytest.register_assert_rewrite("st_helpers", "grader_helpers", "golden", "modbus_support")
+pytest.register_assert_rewrite("st_helpers", "grader_helpers", "golden", "modbus_support", "cnc_st")
 
 # CI is deterministic: under CI=true every property test draws the same examples each run
 # (a failure found there reproduces on the next run); a developer's run still explores anew.

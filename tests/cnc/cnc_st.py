@@ -2,22 +2,19 @@
 
 Each helper compiles the block(s) once with a small test PROGRAM around them that runs a
 whole frame inside one scan and records the visited points in arrays, so a property test
-can check hundreds of frames quickly. (The suite has no conftest.py and no package
-__init__: test files put this directory on sys.path.)
+can check hundreds of frames quickly. (tests/conftest.py puts this directory on sys.path.)
 """
 from __future__ import annotations
 
-import sys
 from functools import lru_cache
 from pathlib import Path
 from typing import Any
 
+from st_helpers import load
+
+from plclab.stands import pou_path
+
 REPO = Path(__file__).resolve().parents[2]
-sys.path.insert(0, str(REPO / "tests" / "runtime"))
-
-from st_helpers import load  # noqa: E402
-
-from plclab.stands import pou_path  # noqa: E402
 
 MAX_POINTS = 20000
 

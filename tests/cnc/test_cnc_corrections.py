@@ -4,14 +4,11 @@ reversal (4.2.2.3)."""
 from __future__ import annotations
 
 import math
-import sys
-from pathlib import Path
 
 import pytest
 from hypothesis import assume, given, settings, strategies as st
 
-sys.path.insert(0, str(Path(__file__).resolve().parent))
-from cnc_st import Runner, pou  # noqa: E402
+from cnc_st import Runner, pou
 
 _cache: dict[str, Runner] = {}
 

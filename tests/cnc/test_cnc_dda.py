@@ -4,13 +4,10 @@ coarse linear interpolator (eq. (4)-(5)) in the soft PLC: no pulse lost, no drif
 from __future__ import annotations
 
 import math
-import sys
-from pathlib import Path
 
 from hypothesis import example, given, settings, strategies as st
 
-sys.path.insert(0, str(Path(__file__).resolve().parent))
-from cnc_st import Runner, dda, dda_long, pou  # noqa: E402
+from cnc_st import Runner, dda, dda_long, pou
 
 N, EPS = 4, 0.01             # fine steps per cycle, mm per pulse (the test programs' values)
 LIMIT = N * EPS              # the largest increment per cycle with one pulse per fine step

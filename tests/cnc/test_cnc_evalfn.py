@@ -4,13 +4,10 @@ only, the end point exactly."""
 from __future__ import annotations
 
 import math
-import sys
-from pathlib import Path
 
 from hypothesis import given, settings, strategies as st
 
-sys.path.insert(0, str(Path(__file__).resolve().parent))
-from cnc_st import eval_circular, eval_linear  # noqa: E402
+from cnc_st import eval_circular, eval_linear
 
 increments = st.integers(min_value=-400, max_value=400)
 

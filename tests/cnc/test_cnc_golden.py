@@ -4,15 +4,13 @@ change, compared with a fresh run in virtual time (tolerance: one scan). After a
 change of behaviour regenerate with PLCLAB_UPDATE_GOLDEN=1 and review the diff."""
 from __future__ import annotations
 
-import sys
 from pathlib import Path
 
 import pytest
 
-sys.path.insert(0, str(Path(__file__).resolve().parents[1] / "stands"))
-from golden import check_golden  # noqa: E402
+from golden import check_golden
 
-from plclab.stands import cnc  # noqa: E402
+from plclab.stands import cnc
 
 SCENARIOS = ("square", "circle", "star", "pocket", "backlash", "blank", "estop")
 

@@ -4,13 +4,10 @@ within the accumulated-error bound of eq. (17)-(19)/(22)."""
 from __future__ import annotations
 
 import math
-import sys
-from pathlib import Path
 
 from hypothesis import given, settings, strategies as st
 
-sys.path.insert(0, str(Path(__file__).resolve().parent))
-from cnc_st import integ_circular, integ_linear  # noqa: E402
+from cnc_st import integ_circular, integ_linear
 
 lengths = st.integers(-1500, 1500).map(float)
 

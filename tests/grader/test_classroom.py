@@ -9,23 +9,19 @@ import io
 import multiprocessing
 import shutil
 from urllib.parse import unquote
-import sys
 from pathlib import Path
 
 import pytest
 from lxml import etree
 from lxml import html as lhtml
 
-sys.path.insert(0, str(Path(__file__).resolve().parent))
-pytest.register_assert_rewrite("grader_helpers")      # its asserts report like the tests' own
-
-from plclab.cli import main  # noqa: E402
-from plclab.grader import grade  # noqa: E402
-from plclab.grader.classroom import (find_submissions, grade_class, junit_xml, report_html,  # noqa: E402
+from plclab.cli import main
+from plclab.grader import grade
+from plclab.grader.classroom import (find_submissions, grade_class, junit_xml, report_html,
                                      results_csv, row_message, write_class_outputs)
-from plclab.stands import get_stand, sources  # noqa: E402
-from classroom_faults import grade_or_misbehave  # noqa: E402
-from grader_helpers import FIXTURES_DIR, fixtures  # noqa: E402
+from plclab.stands import get_stand, sources
+from classroom_faults import grade_or_misbehave
+from grader_helpers import FIXTURES_DIR, fixtures
 
 BROKEN = "PROGRAM Broken\nVAR x : INT; END_VAR\nx := ;\nEND_PROGRAM\n"   # a syntax error, line 3
 

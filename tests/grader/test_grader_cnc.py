@@ -4,20 +4,17 @@ every wrong solution in fixtures/cnc fails the requirement its first line names.
 from __future__ import annotations
 
 import functools
-import sys
-from pathlib import Path
 
 import pytest
 
-sys.path.insert(0, str(Path(__file__).resolve().parent))
 
-from plclab.cli import main  # noqa: E402
-from plclab.grader import GradeReport, grade, grade_sources  # noqa: E402
-from plclab.grader import cnc as cnc_grader  # noqa: E402
-from plclab.handout import handout_files  # noqa: E402
-from plclab.stands import bundle, pou_path  # noqa: E402
-from plclab.stands.cnc import STAND  # noqa: E402
-from grader_helpers import FIXTURES_DIR, assert_fails_with, assert_traces_written, fixtures  # noqa: E402
+from plclab.cli import main
+from plclab.grader import GradeReport, grade, grade_sources
+from plclab.grader import cnc as cnc_grader
+from plclab.handout import handout_files
+from plclab.stands import bundle, pou_path
+from plclab.stands.cnc import STAND
+from grader_helpers import FIXTURES_DIR, assert_fails_with, assert_traces_written, fixtures
 
 
 @functools.lru_cache(maxsize=None)

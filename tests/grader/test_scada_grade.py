@@ -289,7 +289,6 @@ def test_a_grader_bug_is_an_error_row_and_exit_code_2_never_the_students_fault(m
 
 
 def test_the_committed_class_of_logs_is_what_the_generator_makes():
-    sys.path.insert(0, str(Path(__file__).resolve().parent))
     from make_scada_fixtures import main as make
 
     assert make(["--check"]) == 0
