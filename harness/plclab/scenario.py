@@ -24,6 +24,7 @@ from typing import Any, Callable, Iterable, Iterator, Optional, Sequence
 
 from plclab.frontend import check_sources
 from plclab.runtime.compiler import CompiledProgram, compile_unit
+from plclab.runtime.image import image_slot
 from plclab.runtime.plc import PLC
 from plclab.runtime.retain import RetainStore
 from plclab.runtime.sim import Simulation
@@ -213,7 +214,6 @@ class Session:
         """A label's I/O point (`SQ2`), an observable (`FramePtr`) or an ST path, now."""
         address = self.labels.get(name, name)
         if address.startswith("%"):
-            from plclab.runtime.image import image_slot
             area, index = image_slot(address)
             raw = self.plc.image.areas[area][index]
             return bool(raw) if area[1] == "X" else raw

@@ -8,6 +8,7 @@ tick, so a scan never sees a half-applied multi-register write.
 """
 from __future__ import annotations
 
+import functools
 import threading
 from dataclasses import dataclass, field
 
@@ -28,10 +29,12 @@ AREAS: dict[str, tuple[int, int]] = {
 }
 
 
+@functools.lru_cache(maxsize=4096)
 def image_slot(address: str, *, percent: bool = True) -> tuple[str, int]:
     """Where a located address lives in the image: `'%IX1.6'` -> ('IX', 14), `'%QW3'` ->
     ('QW', 3). `percent=False` also takes the plants' spelling ('QW3'). An address outside
-    OpenPLC's areas is one AddressError line."""
+    OpenPLC's areas is one AddressError line. Cached: the PSM face and `Session.value` ask
+    for the same few addresses on every poll and every scan."""
     a = parse_address(address, percent=percent)
     if a.area not in AREAS:
         raise AddressError(f"{address}: not an OpenPLC area (%IX %QX %IW %QW %MW %MD %ML)")
