@@ -126,33 +126,37 @@ def test_xml_contents_of_the_full_program(built):
     assert "Tasks 1 + 2 + 3" in root.findtext("ppx:contentHeader/ppx:Comment", namespaces=NS)
 
     types = {t.get("name"): t for t in root.findall("ppx:types/ppx:dataTypes/ppx:dataType", NS)}
-    assert list(types) == ["T_FrameData", "ST_Frame", "T_FrameTable", "ST_ControlProgram"]
+    assert list(types) == ["T_FrameData", "ST_Frame", "T_FrameTable", "ST_ControlProgram", "ST_Playback"]
     table = types["T_FrameTable"].find("ppx:baseType/ppx:array", NS)
     assert [(d.get("lower"), d.get("upper")) for d in table.findall("ppx:dimension", NS)] == [("1", "32")]
     assert table.find("ppx:baseType/ppx:derived", NS).get("name") == "ST_Frame"
     pause = types["ST_Frame"].find("ppx:baseType/ppx:struct/ppx:variable[@name='Pause']", NS)
     assert pause.find("ppx:type/ppx:TIME", NS) is not None
-    assert pause.find("ppx:initialValue/ppx:simpleValue", NS).get("value") == "T#1s"
+    assert "Task 2" in "".join(pause.find("ppx:documentation", NS).itertext())
 
     pous = {p.get("name"): p for p in root.findall("ppx:types/ppx:pous/ppx:pou", NS)}
     assert pous["FC_PackBits7"].get("pouType") == "function"
     assert pous["FC_PackBits7"].find("ppx:interface/ppx:returnType/ppx:INT", NS) is not None
-    assert pous["FB_FrameStore"].get("pouType") == "functionBlock"
-    store = pous["FB_FrameStore"].find("ppx:interface", NS)
-    assert [etree.QName(c).localname for c in store] == ["inputVars", "inOutVars", "outputVars", "localVars"]
-    assert store.find("ppx:localVars", NS).get("constant") == "true"
-    prg = pous["PRG_Mp9cFull"]
+    manual = pous["FB_Mp9cManual"]
+    assert manual.get("pouType") == "functionBlock"
+    lists = manual.find("ppx:interface", NS)
+    assert [etree.QName(c).localname for c in lists] == ["inputVars", "inOutVars", "outputVars", "externalVars",
+                                                        "localVars"]
+    assert [v.get("name") for v in lists.findall("ppx:externalVars/ppx:variable", NS)][:5] == \
+        ["SA2", "SA3", "SA4", "SA5", "I07"]
+    assert lists.find("ppx:localVars", NS).get("constant") == "true"
+    short = lists.find("ppx:localVars[@constant='true']/ppx:variable[@name='SHORT_PAUSE']", NS)
+    assert short.find("ppx:initialValue/ppx:simpleValue", NS).get("value") == "T#500ms"
+    assert "I0.7 = 0" in "".join(short.find("ppx:documentation", NS).itertext())
+    prg = pous["PRG_Mp9cBaseline"]
     assert prg.get("pouType") == "program"
     lists = prg.find("ppx:interface", NS)
-    assert [v.get("name") for v in lists.findall("ppx:externalVars/ppx:variable", NS)][:2] == ["SA1", "SA2"]
+    assert [v.get("name") for v in lists.findall("ppx:externalVars/ppx:variable", NS)][:2] == ["SQ1", "SQ2"]
     retained = lists.find("ppx:localVars[@retain='true']", NS)
     assert retained.find("ppx:variable", NS).get("name") == "Cp"
     assert retained.find("ppx:variable/ppx:type/ppx:derived", NS).get("name") == "ST_ControlProgram"
-    short = lists.find("ppx:localVars[@constant='true']/ppx:variable[@name='PAUSE_SHORT']", NS)
-    assert short.find("ppx:initialValue/ppx:simpleValue", NS).get("value") == "T#500ms"
-    assert "Task 2" in "".join(short.find("ppx:documentation", NS).itertext())
-    assert body_of(prg).startswith("IF NOT SA1 THEN")
-    assert "PRG_Mp9cFull" in "".join(prg.find("ppx:documentation", NS).itertext())
+    assert body_of(prg).startswith("Sensors := FC_PackBits7(SQ1,")
+    assert "Task 1: every mechanism" in "".join(prg.find("ppx:documentation", NS).itertext())
 
     config = root.find("ppx:instances/ppx:configurations/ppx:configuration", NS)
     assert config.get("name") == "Config0"
@@ -160,13 +164,13 @@ def test_xml_contents_of_the_full_program(built):
     assert resource.get("name") == "Res0"
     task = resource.find("ppx:task", NS)
     assert (task.get("name"), task.get("interval"), task.get("priority")) == ("MainTask", "T#10ms", "1")
-    assert [(i.get("name"), i.get("typeName")) for i in task.findall("ppx:pouInstance", NS)] == [("Main", "PRG_Mp9cFull")]
+    assert [(i.get("name"), i.get("typeName")) for i in task.findall("ppx:pouInstance", NS)] == [("Main", "PRG_Mp9cBaseline")]
     globals_ = {v.get("name"): v for v in config.findall("ppx:globalVars/ppx:variable", NS)}
     assert globals_["SQ1"].get("address") == "%IX0.0" and globals_["SB1"].get("address") == "%IX1.6"
     assert globals_["HL1"].get("address") == "%QX1.0"
     assert globals_["SQ1"].find("ppx:type/ppx:BOOL", NS) is not None
     # CDATA in the file, as Beremiz writes it
-    assert "<xhtml:p><![CDATA[IF NOT SA1 THEN" in built["full"][1].read_text(encoding="utf-8")
+    assert "<xhtml:p><![CDATA[Sensors := FC_PackBits7(SQ1," in built["full"][1].read_text(encoding="utf-8")
 
 
 ALL_KINDS = """

@@ -61,11 +61,13 @@ def test_the_wheel_carries_the_shipped_st_and_no_solution(installed):
                  "plclab/plc/POUs/PRG_Thermo.st", "plclab/handouts/mp9c-tasks.md",
                  "plclab/benchprograms/bench300.st"):
         assert must in names
-    solution_only = {p.name for p in (SOLUTIONS / "POUs").glob("*.st")} - \
-        {p.name for p in (REPO / "harness" / "plclab" / "plc" / "POUs").glob("*.st")}
-    assert solution_only and not [n for n in names if Path(n).name in solution_only]
+    solution_files = {p.name for p in SOLUTIONS.rglob("*") if p.is_file()}
+    assert {"mp9c.toml", "tur10.toml", "FB_CncEvalLinear.st"} <= solution_files
+    assert not [n for n in names if n.startswith("solutions") or Path(n).name in solution_files - {"FB_CncEvalLinear.st"}]
     texts = "\n".join(zipfile.ZipFile(wheel).read(n).decode("utf-8", "replace") for n in names if n.endswith(".st"))
-    assert "RunEnable" not in texts and "RecordPause" not in texts
+    answer = (SOLUTIONS / "POUs" / "FB_CncEvalLinear.st").read_text(encoding="utf-8")
+    assert answer.strip() not in texts                      # the wheel has the students' stub, not the answer
+    assert "SHORT_PAUSE" not in texts and "LONG_PAUSE" not in texts     # nothing of the task references
 
 
 def test_installed_plclab_builds_runs_and_grades_from_another_folder(installed, tmp_path):

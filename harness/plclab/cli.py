@@ -218,6 +218,10 @@ def _cmd_lab(args: argparse.Namespace) -> int:
 def _cmd_build(args: argparse.Namespace) -> int:
     from plclab.build import write_build
 
+    if args.outline:
+        from plclab.stands import get_stand
+        print(get_stand(args.stand).outline(args.variant), end="")
+        return 0
     for path in write_build(args.stand, args.variant, args.output, args.xml):
         print(f"wrote {path}")
     return 0
@@ -344,6 +348,8 @@ def build_parser() -> argparse.ArgumentParser:
     c.add_argument("variant", choices=("baseline", "task1", "task2", "task3", "full"))
     c.add_argument("-o", "--output", metavar="FILE.st", help="default: STAND_VARIANT.st")
     c.add_argument("--xml", metavar="FILE.xml", help="also write the PLCopen XML project")
+    c.add_argument("--outline", action="store_true",
+                   help="write nothing; print a task reference's changes to the starting program as a diff")
     c.set_defaults(func=_cmd_build)
 
     c = sub.add_parser("handout", help="the student's starting program, I/O map and task sheet (no solution)")

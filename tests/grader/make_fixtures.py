@@ -31,110 +31,88 @@ class Fixture:
     fails: str                           # the requirement that must fail
     mistake: str                         # what the student got wrong
     base: str                            # the variant whose bundle is edited
-    edits: tuple[tuple[str, str], ...]   # (old, new): old must occur exactly once
+    edits: tuple[tuple, ...]             # (old, new[, count]): old must occur exactly count (1) times
     stand: str = "mp9c"                  # written to fixtures/<stand>/
 
 
 # ---------------------------------------------------------------------------- shared mistakes
-# FB_FrameSequencer is the references' one automatic-mode block (continuous and step-by-step
-# subroutines in one CASE); each edit below is one mistake in it, made on either stand.
+# The references are the starting programs with the tasks' edits (solutions/<stand>.toml), so
+# every fixture is what a student hands in: the starting program's structure (main program,
+# manual / automatic / continuous / step-by-step subroutines) with one mistake in a solution.
 
-STEP_KEEPS_1S = (
-    ("            Pause(Start := TRUE, Duration := Cp.Frames[Ptr].Pause, Cancel := FALSE);",
-     "            Pause(Start := TRUE, Duration := SEL(G := StepMode, IN0 := Cp.Frames[Ptr].Pause, IN1 := T#1s),\n"
-     "                  Cancel := FALSE);"),
-    ("            Pause(Start := FALSE, Duration := Cp.Frames[Ptr].Pause, Cancel := FALSE);",
-     "            Pause(Start := FALSE, Duration := SEL(G := StepMode, IN0 := Cp.Frames[Ptr].Pause, IN1 := T#1s),\n"
-     "                  Cancel := FALSE);"),
-)
-NEXT_FRAMES_PAUSE = (
-    ("            Pause(Start := TRUE, Duration := Cp.Frames[Ptr].Pause, Cancel := FALSE);",
-     "            Pause(Start := TRUE, Duration := Cp.Frames[Ptr MOD Cp.Count + 1].Pause, Cancel := FALSE);"),
-    ("            Pause(Start := FALSE, Duration := Cp.Frames[Ptr].Pause, Cancel := FALSE);",
-     "            Pause(Start := FALSE, Duration := Cp.Frames[Ptr MOD Cp.Count + 1].Pause, Cancel := FALSE);"),
-)
-WATCHDOG_WHOLE_RUN = (("Watchdog(Watch := InFrame AND NOT StartFrame,", "Watchdog(Watch := Running,"),)
-STEP_WRAPS = (("                IF Ptr >= Cp.Count AND NOT RunEnable THEN",
-               "                IF Ptr >= Cp.Count AND NOT RunEnable AND NOT StepMode THEN"),)
-ENABLE_AT_REACHED = (
-    ("    Watchdog : FB_FrameWatchdog;\nEND_VAR",
-     "    Watchdog : FB_FrameWatchdog;\n    StopAtEnd : BOOL;           (* the last frame reached with RunEnable 0 *)\n"
-     "END_VAR"),
-    ("        ELSIF FrameDone THEN\n            State := IN_PAUSE;\n",
-     "        ELSIF FrameDone THEN\n            State := IN_PAUSE;\n"
-     "            StopAtEnd := Ptr >= Cp.Count AND NOT RunEnable;\n"),
-    ("                IF Ptr >= Cp.Count AND NOT RunEnable THEN", "                IF StopAtEnd THEN"),
-)
-
+RECORDED = "Duration := Cp.Frames[Sequencer.Ptr].Pause"
+WATCHDOG_WHOLE_RUN = (("Watchdog(Watch := Sequencer.InFrame AND NOT Sequencer.StartFrame,",
+                       "Watchdog(Watch := Sequencer.Running,"),)
 HL1_LATCHED = (("ELSE\n    Q := Empty;\nEND_IF;", "ELSIF Empty THEN\n    Q := TRUE;                  (* ON while empty *)\nEND_IF;"),)
 HL1_INVERTED = (("HL1 := Indicator.Q;", "HL1 := NOT Indicator.Q;"),)
 RECORD_ON_PRESS = (("Short := WasHeld AND NOT Held AND NOT LongGiven;", "Short := Press;"),)
+RESET_ON_RELEASE = (("Long := LongTimer.Q AND NOT LongGiven;\nShort := WasHeld AND NOT Held AND NOT LongGiven;\n"
+                     "IF Long THEN\n    LongGiven := TRUE;\nEND_IF;\n",
+                     "IF LongTimer.Q THEN\n    LongGiven := TRUE;             (* held 3 s *)\nEND_IF;\n"
+                     "Long := WasHeld AND NOT Held AND LongGiven;\n"
+                     "Short := WasHeld AND NOT Held AND NOT LongGiven;\n"),)
 
-
-MANUAL_TASK1 = """    L1 := SA2;
-    L2 := NOT SA5;
-    L3 := SA5;
-    L4 := NOT SA3;
-    L5 := SA3;
-    L6 := SA4;
-    L7 := NOT SA4;
-"""
+# MP-9C: the step-by-step subroutine's pause (state 1 and state 2 of FB_Mp9cStep)
+STEP_PAUSE_START = ("    IF FrameDone THEN\n        Sequencer.State := IN_PAUSE;\n"
+                    f"        Pause(Start := TRUE, {RECORDED}, Cancel := FALSE);")
+STEP_PAUSE_RUN = f"2:  (* the pause after frame Ptr *)\n    Pause(Start := FALSE, {RECORDED}, Cancel := FALSE);\n"
+# FB_Mp9cStep's end of the last pause (4 spaces after the pause call; FB_Mp9cContinuous has 8)
+MP9C_STEP_NO_WRAP = ("    IF Pause.Done AND Sequencer.Ptr >= Cp.Count AND NOT Enable THEN\n"
+                     "        Sequencer.State := STOPPED;         (* the last frame's pause is over: no restart *)\n"
+                     "    ELSIF Pause.Done THEN\n")
 
 FIXTURES = (
     # ---------------------------------------------------------------- Task 1
     Fixture("task1_sa4_ignored", "task1", "T1.3",
             "SA4 is still not wired in: L6 and L7 stay FALSE as in the baseline.", "task1",
-            (("    L6 := SA4;\n    L7 := NOT SA4;\n", "    L6 := FALSE;\n    L7 := FALSE;\n"),)),
+            (("L6 := SA4;                          (* arm forward *)\n"
+              "L7 := NOT SA4;                      (* arm backward *)\n", "L6 := FALSE;\nL7 := FALSE;\n"),)),
     Fixture("task1_rotation_swapped", "task1", "T1.2",
             "rotation directions swapped: L4 := SA3, L5 := NOT SA3 (SA3 = 1 turns left).", "task1",
-            (("    L4 := NOT SA3;\n    L5 := SA3;\n", "    L4 := SA3;\n    L5 := NOT SA3;\n"),)),
+            (("L4 := NOT SA3;", "L4 := SA3;"), ("L5 := SA3;", "L5 := NOT SA3;"))),
     Fixture("task1_gripper_inverted", "task1", "T1.1",
             "gripper inverted: L1 := NOT SA2 (SA2 = 0 clamps).", "task1",
-            (("    L1 := SA2;\n", "    L1 := NOT SA2;\n"),)),
+            (("L1 := SA2;", "L1 := NOT SA2;"),)),
     Fixture("task1_extension_conflict", "task1", "G2",
             "L7 := NOT SA5 copied from the lift line: with SA4 = 1 and SA5 = 0 both extension coils "
             "are ON (valve conflict).", "task1",
-            (("    L7 := NOT SA4;\n", "    L7 := NOT SA5;\n"),)),
+            (("L7 := NOT SA4;", "L7 := NOT SA5;"),)),
     Fixture("task1_manual_in_auto", "task1", "T1.5",
-            "the switch logic is outside IF NOT SA1: the switches drive the valves in automatic mode "
-            "too, so playback is overwritten.", "task1",
-            (("IF NOT SA1 THEN\n    (* manual mode: every valve follows its switch (Task 1) *)\n"
-              + MANUAL_TASK1 + "END_IF;\n",
-              "(* every valve follows its switch (Task 1) *)\n" + MANUAL_TASK1.replace("    L", "L")),)),
+            "the manual subroutine is called in automatic mode too (only its SB1 inputs gated by SA1), so "
+            "the switches overwrite the played-back frame.", "task1",
+            (("IF NOT SA1 THEN\n    Manual(Sensors := Sensors, Record := Button.Short, Reset := Button.Long, "
+              "Cp := Cp);\nEND_IF;\n",
+              "Manual(Sensors := Sensors, Record := Button.Short AND NOT SA1, Reset := Button.Long AND NOT SA1,\n"
+              "       Cp := Cp);\n"),)),
     Fixture("task1_hl1_inverted", "task1", "G3",
             "HL1 := NOT Indicator.Q: the lamp is OFF while the program is empty and ON once it holds frames.",
             "task1", HL1_INVERTED),
     # ---------------------------------------------------------------- Task 2
     Fixture("task2_pauses_swapped", "task2", "T2.1",
             "pauses swapped: I0.7 = 0 gives 3 s, I0.7 = 1 gives 0.5 s.", "task2",
-            (("SEL(G := I07, IN0 := PAUSE_SHORT, IN1 := PAUSE_LONG)",
-              "SEL(G := I07, IN0 := PAUSE_LONG, IN1 := PAUSE_SHORT)"),)),
+            (("SEL(G := I07, IN0 := SHORT_PAUSE, IN1 := LONG_PAUSE)",
+              "SEL(G := I07, IN0 := LONG_PAUSE, IN1 := SHORT_PAUSE)"),)),
     Fixture("task2_i07_live", "task2", "T2.3",
-            "I0.7 read in automatic mode: the pause timer takes SEL(I07, 0.5 s, 3 s) live instead of "
-            "the pause recorded with the frame.", "task2",
-            (("    FrameTimeout : TIME := T#10s;\nEND_VAR",
-              "    FrameTimeout : TIME := T#10s;\n"
-              "    PauseTime : TIME;           (* the pause to hold *)\nEND_VAR"),
-             ("            Pause(Start := TRUE, Duration := Cp.Frames[Ptr].Pause, Cancel := FALSE);",
-              "            Pause(Start := TRUE, Duration := PauseTime, Cancel := FALSE);"),
-             ("            Pause(Start := FALSE, Duration := Cp.Frames[Ptr].Pause, Cancel := FALSE);",
-              "            Pause(Start := FALSE, Duration := PauseTime, Cancel := FALSE);"),
-             ("Sequencer(Active := SA1, StepMode := SA6,",
-              "Sequencer(Active := SA1, StepMode := SA6, PauseTime := RecordPause,"))),
+            "I0.7 read in automatic mode: both playback subroutines take SEL(I07, 0.5 s, 3 s) live instead "
+            "of the pause recorded with the frame.", "task2",
+            (("    FrameDone : BOOL;               (* the sensors show frame Ptr reached *)\nEND_VAR\n",
+              "    FrameDone : BOOL;               (* the sensors show frame Ptr reached *)\nEND_VAR\n"
+              "VAR_EXTERNAL\n    I07 : BOOL;\nEND_VAR\n", 2),
+             (RECORDED, "Duration := SEL(G := I07, IN0 := T#500ms, IN1 := T#3s)", 4))),
     Fixture("task2_pause_ignored", "task2", "T2.2",
-            "the selected pause is computed but never used: every frame still gets the baseline 1 s.",
+            "the pause is recorded with each frame but never used: playback still holds the fixed 1 s.",
             "task2",
-            (("    Robot : FB_Mp9cRobot;\nEND_VAR",
-              "    Robot : FB_Mp9cRobot;\n    Pause : TIME;                   (* chosen by I0.7 *)\nEND_VAR"),
-             ("Robot(RecordPause := SEL(G := I07, IN0 := PAUSE_SHORT, IN1 := PAUSE_LONG),",
-              "Pause := SEL(G := I07, IN0 := PAUSE_SHORT, IN1 := PAUSE_LONG);\n"
-              "Robot(RecordPause := T#1s,"))),
+            (("    WAIT_STEP : INT := 3;\n",
+              "    WAIT_STEP : INT := 3;\n    PAUSE_TIME : TIME := T#1s;      (* after every frame *)\n", 2),
+             (RECORDED, "Duration := PAUSE_TIME", 4))),
     Fixture("task2_step_pause_ignored", "task2", "T2.2",
             "the recorded pause is used in continuous mode only: step mode (SA6 = 1) keeps the starting "
-            "program's fixed 1 s.", "task2", STEP_KEEPS_1S),
+            "program's fixed 1 s.", "task2",
+            ((STEP_PAUSE_START, STEP_PAUSE_START.replace(RECORDED, "Duration := T#1s")),
+             (STEP_PAUSE_RUN, STEP_PAUSE_RUN.replace(RECORDED, "Duration := T#1s")))),
     Fixture("task2_pause_off_by_one", "task2", "T2.2",
             "off by one: after each frame the pause recorded with the next frame (Ptr MOD Count + 1).",
-            "task2", NEXT_FRAMES_PAUSE),
+            "task2", ((RECORDED, "Duration := Cp.Frames[Sequencer.Ptr MOD Cp.Count + 1].Pause", 4),)),
     Fixture("task2_watchdog_whole_run", "task2", "G10",
             "the frame watchdog times the whole run (Watch := Running), not each frame: normal playback "
             "stops with a fault 10 s after the start.", "task2", WATCHDOG_WHOLE_RUN),
@@ -142,63 +120,60 @@ FIXTURES = (
             "a frame is recorded on the (debounced) press of SB1, not at its release.", "task2", RECORD_ON_PRESS),
     Fixture("task2_short_pause_1s", "task2", "T2.1",
             "the short pause kept the baseline value: I0.7 = 0 gives 1 s instead of 0.5 s.", "task2",
-            (("PAUSE_SHORT : TIME := T#500ms;", "PAUSE_SHORT : TIME := T#1s;"),)),
+            (("SHORT_PAUSE : TIME := T#500ms;", "SHORT_PAUSE : TIME := T#1s;"),)),
     # ---------------------------------------------------------------- Task 3
     Fixture("task3_start_with_i07_0", "task3", "T3.1",
             "start not gated: an SB1 press starts the program whatever I0.7 is.", "task3",
-            (("        IF Press AND Cp.Count > 0 AND RunEnable THEN",
-              "        IF Press AND Cp.Count > 0 THEN"),)),
+            (("IF Press AND Cp.Count > 0 AND Enable THEN", "IF Press AND Cp.Count > 0 THEN", 2),)),
     Fixture("task3_wrap_not_suppressed", "task3", "T3.5",
-            "I0.7 is taken once, at the SB1 press: dropping it later does not stop the wrap to frame 1.",
-            "task3",
-            (("    SA5 : BOOL;\n    I07 : BOOL;\n", "    SA5 : BOOL;\n    I07 : BOOL;\n    SB1 : BOOL;\n"),
-             ("    Robot : FB_Mp9cRobot;\nEND_VAR",
-              "    Robot : FB_Mp9cRobot;\n    Enable : BOOL;                  (* I0.7 at the start press *)\n"
-              "    Sb1Before : BOOL;\nEND_VAR"),
-             ("Robot(RecordPause := PAUSE,\n      RunEnable := I07 ",
-              "IF SB1 AND NOT Sb1Before THEN\n    Enable := I07;\nEND_IF;\nSb1Before := SB1;\n"
-              "Robot(RecordPause := PAUSE,\n      RunEnable := Enable "))),
+            "I0.7 is taken once, at the SB1 press that starts the program: dropping it later does not stop "
+            "the wrap to frame 1.", "task3",
+            (("    Valves : INT;\n",
+              "    Valves : INT;\n    EnableAtStart : BOOL;           (* I0.7 at the start press *)\n"),
+             ("    (* a frame is done when the sensors show the positions recorded with it *)\n",
+              "    IF Press AND NOT Sequencer.Running THEN\n        EnableAtStart := I07;\n    END_IF;\n"
+              "    (* a frame is done when the sensors show the positions recorded with it *)\n"),
+             ("Enable := I07,", "Enable := EnableAtStart,", 2))),
     Fixture("task3_step_wraps_with_i07_0", "task3", "T3.5",
             "the enable only stops continuous mode: in step mode, after the last frame with I0.7 = 0, a "
-            "press starts frame 1 again.", "task3", STEP_WRAPS),
+            "press starts frame 1 again.", "task3",
+            (("Cancel := FALSE);\n" + MP9C_STEP_NO_WRAP, "Cancel := FALSE);\n    IF Pause.Done THEN\n"),)),
     Fixture("task3_enable_read_when_reached", "task3", "T3.7",
             "I0.7 read when the last frame is reached instead of when its pause is over: switched to 0 "
-            "inside that pause, execution goes on to frame 1.", "task3", ENABLE_AT_REACHED),
+            "inside that pause, execution goes on to frame 1.", "task3",
+            (("VAR\n    Pause : FB_PauseTimer;\nEND_VAR",
+              "VAR\n    Pause : FB_PauseTimer;\n    StopAtEnd : BOOL;               (* the last frame reached, "
+              "Enable 0 *)\nEND_VAR", 2),
+             ("FrameDone THEN\n        Sequencer.State := IN_PAUSE;\n",
+              "FrameDone THEN\n        Sequencer.State := IN_PAUSE;\n"
+              "        StopAtEnd := Sequencer.Ptr >= Cp.Count AND NOT Enable;\n", 2),
+             ("IF Pause.Done AND Sequencer.Ptr >= Cp.Count AND NOT Enable THEN", "IF Pause.Done AND StopAtEnd THEN",
+              2))),
     Fixture("task3_hl1_never_off", "task3", "G3",
             "HL1 switched ON while the program is empty but never switched OFF again (no ELSE branch).",
             "task3", HL1_LATCHED),
     Fixture("task3_stops_at_once", "task3", "T3.4",
             "I0.7 = 0 stops execution at once instead of after the last frame and its pause.", "task3",
-            (("ELSIF Fault THEN\n    State := STOPPED;",
-              "ELSIF Fault OR NOT RunEnable THEN\n    State := STOPPED;"),)),
+            (("ELSIF Sequencer.Fault THEN\n    Sequencer.State := STOPPED;",
+              "ELSIF Sequencer.Fault OR NOT I07 THEN\n    Sequencer.State := STOPPED;"),)),
     Fixture("task3_reset_on_release", "task3", "G5",
             "the long press resets the program when SB1 is released, not at 3.0 s while it is held.",
-            "task3",
-            (("Long := LongTimer.Q AND NOT LongGiven;\nShort := WasHeld AND NOT Held AND NOT LongGiven;\n"
-              "IF Long THEN\n    LongGiven := TRUE;\nEND_IF;\n",
-              "IF LongTimer.Q THEN\n    LongGiven := TRUE;             (* held 3 s *)\nEND_IF;\n"
-              "Long := WasHeld AND NOT Held AND LongGiven;\n"
-              "Short := WasHeld AND NOT Held AND NOT LongGiven;\n"),)),
+            "task3", RESET_ON_RELEASE),
 )
 
 
 # ---------------------------------------------------------------------------- TUR-10
 
-TUR10_MANUAL = """    DRIVE1 := FC_JogReference(SA1_FWD, SA1_BWD, SA6);
-    DRIVE2 := FC_JogReference(SA2_FWD, SA2_BWD, SA6);
-    DRIVE3 := FC_JogReference(SA3_FWD, SA3_BWD, SA6);
-    DRIVE4 := FC_JogReference(SA4_FWD, SA4_BWD, SA6);
-    DRIVE5 := FC_JogReference(SA5_FWD, SA5_BWD, SA6);
-"""
 TUR10_ENABLES = """RE5 := FC_BitOf(Code, 0);
 RE4 := FC_BitOf(Code, 1);
 RE3 := FC_BitOf(Code, 2);
 RE2 := FC_BitOf(Code, 3);
 RE1 := FC_BitOf(Code, 4);
 """
+TUR10_NO_WRAP = "IF Pause.Done AND Sequencer.Ptr >= Cp.Count AND NOT Enable THEN"
 
 
-def tur10(name: str, task: str, fails: str, mistake: str, base: str, *edits: tuple[str, str]) -> Fixture:
+def tur10(name: str, task: str, fails: str, mistake: str, base: str, *edits: tuple) -> Fixture:
     return Fixture(name, task, fails, mistake, base, tuple(edits), stand="tur10")
 
 
@@ -206,14 +181,14 @@ TUR10_FIXTURES = (
     # ---------------------------------------------------------------- Task 1
     tur10("task1_sa6_ignored", "task1", "T1.1",
           "SA6 not wired: every jog is called with LowSpeed := FALSE, so +/-1500 where +/-500 is due.",
-          "task1", (TUR10_MANUAL, TUR10_MANUAL.replace(", SA6);", ", FALSE);"))),
+          "task1", (", SA6);", ", FALSE);", 5)),
     tur10("task1_both_buttons_move", "task1", "T1.3",
           "'no button' tested as NOT Forward AND NOT Backward: with both buttons held the drive runs "
           "forward.", "task1",
           ("IF Forward = Backward THEN", "IF NOT Forward AND NOT Backward THEN")),
     tur10("task1_sa4_ignored", "task1", "T1.1",
           "drive 4 is still not jogged: DRIVE4 := 0 as in the baseline.", "task1",
-          ("    DRIVE4 := FC_JogReference(SA4_FWD, SA4_BWD, SA6);\n", "    DRIVE4 := 0;\n")),
+          ("DRIVE4 := FC_JogReference(SA4_FWD, SA4_BWD, SA6);\n", "DRIVE4 := 0;\n")),
     tur10("task1_drive2_swapped", "task1", "T1.1",
           "drive 2's buttons swapped: SA2 forward gives -500 / -1500 and moves the link backward.", "task1",
           ("FC_JogReference(SA2_FWD, SA2_BWD, SA6)", "FC_JogReference(SA2_BWD, SA2_FWD, SA6)")),
@@ -233,83 +208,79 @@ TUR10_FIXTURES = (
     tur10("task1_normal_speed_3000", "task1", "G2",
           "normal speed taken as 3000 (twice the limit): the DAC overvolts the drive.", "task1",
           ("    NORMAL : INT := 1500;", "    NORMAL : INT := 3000;")),
-    # ---------------------------------------------------------------- Task 2
-    tur10("task2_pauses_swapped", "task2", "T2.1",
-          "pauses swapped: I1.5 = 0 gives 3 s, I1.5 = 1 gives 0.5 s.", "task2",
-          ("SEL(G := I15, IN0 := PAUSE_SHORT, IN1 := PAUSE_LONG)",
-           "SEL(G := I15, IN0 := PAUSE_LONG, IN1 := PAUSE_SHORT)")),
-    tur10("task2_i15_live", "task2", "T2.3",
-          "I1.5 read in automatic mode: the pause timer takes SEL(I15, 0.5 s, 3 s) live instead of the "
-          "pause recorded with the frame.", "task2",
-          ("    FrameTimeout : TIME := T#10s;\nEND_VAR",
-           "    FrameTimeout : TIME := T#10s;\n    PauseTime : TIME;           (* the pause to hold *)\nEND_VAR"),
-          ("            Pause(Start := TRUE, Duration := Cp.Frames[Ptr].Pause, Cancel := FALSE);",
-           "            Pause(Start := TRUE, Duration := PauseTime, Cancel := FALSE);"),
-          ("            Pause(Start := FALSE, Duration := Cp.Frames[Ptr].Pause, Cancel := FALSE);",
-           "            Pause(Start := FALSE, Duration := PauseTime, Cancel := FALSE);"),
-          ("Sequencer(Active := SA7, StepMode := FALSE,",
-           "Sequencer(Active := SA7, StepMode := FALSE, PauseTime := RecordPause,")),
-    tur10("task2_pause_ignored", "task2", "T2.2",
-          "the selected pause is computed but never used: every frame still gets the baseline 1 s.",
-          "task2",
-          ("    Robot : FB_Tur10Robot;\nEND_VAR",
-           "    Robot : FB_Tur10Robot;\n    Pause : TIME;                   (* chosen by I1.5 *)\nEND_VAR"),
-          ("Robot(RecordPause := SEL(G := I15, IN0 := PAUSE_SHORT, IN1 := PAUSE_LONG),",
-           "Pause := SEL(G := I15, IN0 := PAUSE_SHORT, IN1 := PAUSE_LONG);\nRobot(RecordPause := T#1s,")),
-    tur10("task2_pause_off_by_one", "task2", "T2.2",
-          "off by one: after each frame the pause recorded with the next frame (Ptr MOD Count + 1).",
-          "task2", *NEXT_FRAMES_PAUSE),
-    tur10("task2_watchdog_whole_run", "task2", "G11",
-          "the frame watchdog times the whole run (Watch := Running), not each frame: normal playback "
-          "stops with a fault 20 s after the start.", "task2", *WATCHDOG_WHOLE_RUN),
-    tur10("task2_short_pause_1s", "task2", "T2.1",
-          "the short pause kept the baseline value: I1.5 = 0 gives 1 s instead of 0.5 s.", "task2",
-          ("PAUSE_SHORT : TIME := T#500ms;", "PAUSE_SHORT : TIME := T#1s;")),
-    tur10("task2_program_not_retained", "task2", "G10",
-          "the control program declared VAR instead of VAR RETAIN: a PLC restart empties it.", "task2",
-          ("VAR RETAIN\n    Cp : ST_ControlProgram;", "VAR\n    Cp : ST_ControlProgram;")),
-    # ---------------------------------------------------------------- Task 3
-    tur10("task3_start_with_i15_0", "task3", "T3.1",
-          "start not gated: an SB1 press starts the program whatever I1.5 is.", "task3",
-          ("        IF Press AND Cp.Count > 0 AND RunEnable THEN", "        IF Press AND Cp.Count > 0 THEN")),
-    tur10("task3_wrap_not_suppressed", "task3", "T3.5",
-          "I1.5 is taken once, at the SB1 press: dropping it later does not stop the wrap to frame 1.",
-          "task3",
-          ("    SA7 : BOOL;\n    I15 : BOOL;\n", "    SA7 : BOOL;\n    I15 : BOOL;\n    SB1 : BOOL;\n"),
-          ("    Robot : FB_Tur10Robot;\nEND_VAR",
-           "    Robot : FB_Tur10Robot;\n    Enable : BOOL;                  (* I1.5 at the start press *)\n"
-           "    Sb1Before : BOOL;\nEND_VAR"),
-          ("Robot(RecordPause := PAUSE,\n      RunEnable := I15,",
-           "IF SB1 AND NOT Sb1Before THEN\n    Enable := I15;\nEND_IF;\nSb1Before := SB1;\n"
-           "Robot(RecordPause := PAUSE,\n      RunEnable := Enable,")),
-    tur10("task3_enable_read_when_reached", "task3", "T3.7",
-          "I1.5 read when the last frame is reached instead of when its pause is over: switched to 0 "
-          "inside that pause, execution goes on to frame 1.", "task3", *ENABLE_AT_REACHED),
     tur10("task1_admissible_160", "task1", "G8",
           "the admissible error written as 160 codes instead of 16: the references go to 0 while the link "
           "is still far from the frame and moving.", "task1",
           ("    Admissible : INT := 16;     (* admissible error, codes *)",
            "    Admissible : INT := 160;    (* admissible error, codes *)")),
+    # ---------------------------------------------------------------- Task 2
+    tur10("task2_pauses_swapped", "task2", "T2.1",
+          "pauses swapped: I1.5 = 0 gives 3 s, I1.5 = 1 gives 0.5 s.", "task2",
+          ("SEL(G := I15, IN0 := SHORT_PAUSE, IN1 := LONG_PAUSE)",
+           "SEL(G := I15, IN0 := LONG_PAUSE, IN1 := SHORT_PAUSE)")),
+    tur10("task2_i15_live", "task2", "T2.3",
+          "I1.5 read in automatic mode: the pause timer takes SEL(I15, 0.5 s, 3 s) live instead of the "
+          "pause recorded with the frame.", "task2",
+          ("    AllReached : BOOL;\nEND_VAR", "    AllReached : BOOL;\n    I15 : BOOL;\nEND_VAR"),
+          (RECORDED, "Duration := SEL(G := I15, IN0 := T#500ms, IN1 := T#3s)", 2)),
+    tur10("task2_pause_ignored", "task2", "T2.2",
+          "the pause is recorded with each frame but never used: playback still holds the fixed 1 s.",
+          "task2",
+          ("    FRAME_TIMEOUT : TIME := T#20s;\n",
+           "    FRAME_TIMEOUT : TIME := T#20s;\n    PAUSE_TIME : TIME := T#1s;      (* after every frame *)\n"),
+          (RECORDED, "Duration := PAUSE_TIME", 2)),
+    tur10("task2_pause_off_by_one", "task2", "T2.2",
+          "off by one: after each frame the pause recorded with the next frame (Ptr MOD Count + 1).",
+          "task2", (RECORDED, "Duration := Cp.Frames[Sequencer.Ptr MOD Cp.Count + 1].Pause", 2)),
+    tur10("task2_watchdog_whole_run", "task2", "G11",
+          "the frame watchdog times the whole run (Watch := Running), not each frame: normal playback "
+          "stops with a fault 20 s after the start.", "task2", *WATCHDOG_WHOLE_RUN),
+    tur10("task2_short_pause_1s", "task2", "T2.1",
+          "the short pause kept the baseline value: I1.5 = 0 gives 1 s instead of 0.5 s.", "task2",
+          ("SHORT_PAUSE : TIME := T#500ms;", "SHORT_PAUSE : TIME := T#1s;")),
+    tur10("task2_program_not_retained", "task2", "G10",
+          "the control program declared VAR instead of VAR RETAIN: a PLC restart empties it.", "task2",
+          ("VAR RETAIN\n    Cp : ST_ControlProgram;", "VAR\n    Cp : ST_ControlProgram;")),
     tur10("task2_hl1_inverted", "task2", "G5",
           "HL1 := NOT Indicator.Q: the lamp is OFF while the program is empty and ON once it holds frames.",
           "task2", *HL1_INVERTED),
     tur10("task2_hl1_never_off", "task2", "G5",
           "HL1 switched ON while the program is empty but never switched OFF again (no ELSE branch).",
           "task2", *HL1_LATCHED),
+    # ---------------------------------------------------------------- Task 3
+    tur10("task3_start_with_i15_0", "task3", "T3.1",
+          "start not gated: an SB1 press starts the program whatever I1.5 is.", "task3",
+          ("IF Press AND Cp.Count > 0 AND Enable THEN", "IF Press AND Cp.Count > 0 THEN")),
+    tur10("task3_wrap_not_suppressed", "task3", "T3.5",
+          "I1.5 is taken once, at the SB1 press that starts the program: dropping it later does not stop "
+          "the wrap to frame 1.", "task3",
+          ("    Indicator : FB_ResetIndicator;\nEND_VAR",
+           "    Indicator : FB_ResetIndicator;\n    EnableAtStart : BOOL;           (* I1.5 at the start press *)\n"
+           "END_VAR"),
+          ("(* called in both modes: in manual mode it only stops playback and clears a fault *)\n",
+           "IF Button.Press AND NOT Robot.Sequencer.Running THEN\n    EnableAtStart := I15;\nEND_IF;\n"
+           "(* called in both modes: in manual mode it only stops playback and clears a fault *)\n"),
+          ("Enable := I15,", "Enable := EnableAtStart,")),
+    tur10("task3_enable_read_when_reached", "task3", "T3.7",
+          "I1.5 read when the last frame is reached instead of when its pause is over: switched to 0 "
+          "inside that pause, execution goes on to frame 1.", "task3",
+          ("    Watchdog : FB_FrameWatchdog;\nEND_VAR",
+           "    Watchdog : FB_FrameWatchdog;\n    StopAtEnd : BOOL;               (* the last frame reached, "
+           "Enable 0 *)\nEND_VAR"),
+          ("            Sequencer.State := IN_PAUSE;\n",
+           "            Sequencer.State := IN_PAUSE;\n"
+           "            StopAtEnd := Sequencer.Ptr >= Cp.Count AND NOT Enable;\n"),
+          (TUR10_NO_WRAP, "IF Pause.Done AND StopAtEnd THEN")),
     tur10("task3_stops_at_once", "task3", "T3.4",
           "I1.5 = 0 stops execution at once instead of after the last frame and its pause.", "task3",
-          ("ELSIF Fault THEN\n    State := STOPPED;", "ELSIF Fault OR NOT RunEnable THEN\n    State := STOPPED;")),
+          ("ELSIF Sequencer.Fault THEN\n    Sequencer.State := STOPPED;",
+           "ELSIF Sequencer.Fault OR NOT Enable THEN\n    Sequencer.State := STOPPED;")),
     tur10("task3_stops_after_current_frame", "task3", "T3.4",
           "I1.5 = 0 stops after the current frame and its pause instead of after the last frame.", "task3",
-          ("                IF Ptr >= Cp.Count AND NOT RunEnable THEN", "                IF NOT RunEnable THEN")),
+          (TUR10_NO_WRAP, "IF Pause.Done AND NOT Enable THEN")),
     tur10("task3_reset_on_release", "task3", "G7",
           "the long press resets the program when SB1 is released, not at 3.0 s while it is held.",
-          "task3",
-          ("Long := LongTimer.Q AND NOT LongGiven;\nShort := WasHeld AND NOT Held AND NOT LongGiven;\n"
-           "IF Long THEN\n    LongGiven := TRUE;\nEND_IF;\n",
-           "IF LongTimer.Q THEN\n    LongGiven := TRUE;             (* held 3 s *)\nEND_IF;\n"
-           "Long := WasHeld AND NOT Held AND LongGiven;\n"
-           "Short := WasHeld AND NOT Held AND NOT LongGiven;\n")),
+          "task3", *RESET_ON_RELEASE),
     tur10("task3_timeout_10s", "task3", "G11",
           "frame timeout copied from the MP-9C lab: 10 s instead of 20 s.", "task3",
           ("    FRAME_TIMEOUT : TIME := T#20s;", "    FRAME_TIMEOUT : TIME := T#10s;")),
@@ -343,11 +314,11 @@ def header(f: Fixture) -> str:
 
 def text(f: Fixture) -> str:
     body = bundle(get_stand(f.stand), f.base)
-    for old, new in f.edits:
-        n = body.count(old)
-        if n != 1:
-            raise SystemExit(f"{f.name}: the text to replace occurs {n} times in the '{f.base}' "
-                             f"bundle:\n{old}")
+    for old, new, *count in f.edits:
+        n, want = body.count(old), (count or [1])[0]
+        if n != want:
+            raise SystemExit(f"{f.name}: the text to replace occurs {n} times, not {want}, in the "
+                             f"'{f.base}' bundle:\n{old}")
         body = body.replace(old, new)
     return header(f) + body
 

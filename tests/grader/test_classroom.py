@@ -7,6 +7,7 @@ from __future__ import annotations
 import csv
 import io
 import multiprocessing
+import re
 import shutil
 from urllib.parse import unquote
 from pathlib import Path
@@ -45,7 +46,9 @@ def mp9c_class(tmp_path_factory):
     stand = get_stand("mp9c")
     carol = folder / "carol"
     for name, text in sources(stand, "task2"):
-        rel = Path(*Path(name).parts[-2:]) if Path(name).exists() else Path("config.st")
+        edited = re.fullmatch(r"<mp9c task2: (\w+\.st)>", name)     # a starting file with Task 2's changes
+        rel = Path(*Path(name).parts[-2:]) if Path(name).exists() else \
+            Path("POUs", edited.group(1)) if edited else Path("config.st")
         (carol / rel).parent.mkdir(parents=True, exist_ok=True)
         (carol / rel).write_text(text, encoding="utf-8")
     (folder / "bob.st").write_text(BROKEN, encoding="utf-8")

@@ -130,10 +130,11 @@ def test_program_without_configuration_is_refused(tmp_path):
 
 def test_runtime_fault_is_a_failing_row(tmp_path):
     def divide_by_zero_in_automatic_mode(text: str) -> str:
-        text = text.replace("    Robot : FB_Mp9cRobot;\nEND_VAR",
-                            "    Robot : FB_Mp9cRobot;\n    Zero : INT;\n    Crash : INT;\nEND_VAR")
-        return text.replace("Robot(RecordPause := PAUSE,",
-                            "IF SA1 THEN\n    Crash := 100 / Zero;\nEND_IF;\nRobot(RecordPause := PAUSE,")
+        declared = "    Robot : FB_Mp9cAutomatic;       (* automatic work mode subroutine *)\n"
+        call = "Robot(Active := SA1,"
+        assert text.count(declared) == 1 and text.count(call) == 1
+        text = text.replace(declared, declared + "    Zero : INT;\n    Crash : INT;\n")
+        return text.replace(call, "IF SA1 THEN\n    Crash := 100 / Zero;\nEND_IF;\n" + call)
     report = grade("mp9c", "task1", [write_bundle(tmp_path, "task1", divide_by_zero_in_automatic_mode)])
     assert not report.errors
     g1 = report.row("G1")

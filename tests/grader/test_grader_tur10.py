@@ -108,10 +108,11 @@ def test_wrong_solution_fails_with_the_row_that_says_why(name, task, rid):
 
 def test_runtime_fault_is_a_failing_row():
     text = bundle(STAND, "task1")
-    text = text.replace("    Robot : FB_Tur10Robot;\nEND_VAR",
-                        "    Robot : FB_Tur10Robot;\n    Zero : INT;\n    Crash : INT;\nEND_VAR")
-    text = text.replace("Robot(RecordPause := PAUSE,", "IF SA7 THEN\n    Crash := 100 / Zero;\nEND_IF;\n"
-                        "Robot(RecordPause := PAUSE,")
+    declared = "    Robot : FB_Tur10Automatic;      (* automatic work mode subroutine *)\n"
+    call = "Robot(Active := SA7,"
+    assert text.count(declared) == 1 and text.count(call) == 1
+    text = text.replace(declared, declared + "    Zero : INT;\n    Crash : INT;\n")
+    text = text.replace(call, "IF SA7 THEN\n    Crash := 100 / Zero;\nEND_IF;\n" + call)
     report = grade_sources("tur10", "task1", [("crash.st", text)])
     assert not report.errors
     g1 = report.row("G1")

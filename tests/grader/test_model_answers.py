@@ -1,102 +1,76 @@
-"""The model answers of docs/instructors.md, made real: the starting program of each robot
-with exactly the changes the outline lists, graded. Each passes its task, so the outline is a
-correct solution in the starting program's own structure (main program, manual / automatic /
-continuous / step-by-step subroutines), and each is a real change: no task is one line away
-from the starting program (MP-9C: 13, 11, 19 changed lines; TUR-10: 16, 7, 7; Tasks 2 and 3
-change several POUs each, the frame type included for Task 2).
+"""The reference solutions are the model answers of docs/instructors.md: the starting program
+with exactly the changes of the task (solutions/<stand>.toml), so each is a correct solution
+in the starting program's own structure (main program, manual / automatic / continuous /
+step-by-step subroutines) and a real change of it: tens of changed lines over several POUs,
+never one line away from what the student is handed. That they pass their tasks is
+test_grader_mp9c / test_grader_tur10's `test_reference_solution_passes_its_task`.
 """
 from __future__ import annotations
 
-import difflib
+import re
+from pathlib import Path
 
 import pytest
 
-from plclab.grader import grade_sources
-from plclab.stands import bundle, get_stand
+from plclab.cli import main
+from plclab.stands import get_stand
 
-PAUSE_FIELD = ("        Data : T_FrameData;\n    END_STRUCT;",
-               "        Data : T_FrameData;\n        Pause : TIME;\n    END_STRUCT;", 1)
-
-MP9C = {
-    "task1": [
-        ("VAR_EXTERNAL\n    SA5 : BOOL;\n", "VAR_EXTERNAL\n    SA2 : BOOL;\n    SA3 : BOOL;\n    SA4 : BOOL;\n"
-         "    SA5 : BOOL;\n", 1),
-        ("L1 := FALSE;\nL2 := NOT SA5;\nL3 := SA5;\nL4 := FALSE;\nL5 := FALSE;\nL6 := FALSE;\nL7 := FALSE;\n",
-         "L1 := SA2;\nL2 := NOT SA5;\nL3 := SA5;\nL4 := NOT SA3;\nL5 := SA3;\nL6 := SA4;\nL7 := NOT SA4;\n", 1),
-    ],
-    "task2": [
-        PAUSE_FIELD,
-        ("VAR_EXTERNAL\n    SA5 : BOOL;\n", "VAR_EXTERNAL\n    SA5 : BOOL;\n    I07 : BOOL;\n", 1),
-        ("        Cp.Frames[Cp.Count].Data[2] := Sensors;\n",
-         "        Cp.Frames[Cp.Count].Data[2] := Sensors;\n"
-         "        Cp.Frames[Cp.Count].Pause := SEL(G := I07, IN0 := T#500ms, IN1 := T#3s);\n", 1),
-        ("Duration := PAUSE_TIME", "Duration := Cp.Frames[Sequencer.Ptr].Pause", 4),
-    ],
-    "task3": [
-        ("VAR_EXTERNAL\n    L1 : BOOL;\n", "VAR_EXTERNAL\n    I07 : BOOL;\n    L1 : BOOL;\n", 1),
-        ("FrameDone := Sensors = Cp.Frames[Sequencer.Ptr].Data[2],",
-         "FrameDone := Sensors = Cp.Frames[Sequencer.Ptr].Data[2], Enable := I07,", 2),
-        ("    FrameDone : BOOL;               (* the sensors show frame Ptr reached *)\n",
-         "    FrameDone : BOOL;               (* the sensors show frame Ptr reached *)\n"
-         "    Enable : BOOL;                  (* I0.7: execution allowed *)\n", 2),
-        ("IF Press AND Cp.Count > 0 THEN", "IF Press AND Cp.Count > 0 AND Enable THEN", 2),
-        ("IF Pause.Done THEN\n",
-         "IF Pause.Done AND Sequencer.Ptr >= Cp.Count AND NOT Enable THEN\n"
-         "        Sequencer.State := STOPPED;\n    ELSIF Pause.Done THEN\n", 2),
-    ],
-}
-
-TUR10 = {
-    "task1": [
-        ("VAR_EXTERNAL\n    SA1_FWD : BOOL;\n    SA1_BWD : BOOL;\n",
-         "VAR_EXTERNAL\n    SA1_FWD : BOOL;\n    SA1_BWD : BOOL;\n" + "".join(
-             f"    SA{k}_FWD : BOOL;\n    SA{k}_BWD : BOOL;\n" for k in range(2, 6)), 1),
-        ("\nDRIVE2 := 0;\nDRIVE3 := 0;\nDRIVE4 := 0;\nDRIVE5 := 0;\nSensors();",
-         "\n" + "".join(f"DRIVE{k} := FC_JogReference(SA{k}_FWD, SA{k}_BWD, SA6);\n" for k in range(2, 6))
-         + "Sensors();", 1),
-    ],
-    "task2": [
-        PAUSE_FIELD,
-        ("    SA6 : BOOL;\n    DRIVE1 : INT;\n", "    SA6 : BOOL;\n    I15 : BOOL;\n    DRIVE1 : INT;\n", 1),
-        ("        Cp.Frames[Cp.Count].Data := Positions;\n",
-         "        Cp.Frames[Cp.Count].Data := Positions;\n"
-         "        Cp.Frames[Cp.Count].Pause := SEL(G := I15, IN0 := T#500ms, IN1 := T#3s);\n", 1),
-        ("Duration := PAUSE_TIME", "Duration := Cp.Frames[Sequencer.Ptr].Pause", 2),
-    ],
-    "task3": [
-        ("    RegHold : BOOL;\n    Targets : T_FrameData;\n    AllReached : BOOL;\nEND_VAR",
-         "    RegHold : BOOL;\n    Targets : T_FrameData;\n    AllReached : BOOL;\n    I15 : BOOL;\nEND_VAR", 1),
-        ("IF Press AND Cp.Count > 0 THEN", "IF Press AND Cp.Count > 0 AND I15 THEN", 1),
-        ("IF Pause.Done THEN\n",
-         "IF Pause.Done AND Sequencer.Ptr >= Cp.Count AND NOT I15 THEN\n"
-         "                Sequencer.State := STOPPED;\n            ELSIF Pause.Done THEN\n", 1),
-    ],
-}
-
-
-def model_answer(stand: str, task: str) -> tuple[str, str]:
-    """(starting program, model answer) as OpenPLC bundles."""
-    start = bundle(get_stand(stand), "baseline")
-    text = start
-    for old, new, count in {"mp9c": MP9C, "tur10": TUR10}[stand][task]:
-        assert text.count(old) == count, f"{stand} {task}: {old!r} occurs {text.count(old)} times, not {count}"
-        text = text.replace(old, new)
-    return start, text
-
-
+DOCS = Path(__file__).resolve().parents[2] / "docs"
 CASES = [(s, t) for s in ("mp9c", "tur10") for t in ("task1", "task2", "task3")]
 
 
-@pytest.mark.parametrize("stand,task", CASES)
-def test_model_answer_passes_its_task(stand, task):
-    _, answer = model_answer(stand, task)
-    report = grade_sources(stand, task, [(f"{stand}_{task}_model.st", answer)])
-    assert report.passed, report.text()
+def changed_lines(outline: str) -> list[str]:
+    return [line for line in outline.splitlines() if line[:1] in "+-" and not line.startswith(("+++", "---"))]
+
+
+def added_code(outline: str) -> set[str]:
+    """The statements and declarations a diff adds (comment text left out)."""
+    return {line for line in changed_lines(outline) if line.startswith("+")
+            and re.sub(r"\(\*.*?\*\)", "", line[1:]).strip().endswith((";", "THEN"))}
+
+
+def changed_files(outline: str) -> list[str]:
+    return re.findall(r"^\+\+\+ b/\S+/(\w+)\.st$", outline, re.M)
 
 
 @pytest.mark.parametrize("stand,task", CASES)
 def test_model_answer_is_a_real_change_of_the_starting_program(stand, task):
-    start, answer = model_answer(stand, task)
-    changed = [line for line in difflib.unified_diff(start.splitlines(), answer.splitlines(), lineterm="", n=0)
-               if line[:1] in "+-" and not line.startswith(("+++", "---"))]
-    assert len(changed) >= 5, changed
+    outline = get_stand(stand).outline(task)
+    code = [line for line in changed_lines(outline) if not line[1:].lstrip().startswith(("(*", "*"))]
+    assert len(changed_lines(outline)) >= 14, outline
+    assert len(code) >= 5, outline                      # not only comments
+    if task != "task1":                                 # Tasks 2 and 3 span the program's subroutines
+        assert len(changed_files(outline)) >= 2, outline
+
+
+@pytest.mark.parametrize("stand,task", CASES)
+def test_the_instructors_outline_names_every_file_the_model_answer_changes(stand, task):
+    """docs/instructors.md's section of the task lists each POU the reference changes."""
+    text = (DOCS / "instructors.md").read_text(encoding="utf-8")
+    title = {"mp9c": "MP-9C", "tur10": "TUR-10"}[stand] + f" Task {task[-1]}"
+    section = text.split(f"### {title}", 1)[1].split("\n### ", 1)[0].split("\n## ", 1)[0]
+    missing = [pou for pou in changed_files(get_stand(stand).outline(task)) if f"`{pou}`" not in section]
+    assert missing == [], f"docs/instructors.md '### {title}' does not name {missing}"
+
+
+def test_full_is_the_three_tasks_together():
+    """`full` is the three tasks' edits in one program (plus, on the TUR-10, every axis
+    regulated): each task's added lines are in it."""
+    for stand in ("mp9c", "tur10"):
+        s = get_stand(stand)
+        full = added_code(s.outline("full"))
+        for task in ("task1", "task2", "task3"):
+            added = added_code(s.outline(task))
+            assert added and added <= full, (stand, task, added - full)
+
+
+def test_plclab_build_outline_prints_the_diff_and_writes_nothing(tmp_path, capsys, monkeypatch):
+    monkeypatch.chdir(tmp_path)
+    assert main(["build", "tur10", "task2", "--outline"]) == 0
+    out = capsys.readouterr().out
+    assert out == get_stand("tur10").outline("task2")
+    assert "+++ b/plclab/plc/POUs/FB_Tur10Manual.st" in out and "+        Cp.Frames[Cp.Count].Pause := SEL(" in out
+    assert list(tmp_path.iterdir()) == []
+    assert main(["build", "tur10", "baseline", "--outline"]) == 1
+    err = capsys.readouterr().err
+    assert len(err.strip().splitlines()) == 1 and "not a task reference" in err

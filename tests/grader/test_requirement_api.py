@@ -64,3 +64,38 @@ def test_a_grader_bug_is_an_error_row_never_the_students_failure():
     assert x2.passed and not x1.passed and x1.internal and x1.result == "ERROR"
     assert "bug of the grader, not of your program" in x1.observed and "TypeError" in x1.observed
     assert report.exit_code == 2 and "not a mistake of your program" in report.text()
+
+
+def test_a_requirement_repeated_in_step_mode_passes_only_if_checked_to_the_end_in_both():
+    """`repeats`: continuous mode passes R1, step mode stops before reaching it: R1 is not
+    passed, and its row names the step-mode scenario and why it stopped."""
+    def continuous(s, c):
+        with c.requirement("X1"):
+            s.run(0.1)
+
+    def step(s, c):
+        s.run(0.2)
+        raise ScenarioFailure("step mode: the first press started nothing")
+
+    x1 = Requirement("X1", "checked in both modes", "continuous")
+    req = RequirementSet(stand="mp9c", task="selftest", title="self test", requirements=(x1,),
+                         scenarios=(Scenario("continuous", continuous), Scenario("step", step, repeats="continuous")),
+                         make_session=make_session)
+    assert req.checked_in(x1) == ["continuous", "step"]
+    registry.register(req)
+    try:
+        report = grade_sources("mp9c", "selftest", sources(STAND, "task1"))
+    finally:
+        del registry._REGISTRY[("mp9c", "selftest")]
+    row = report.row("X1")
+    assert not row.passed and not row.internal and row.scenario == "step"
+    assert row.observed == ("not checked in scenario step: the scenario stopped first: step mode: the first "
+                            "press started nothing")
+    assert row.time == pytest.approx(0.2, abs=0.011)
+
+
+def test_a_scenario_repeating_an_unknown_one_is_refused():
+    with pytest.raises(ValueError, match="repeats unknown scenario 'nope'"):
+        RequirementSet(stand="mp9c", task="selftest", title="t", requirements=(R1,),
+                       scenarios=(Scenario("s", lambda s, c: None), Scenario("t", lambda s, c: None, repeats="nope")),
+                       make_session=make_session)

@@ -4,12 +4,15 @@ alone; a task's reference solution needs the checkout and is refused in one line
 """
 from __future__ import annotations
 
+import tomllib
+from pathlib import Path
+
 import pytest
 
 from plclab import stands
 from plclab.build import write_build
 from plclab.errors import PlcLabError
-from plclab.stands import PLC_DIR, SOLUTIONS_DIR, STANDS, get_stand
+from plclab.stands import PLC_DIR, SOLUTIONS_DIR, STANDS, get_stand, references
 
 
 def _stems(folder):
@@ -18,15 +21,23 @@ def _stems(folder):
 
 def test_the_checkout_has_the_solutions_tree():
     assert SOLUTIONS_DIR is not None and (SOLUTIONS_DIR / "POUs").is_dir()
+    assert (SOLUTIONS_DIR / "mp9c.toml").is_file() and (SOLUTIONS_DIR / "tur10.toml").is_file()
 
 
-def test_a_reference_reads_its_own_version_of_a_starting_block():
-    """T_ControlProgram: the student's has no pause per frame, Task 2's model answer has."""
+def test_a_task_reference_is_the_starting_program_with_the_tasks_edits():
+    """T_ControlProgram: the student's has no pause per frame, Task 2's model answer has; a
+    block the task does not touch is the shipped file itself."""
     stand = get_stand("mp9c")
-    [starting] = [f for f in stand.files("baseline") if f.stem == "T_ControlProgram"]
-    [answer] = [f for f in stand.files("task2") if f.stem == "T_ControlProgram"]
-    assert PLC_DIR in starting.parents and SOLUTIONS_DIR in answer.parents
-    assert "Pause" not in starting.read_text(encoding="utf-8") and "Pause" in answer.read_text(encoding="utf-8")
+    starting = dict(stand.pou_sources("baseline"))
+    answer = stand.pou_sources("task2")
+    assert [name for name, _ in answer if name.startswith("<")] == [
+        "<mp9c task2: T_ControlProgram.st>", "<mp9c task2: FB_Mp9cManual.st>", "<mp9c task2: FB_Mp9cContinuous.st>",
+        "<mp9c task2: FB_Mp9cStep.st>", "<mp9c task2: PRG_Mp9cBaseline.st>"]
+    untouched = [(name, text) for name, text in answer if not name.startswith("<")]
+    assert untouched and all(starting[name] == text for name, text in untouched)
+    assert all(PLC_DIR in Path(name).parents for name, _ in untouched)
+    changed = dict(answer)["<mp9c task2: T_ControlProgram.st>"]
+    assert "Pause" not in starting[str(PLC_DIR / "POUs" / "T_ControlProgram.st")] and "Pause : TIME" in changed
 
 
 @pytest.mark.parametrize("name", STANDS)
@@ -35,7 +46,9 @@ def test_shipped_variants_are_built_from_package_data_only(name):
     for vname, v in stand.variants.items():
         files = stand.files(vname)
         shipped = [f for f in files if PLC_DIR in f.parents]
-        if v.reference:
+        if v.edited:
+            assert shipped == files and stand.outline(vname), f"{name} {vname}: an edited reference changes nothing"
+        elif v.reference:
             assert len(shipped) < len(files), f"{name} {vname} is marked reference but uses no solution file"
         else:
             assert shipped == files, f"{name} {vname} is handed to students but reads {set(files) - set(shipped)}"
@@ -45,6 +58,27 @@ def test_every_solution_file_belongs_to_a_reference_variant():
     used = {f.stem for name in STANDS for vname, v in get_stand(name).variants.items() if v.reference
             for f in get_stand(name).files(vname)}
     assert _stems(SOLUTIONS_DIR / "POUs") <= used
+    for edits in SOLUTIONS_DIR.glob("*.toml"):
+        stand = get_stand(edits.stem)
+        with edits.open("rb") as f:
+            sections = set(tomllib.load(f))
+        assert sections == {n for n, v in stand.variants.items() if v.edited}
+
+
+def test_an_edit_that_no_longer_matches_the_starting_program_is_one_clear_error(tmp_path, monkeypatch):
+    broken = (SOLUTIONS_DIR / "mp9c.toml").read_text(encoding="utf-8").replace(
+        "old = \"IF Press AND Cp.Count > 0 THEN\"", "old = \"IF Press AND Count > 0 THEN\"", 1)
+    (tmp_path / "mp9c.toml").write_text(broken, encoding="utf-8")
+    monkeypatch.setattr(stands, "SOLUTIONS_DIR", tmp_path)
+    references._table.cache_clear()
+    try:
+        with pytest.raises(PlcLabError) as e:
+            write_build("mp9c", "task3", str(tmp_path / "x.st"), None)
+    finally:
+        references._table.cache_clear()
+    msg = str(e.value)
+    assert "\n" not in msg and "mp9c.toml: [task3] edit 8 (FB_Mp9cContinuous)" in msg and "occurs 0 times, not 1" in msg
+    assert not (tmp_path / "x.st").exists()
 
 
 @pytest.mark.parametrize("name,variant", [("mp9c", "task2"), ("tur10", "full")])

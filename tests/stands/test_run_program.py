@@ -46,10 +46,10 @@ def test_a_program_without_configuration_or_with_a_variant_is_refused(tmp_path, 
 def test_a_scenario_reading_an_observable_the_program_lacks_says_which(tmp_path, capsys):
     mine = tmp_path / "renamed.st"
     # the student renamed the frame store instance: the scenario's frame count is gone
-    head, main_program = bundle(STAND, "task1").split("PROGRAM PRG_Mp9cTask1", 1)
+    head, main_program = bundle(STAND, "task1").split("PROGRAM PRG_Mp9cBaseline", 1)
     main_program = main_program.replace("    Cp : ST_ControlProgram;", "    Store : ST_ControlProgram;") \
-        .replace("Cp := Cp);", "Cp := Store);")
-    mine.write_text(head + "PROGRAM PRG_Mp9cTask1" + main_program, encoding="utf-8")
+        .replace("Cp := Cp);", "Cp := Store);").replace("Empty := Cp.Count", "Empty := Store.Count")
+    mine.write_text(head + "PROGRAM PRG_Mp9cBaseline" + main_program, encoding="utf-8")
     code = main(["run", "mp9c", "--program", str(mine), "--scenario", "bounce", "--csv", str(tmp_path / "b.csv")])
     out = capsys.readouterr()
     assert code == 1, out.err

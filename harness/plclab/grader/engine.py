@@ -24,7 +24,7 @@ from plclab.frontend import check_sources, read_sources
 from plclab.scenario import ScenarioFailure, Session, compiled_once
 from plclab.trace import write_csv, write_vcd
 
-from .registry import EVERY, Checks, RequirementSet, requirement_set
+from .registry import EVERY, Checks, Requirement, RequirementSet, requirement_set
 from .report import GradeReport, Row
 
 
@@ -121,27 +121,35 @@ def _rows(req: RequirementSet, checks: Checks) -> list[Row]:
     rows = []
     for r in req.requirements:
         failure = checks.failures.get(r.id)
+        unchecked = [sc for sc in req.checked_in(r) if sc not in checks.passed_in.get(r.id, ())]
         if failure is not None:
             f, scenario = failure
             rows.append(Row(r.id, r.text, False, f.expected, f.observed, f.time, scenario))
-        elif r.id in checks.passed:
+        elif r.id in checks.passed and not unchecked:
             rows.append(Row(r.id, r.text, True, scenario=r.scenario if r.scenario != EVERY else ""))
-        elif r.scenario in checks.internal or (r.scenario == EVERY and checks.internal):
-            scenario = r.scenario if r.scenario != EVERY else next(iter(checks.internal))
-            error, time = checks.internal[scenario]
-            rows.append(Row(r.id, r.text, False, "", f"not checked: the grader failed ({error}); this is a "
-                            "bug of the grader, not of your program: please report it", time, scenario,
-                            internal=True))
-        elif r.scenario in checks.stopped:
-            reason, time = checks.stopped[r.scenario]
-            rows.append(Row(r.id, r.text, False, "", f"not checked: the scenario stopped first: {reason}",
-                            time, r.scenario))
         else:
-            earlier = [rid for rid, (_f, sc) in checks.failures.items() if sc == r.scenario]
-            why = (f"the scenario could not go on after {earlier[0]} failed" if earlier
-                   else "the scenario ended before this check")
-            rows.append(Row(r.id, r.text, False, "", f"not checked: {why}", None, r.scenario))
+            rows.append(_not_checked(r, checks, unchecked[0] if unchecked else r.scenario,
+                                     partly=r.id in checks.passed))
     return rows
+
+
+def _not_checked(r: Requirement, checks: Checks, scenario: str, partly: bool) -> Row:
+    """The row of a requirement not checked to the end in `scenario` (`partly`: it was in
+    another of its scenarios): a grader bug there, the scenario stopped, or it ended first."""
+    where = f" in scenario {scenario}" if partly else ""
+    if scenario in checks.internal or (scenario == EVERY and checks.internal):
+        scenario = scenario if scenario != EVERY else next(iter(checks.internal))
+        error, time = checks.internal[scenario]
+        return Row(r.id, r.text, False, "", f"not checked{where}: the grader failed ({error}); this is a "
+                   "bug of the grader, not of your program: please report it", time, scenario, internal=True)
+    if scenario in checks.stopped:
+        reason, time = checks.stopped[scenario]
+        return Row(r.id, r.text, False, "", f"not checked{where}: the scenario stopped first: {reason}",
+                   time, scenario)
+    earlier = [rid for rid, (_f, sc) in checks.failures.items() if sc == scenario]
+    why = (f"the scenario could not go on after {earlier[0]} failed" if earlier
+           else "the scenario ended before this check")
+    return Row(r.id, r.text, False, "", f"not checked{where}: {why}", None, scenario)
 
 
 def requirement_table(stand: str, task: str) -> list[tuple[str, str]]:

@@ -533,8 +533,9 @@ TASK3 = task3_requirements("I0.7", remaining="frames 3 and 4", stops="execution 
 
 register_tasks(STAND, {
     "task1": (TASK1, (Scenario("manual", sc_manual), Scenario("playback", sc_playback),
-                      Scenario("playback_step", sc_playback_step))),
-    "task2": (TASK2, (Scenario("pauses", sc_pauses), Scenario("pauses_step", sc_pauses_step))),
-    "task3": (TASK3, (Scenario("enable", sc_enable), Scenario("enable_step", sc_enable_step),
-                      Scenario("last_pause", sc_last_pause), Scenario("last_pause_step", sc_last_pause_step))),
+                      Scenario("playback_step", sc_playback_step, repeats="playback"))),
+    "task2": (TASK2, (Scenario("pauses", sc_pauses), Scenario("pauses_step", sc_pauses_step, repeats="pauses"))),
+    "task3": (TASK3, (Scenario("enable", sc_enable), Scenario("enable_step", sc_enable_step, repeats="enable"),
+                      Scenario("last_pause", sc_last_pause),
+                      Scenario("last_pause_step", sc_last_pause_step, repeats="last_pause"))),
 }, GENERAL, GENERAL_SCENARIOS, make_session, every=(no_fault, no_conflict))

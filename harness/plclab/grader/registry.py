@@ -23,7 +23,10 @@ How an instructor adds a requirement (one file, `plclab.grader.<stand>`, no engi
                                scenarios=(Scenario("timeout", sc_timeout),), make_session=...))
 
 A requirement may be checked by every scenario (`EVERY`, e.g. "never a valve conflict"): its
-check is an `every` hook run after each scenario. Stands register their sets from
+check is an `every` hook run after each scenario. A scenario that plays another one in a
+second mode (`Scenario("pauses_step", ..., repeats="pauses")`: the same flow in step mode)
+must check each of that scenario's requirements to the end too: a requirement passes only if
+it passed in its scenario and in every scenario that repeats it. Stands register their sets from
 `plclab.grader.<stand>` (imported on first use), so adding a stand is adding one module.
 """
 from __future__ import annotations
@@ -67,6 +70,7 @@ class Checks:
     def __init__(self, requirements: Sequence[Requirement]):
         self.requirements = {r.id: r for r in requirements}
         self.passed: set[str] = set()
+        self.passed_in: dict[str, set[str]] = {}                     # requirement -> scenarios
         self.failures: dict[str, tuple[Failure, str]] = {}
         self.scenario = ""
         self.stopped: dict[str, tuple[str, Optional[float]]] = {}   # scenario -> (reason, time)
@@ -86,12 +90,14 @@ class Checks:
             self._known(rid)
         yield ids[0] if len(ids) == 1 else tuple(ids)
         for rid in ids:
-            self.passed.add(rid)
+            self.ok(rid)
 
     def ok(self, rid: str) -> None:
-        """Requirement `rid` has been checked to the end (it passes unless something failed)."""
+        """Requirement `rid` has been checked to the end in the current scenario (it passes
+        unless something failed)."""
         self._known(rid)
         self.passed.add(rid)
+        self.passed_in.setdefault(rid, set()).add(self.scenario)
 
     def fail(self, rid: str, expected: str, observed: str, time: Optional[float]) -> None:
         self._known(rid)
@@ -143,6 +149,7 @@ class Scenario:
     name: str
     run: Callable[[Session, Checks], None]
     needs_retain: bool = False     # the session gets a retain file (PLC restarts)
+    repeats: str = ""              # a scenario whose requirements this one checks again (step mode)
 
 
 # (sources, retain_path, checked) -> Session: `checked` is the program as the front end checked
@@ -171,6 +178,16 @@ class RequirementSet:
             if r.scenario != EVERY and r.scenario not in names:
                 raise ValueError(f"{self.stand} {self.task}: requirement {r.id} names unknown "
                                  f"scenario {r.scenario!r}")
+        for s in self.scenarios:
+            if s.repeats and s.repeats not in names:
+                raise ValueError(f"{self.stand} {self.task}: scenario {s.name} repeats unknown scenario "
+                                 f"{s.repeats!r}")
+
+    def checked_in(self, r: Requirement) -> list[str]:
+        """The scenarios that must each check `r` to the end: its own and its repeats."""
+        if r.scenario == EVERY:
+            return []
+        return [r.scenario] + [s.name for s in self.scenarios if s.repeats == r.scenario]
 
 
 _REGISTRY: dict[tuple[str, str], RequirementSet] = {}

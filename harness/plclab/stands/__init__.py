@@ -7,7 +7,9 @@ Where the ST lives: what the project ships to users (each stand's GVL, the build
 the students' starting programs, thermo's program) is package data under `plclab/plc/`, so
 an installed package carries it. The reference solutions of the lab tasks live apart, in the
 repository's `solutions/` tree: a checkout has them (tests, grader tests, instructors), an
-installed package never does, and asking for one there is one clear error.
+installed package never does, and asking for one there is one clear error. A robot task's
+reference is the starting program with that task's edits (`solutions/<stand>.toml`, applied
+by `plclab.stands.references`); the CNC stand's is a whole block (`solutions/POUs/`).
 """
 from __future__ import annotations
 
@@ -18,6 +20,7 @@ from pathlib import Path
 from types import ModuleType
 
 from plclab.errors import PlcLabError
+from plclab.stands import references
 
 PLC_DIR = Path(__file__).resolve().parents[1] / "plc"
 
@@ -50,6 +53,7 @@ class Variant:
     tasks: tuple[Task, ...]
     doc: str = ""
     reference: bool = False                 # a task's reference solution: checkout only
+    edited: bool = False                    # reference = these POUs with solutions/<stand>.toml [name]
     observables: dict[str, str] = field(default_factory=dict)   # where this variant's paths differ
 
 
@@ -69,13 +73,47 @@ class Stand:
         return self.variants[name]
 
     def files(self, variant: str) -> list[Path]:
+        """The ST files `variant` is made of (an edited reference: the starting program's
+        files, which `pou_sources` changes), GVL files last."""
         v = self.variant(variant)
         if v.reference and SOLUTIONS_DIR is None:
             raise PlcLabError(f"{self.name} {variant} is a reference solution: it is only in a checkout of the "
                               f"PLC Lab repository (solutions/), not in the installed package; "
                               f"students start from '{self.name} {self.starting_variant}'")
-        return [pou_path(s, v.reference) for s in self.types + v.pous] + \
+        return [pou_path(s, v.reference and not v.edited) for s in self.types + v.pous] + \
                [PLC_DIR / "GVL" / f"{s}.st" for s in self.gvl]
+
+    def pou_sources(self, variant: str) -> list[tuple[str, str]]:
+        """The variant's types and POUs as (file name, text), in bundle order. An edited
+        reference's changed POUs are named `<stand task: FILE.st>`: no file on disk holds
+        that text, the starting file plus solutions/<stand>.toml make it."""
+        v = self.variant(variant)
+        paths = self.files(variant)[:len(self.types) + len(v.pous)]
+        if not v.edited:
+            return [(str(p), _read(p)) for p in paths]
+        start = {p.stem: _read(p) for p in paths}
+        answer = references.apply(self.solutions_file, variant, start)
+        return [(str(p) if answer[p.stem] == start[p.stem] else f"<{self.name} {variant}: {p.name}>",
+                 answer[p.stem]) for p in paths]
+
+    def outline(self, variant: str) -> str:
+        """The unified diff from the starting program to reference `variant`: the model
+        answer's changes, file by file. Only for an edited reference: anything else is one
+        clear error."""
+        v = self.variant(variant)
+        if not v.edited:
+            raise PlcLabError(f"{self.name} {variant}: not a task reference made from the starting program "
+                              f"(those are: {', '.join(n for n, w in self.variants.items() if w.edited)})")
+        paths = self.files(variant)[:len(self.types) + len(v.pous)]
+        start = {p.stem: (str(p.relative_to(PLC_DIR.parent.parent)), _read(p)) for p in paths}
+        answer = {p.stem: text for p, (_name, text) in zip(paths, self.pou_sources(variant))}
+        return references.outline(start, answer)
+
+    @property
+    def solutions_file(self) -> Path:
+        """solutions/<stand>.toml of the checkout: the edits that make the task references."""
+        assert SOLUTIONS_DIR is not None
+        return SOLUTIONS_DIR / f"{self.name}.toml"
 
     def available(self, variant: str) -> bool:
         """Whether `variant` can be built here (a reference solution needs a checkout)."""
@@ -154,9 +192,9 @@ def gvl_labels(stand: Stand) -> dict[str, str]:
 
 def pou_path(stem: str, reference: bool = False) -> Path:
     """The file of a POU. A reference solution's own version (`solutions/POUs`, checkout
-    only) comes first for a reference variant: a block of the same name there is the model
-    answer's version of the student's starting block (e.g. T_ControlProgram with a pause per
-    frame). Everything else is shipped (`plclab/plc/POUs`)."""
+    only) comes first for a whole-block reference: a block of the same name there is the
+    model answer of the students' stub (the CNC lab's FB_CncEvalLinear). Everything else is
+    shipped (`plclab/plc/POUs`)."""
     if reference and SOLUTIONS_DIR is not None:
         solution = SOLUTIONS_DIR / "POUs" / f"{stem}.st"
         if solution.is_file():
@@ -167,7 +205,7 @@ def pou_path(stem: str, reference: bool = False) -> Path:
 def sources(stand: Stand, variant: str) -> list[tuple[str, str]]:
     """The variant as (file name, text) pairs: the ST files as they are (so diagnostics and
     faults name them) plus the generated configuration. Same program as `bundle()`."""
-    return [(str(p), _read(p)) for p in stand.files(variant)] + \
+    return stand.pou_sources(variant) + [(str(p), _read(p)) for p in stand.files(variant)[-len(stand.gvl):]] + \
         [(f"<{stand.name}-{variant} configuration>", _configuration(stand, variant, ""))]
 
 
@@ -175,10 +213,8 @@ def bundle(stand: Stand, variant: str) -> str:
     """One self-contained OpenPLC-loadable ST text for `variant` of `stand`."""
     v = stand.variant(variant)
     parts = [f"(* {stand.title}: program '{variant}', generated by plclab build from plc/. {v.doc} *)"]
-    files = stand.files(variant)
-    gvl = files[len(files) - len(stand.gvl):]
-    parts += [_read(p) for p in files[:len(files) - len(stand.gvl)]]
-    globals_ = "\n".join(_read(p) for p in gvl)
+    parts += [text for _name, text in stand.pou_sources(variant)]
+    globals_ = "\n".join(_read(p) for p in stand.files(variant)[-len(stand.gvl):])
     parts.append(_configuration(stand, variant, globals_))
     return "\n\n".join(p.strip() for p in parts) + "\n"
 

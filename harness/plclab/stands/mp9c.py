@@ -14,18 +14,16 @@ from plclab.stands import Stand, Task, Variant, gvl_labels
 from plclab.stands.base import Fault, FaultParam, StandSpec
 
 # the starting program (Appendix 1: main program, manual / automatic / continuous /
-# step-by-step subroutines), shipped; the reference solutions' blocks (solutions/POUs
-# first: FB_FrameStore, FB_FrameSequencer, FB_Mp9cRobot and their T_ControlProgram)
+# step-by-step subroutines), shipped; every task's reference is this program with the task's
+# edits (solutions/mp9c.toml, a checkout only)
 STARTING = ("FC_PackBits7", "FC_BitOf", "FB_Sb1Button", "FB_PauseTimer", "FB_FrameWatchdog", "FB_Blink",
             "FB_ResetIndicator", "T_Playback", "FB_Mp9cManual", "FB_Mp9cContinuous", "FB_Mp9cStep",
-            "FB_Mp9cAutomatic")
-REFERENCE = ("FC_PackBits7", "FC_BitOf", "FB_Sb1Button", "FB_FrameStore", "FB_PauseTimer",
-             "FB_FrameWatchdog", "FB_Blink", "FB_ResetIndicator", "FB_FrameSequencer", "FB_Mp9cRobot")
+            "FB_Mp9cAutomatic", "PRG_Mp9cBaseline")
 
 
-def _variant(name: str, prg: str, doc: str, reference: bool = True) -> Variant:
-    pous = (REFERENCE if reference else STARTING) + (prg,)
-    return Variant(name, pous, (Task("MainTask", "T#10ms", 1, (("Main", prg),)),), doc, reference)
+def _variant(name: str, doc: str, reference: bool = True) -> Variant:
+    return Variant(name, STARTING, (Task("MainTask", "T#10ms", 1, (("Main", "PRG_Mp9cBaseline"),)),), doc,
+                   reference, edited=reference)
 
 
 STAND = Stand(
@@ -34,12 +32,11 @@ STAND = Stand(
     gvl=("GVL_MP9C",),
     types=("T_ControlProgram",),
     variants={
-        "baseline": _variant("baseline", "PRG_Mp9cBaseline", "Appendix 1: only the lift in manual mode.",
-                             reference=False),
-        "task1": _variant("task1", "PRG_Mp9cTask1", "Task 1: all four mechanisms in manual mode."),
-        "task2": _variant("task2", "PRG_Mp9cTask2", "Task 2: I0.7 selects the recorded pause."),
-        "task3": _variant("task3", "PRG_Mp9cTask3", "Task 3: I0.7 enables automatic execution."),
-        "full": _variant("full", "PRG_Mp9cFull", "Tasks 1 + 2 + 3."),
+        "baseline": _variant("baseline", "Appendix 1: only the lift in manual mode.", reference=False),
+        "task1": _variant("task1", "Task 1: all four mechanisms in manual mode."),
+        "task2": _variant("task2", "Task 2: I0.7 selects the recorded pause."),
+        "task3": _variant("task3", "Task 3: I0.7 enables automatic execution."),
+        "full": _variant("full", "Tasks 1 + 2 + 3."),
     },
 )
 

@@ -15,21 +15,19 @@ from plclab.stands import Stand, Task, Variant, gvl_labels
 from plclab.stands.base import Fault, FaultParam, StandSpec
 
 # the starting program (Appendix 2: main program, manual / automatic subroutines, the timer
-# interrupt routine PRG_Tur10Regulators), shipped; the reference solutions' blocks
-# (solutions/POUs first: FB_FrameStore, FB_FrameSequencer, FB_Tur10Robot, T_ControlProgram)
+# interrupt routine PRG_Tur10Regulators), shipped; every task's reference is this program
+# with the task's edits (solutions/tur10.toml, a checkout only)
 STARTING = ("FC_PackBits7", "FC_BitOf", "FC_JogReference", "FB_Sb1Button", "FB_PauseTimer",
             "FB_FrameWatchdog", "FB_Blink", "FB_ResetIndicator", "FB_SensorBus", "FB_Tur10Sensors",
-            "FB_PositionRegulator", "PRG_Tur10Regulators", "T_Playback", "FB_Tur10Manual", "FB_Tur10Automatic")
-REFERENCE = ("FC_PackBits7", "FC_BitOf", "FC_JogReference", "FB_Sb1Button", "FB_FrameStore", "FB_PauseTimer",
-             "FB_FrameWatchdog", "FB_Blink", "FB_ResetIndicator", "FB_FrameSequencer", "FB_SensorBus",
-             "FB_Tur10Sensors", "FB_PositionRegulator", "FB_Tur10Robot", "PRG_Tur10Regulators")
+            "FB_PositionRegulator", "PRG_Tur10Regulators", "T_Playback", "FB_Tur10Manual", "FB_Tur10Automatic",
+            "PRG_Tur10Baseline")
 
 
-def _variant(name: str, prg: str, doc: str, reference: bool = True) -> Variant:
-    return Variant(name, (REFERENCE if reference else STARTING) + (prg,), (
-        Task("MainTask", "T#20ms", 1, (("Main", prg),)),
+def _variant(name: str, doc: str, reference: bool = True) -> Variant:
+    return Variant(name, STARTING, (
+        Task("MainTask", "T#20ms", 1, (("Main", "PRG_Tur10Baseline"),)),
         Task("RegTask", "T#10ms", 0, (("Regulators", "PRG_Tur10Regulators"),)),
-    ), doc, reference)
+    ), doc, reference, edited=reference)
 
 
 STAND = Stand(
@@ -38,11 +36,11 @@ STAND = Stand(
     gvl=("GVL_TUR10",),
     types=("T_ControlProgram",),
     variants={
-        "baseline": _variant("baseline", "PRG_Tur10Baseline", "Appendix 2: drive 1 only.", reference=False),
-        "task1": _variant("task1", "PRG_Tur10Task1", "Task 1: manual control of all five drives."),
-        "task2": _variant("task2", "PRG_Tur10Task2", "Task 2: I1.5 selects the recorded pause."),
-        "task3": _variant("task3", "PRG_Tur10Task3", "Task 3: I1.5 enables automatic execution."),
-        "full": _variant("full", "PRG_Tur10Full", "All five axes + Tasks 2 and 3."),
+        "baseline": _variant("baseline", "Appendix 2: drive 1 only.", reference=False),
+        "task1": _variant("task1", "Task 1: manual control of all five drives."),
+        "task2": _variant("task2", "Task 2: I1.5 selects the recorded pause."),
+        "task3": _variant("task3", "Task 3: I1.5 enables automatic execution."),
+        "full": _variant("full", "All five axes + Tasks 2 and 3."),
     },
 )
 
