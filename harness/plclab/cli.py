@@ -74,7 +74,7 @@ def _cmd_cnc(args: argparse.Namespace) -> int:
     try:
         result = run_cnc(args.part, method=args.method, step_mm=args.step, feed=args.feed, csv=args.csv,
                          vcd=args.vcd, plot=args.plot, svg=args.svg, diagonal=args.diagonal,
-                         tools=dict(args.tool or []), drive=args.drive)
+                         tools=dict(args.tool or []), drive=args.drive, program=args.program)
     except GcodeError as e:              # already `file:line:col: error: ...`; nothing has run
         print(e, file=sys.stderr)
         return 1
@@ -461,6 +461,8 @@ def build_parser() -> argparse.ArgumentParser:
     c.add_argument("--feed", type=float, metavar="MM_MIN", help="feed of every cutting block (replaces F)")
     c.add_argument("--tool", type=_tool, action="append", metavar="DN=R",
                    help="the tool-radius table: D number = radius in mm (repeatable), e.g. --tool D1=2.5")
+    c.add_argument("--program", nargs="+", metavar="FILE.st",
+                   help="your ST: FB_CncEvalLinear.st (Task 4) in place of the stub, or a complete program")
     for opt in ("csv", "vcd", "plot", "svg"):
         c.add_argument(f"--{opt}", metavar="F")
     c.set_defaults(func=_cmd_cnc)

@@ -44,7 +44,7 @@ def run_scenario(stand: str, variant: Optional[str] = None, scenario: Optional[s
     play = spec.scenario(name)
     srcs, checked = None, None
     if program:
-        srcs = read_sources(program)
+        srcs = spec.program_sources(program) if spec.program_sources else read_sources(program)
         checked = check_sources(srcs)
         if checked.config is None:
             raise PlcLabError(f"{srcs[-1][0]}: no CONFIGURATION: run the complete program (the bundle you "

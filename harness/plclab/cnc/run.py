@@ -6,7 +6,7 @@ from __future__ import annotations
 import math
 from dataclasses import dataclass, replace
 from pathlib import Path
-from typing import Optional
+from typing import Optional, Sequence
 
 from plclab.cnc.gcode import Frame, Program, parse_file
 from plclab.cnc.toolpath import HEADER, BlockResult, OffsetResult, check_blocks, check_offsets, path_mm
@@ -33,7 +33,11 @@ class CncResult:
 def run_cnc(part: str, method: str = "evalfn", step_mm: float = 0.01, feed: Optional[float] = None,
             csv: Optional[str] = None, vcd: Optional[str] = None, plot: Optional[str] = None,
             svg: Optional[str] = None, diagonal: bool = False,
-            tools: Optional[dict[int, float]] = None, drive: str = "step") -> CncResult:
+            tools: Optional[dict[int, float]] = None, drive: str = "step",
+            program: Optional[Sequence[str]] = None) -> CncResult:
+    """Run part program `part` on the CNC stand: the shipped program (a checkout's model
+    answer of FB_CncEvalLinear), or with `program` the student's files (their
+    FB_CncEvalLinear in place of the stub, or a complete program: cnc.program_sources)."""
     from plclab.stands import cnc
     from plclab.trace import write_vcd
 
@@ -48,13 +52,19 @@ def run_cnc(part: str, method: str = "evalfn", step_mm: float = 0.01, feed: Opti
     for target in (csv, vcd, plot, svg):
         if target:
             check_output(target)         # a bad output is refused before the run
-    program = parse_file(part, tools)
-    frames = program.frames
+    srcs = cnc.program_sources(program) if program else None      # a bad ST file: file:line:col, nothing run
+    variant = cnc.STAND.richest_variant
+    if srcs is None and method == "evalfn" and not cnc.STAND.variant(variant).reference:
+        raise PlcLabError(f"--method evalfn runs {cnc.STUDENT_BLOCK}, the students' Task 4 block, and this "
+                          f"installed package ships only its stub: run yours with --program "
+                          f"{cnc.STUDENT_BLOCK}.st (or use --method dda or integration)")
+    gcode = parse_file(part, tools)
+    frames = gcode.frames
     if feed is not None:
         frames = [f if f.kind == 0 else replace(f, feed=feed) for f in frames]
     if not frames:
         raise PlcLabError(f"{part}: no motion in the part program")
-    s = cnc.session(step_mm=step_mm)
+    s = cnc.session(variant, program=srcs, step_mm=step_mm)
     _check_travel(frames, s.plant)
     length = sum(math.dist(f.start, f.end) if not f.is_arc else 2 * math.pi * math.hypot(f.i, f.j)
                  for f in frames)
@@ -62,7 +72,7 @@ def run_cnc(part: str, method: str = "evalfn", step_mm: float = 0.01, feed: Opti
     run = cnc.run_part(s, frames, method, diagonal, timeout=10.0 + 3.0 * length / slowest, drive=drive)
     blocks = check_blocks(run.executed, run.points, step_mm, method, start_time=run.start, drive=drive)
     offsets = check_offsets(frames, run.executed, step_mm)
-    lines = list(program.notes) + [f"{part}: {len(frames)} frames, method {method}, step {step_mm:g} mm, "
+    lines = list(gcode.notes) + [f"{part}: {len(frames)} frames, method {method}, step {step_mm:g} mm, "
                                    f"drive {drive}", HEADER]
     lines += [b.row() for b in blocks]
     if offsets:
@@ -88,7 +98,7 @@ def run_cnc(part: str, method: str = "evalfn", step_mm: float = 0.01, feed: Opti
         files.append(_plot(plot, frames, run.executed, points, blocks, step_mm, part, method))
     if svg:
         files.append(_svg(svg, frames, points))
-    result = CncResult(program, blocks, offsets, run.missed, run.finished, lines, files)
+    result = CncResult(gcode, blocks, offsets, run.missed, run.finished, lines, files)
     lines.append("ok: every frame within its bound" if result.ok else "FAILED: see the rows above")
     return result
 

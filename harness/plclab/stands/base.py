@@ -76,6 +76,9 @@ class StandSpec:
     plot_signals: tuple[PlotEntry, ...]
     setup: Optional[Callable[[Session], None]] = None   # extra wiring of a fresh session (SCADA client)
     default_scenario: str = "demo"
+    # a student's `--program FILES` -> the sources to run (default: the files as they are, a
+    # complete program); a stand may let one block of a task stand in for its stub (cnc)
+    program_sources: Optional[Callable[[Sequence[str]], list[tuple[str, str]]]] = None
 
     @property
     def name(self) -> str:
