@@ -21,6 +21,8 @@ from typing import Sequence
 from plclab.cnc.gcode import Frame
 
 INTERPOLATION_CYCLE_S = 0.004      # PRG_CncStand: T = 4 fine cycles of 1 ms
+STEP_DRIVE_FEED = 600.0            # mm/min: the top feed the arcs' bound assumes with step/direction bits
+PULSE_FEED_MAX_STEPS = 15_000.0    # PRG_CncStand.PULSE_FEED_MAX: steps/s with the pulse counts (DDA, integration)
 
 
 @dataclass(frozen=True)
@@ -70,7 +72,7 @@ def check_blocks(frames: Sequence[Frame], points: Sequence[tuple[float, int, int
         end_error = math.dist(reached, end) * h
         t_end = pts[-1][0] if pts else prev_time
         results.append(BlockResult(k, f.line, f.kind, _length(f), t_end - prev_time, error,
-                                   _bound(f, method, h) + (h / math.sqrt(2) if drive == "pulse" else 0.0),
+                                   _bound(f, method, h, drive) + (h / math.sqrt(2) if drive == "pulse" else 0.0),
                                    end_error, _grid_error(f, start, end, h)))
         prev_end, prev_time = reached, t_end
     return results
@@ -109,13 +111,14 @@ def _sweep(f: Frame) -> float:
     return s if s > 1e-12 else 2 * math.pi
 
 
-def _bound(f: Frame, method: str, h: float) -> float:
+def _bound(f: Frame, method: str, h: float, drive: str = "step") -> float:
     if method == "evalfn":
         return h
     bound = h / math.sqrt(2)
     if f.is_arc:
         r = math.hypot(f.i, f.j)
-        dphi = min(f.feed, 600.0) / 60.0 * INTERPOLATION_CYCLE_S / r
+        top = max(STEP_DRIVE_FEED, PULSE_FEED_MAX_STEPS * h * 60.0) if drive == "pulse" else STEP_DRIVE_FEED
+        dphi = min(f.feed, top) / 60.0 * INTERPOLATION_CYCLE_S / r
         n = math.ceil(_sweep(f) / dphi)
         bound += n * r * dphi ** 3 / 6 + r * (1 - math.cos(dphi / 2))
     return bound

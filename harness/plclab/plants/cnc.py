@@ -63,6 +63,7 @@ LIMIT_LABELS = {("X", -1): "SQ1", ("X", 1): "SQ2", ("Y", -1): "SQ3", ("Y", 1): "
 PROBE = "IX1.2"           # B1: the touch probe made contact
 OVERRIDE = "IW0"          # RP1 feed override potentiometer, percent 0..150
 COUNTER = {"X": "IW1", "Y": "IW2", "Z": "IW3"}
+_LAMP_ITEMS = tuple(LAMPS.items())
 # The console face (docs/openplc.md): coils SB1, SB2, SA1, SB3 (1 = released); lamps HL1, HL2;
 # the table's positions and the missed steps.
 FACE = ConsoleFace(switches=tuple(CONSOLE), lamps=tuple(LAMPS.items()),
@@ -98,7 +99,7 @@ class CncTable(PlantModel):
         "slow_drive": "axis=X|Y|Z rate=steps_per_s: that drive's maximum step rate drops (missed steps)",
     }
 
-    def __init__(self, step_mm: float = 0.01, max_rate: float = 2000.0,
+    def __init__(self, step_mm: float = 0.01, max_rate: float = 20_000.0,
                  travel_mm: tuple[float, float] = (-150.0, 150.0), period: float = 0.001,
                  backlash: int = 0, pulse_cycle: float = 0.004) -> None:
         super().__init__()
@@ -120,6 +121,8 @@ class CncTable(PlantModel):
         self.step_mm, self.max_rate, self.period = float(step_mm), float(max_rate), float(period)
         self.travel = (round(travel_mm[0] / step_mm), round(travel_mm[1] / step_mm))
         self.axes = {a: Axis() for a in AXES}
+        self._sensed = tuple((a, self.axes[a], LIMITS[(a, -1)], LIMITS[(a, 1)], COUNTER[a]) for a in AXES)
+        self._lines = tuple((a, self.axes[a], STEP[a], DIR[a]) for a in AXES)   # step(): per axis
         self.override = 100
         self.lamps = {name: 0 for name in LAMPS}
         self.enabled = False
@@ -127,23 +130,25 @@ class CncTable(PlantModel):
     # --- the plant contract -------------------------------------------------------------
 
     def step(self, outputs: dict[str, int], dt: float) -> dict[str, int]:
-        """Take the steps the outputs' edges command over dt seconds; report the inputs."""
+        """Take the steps the outputs' edges command over dt seconds; report the inputs.
+        (The hot path of a CNC run, once per fine cycle: kept lean, `plclab bench`.)"""
         if dt < 0:
             raise PlantError(f"dt must not be negative (got {dt})")
-        self.lamps = {name: 1 if outputs.get(loc, 0) else 0 for name, loc in LAMPS.items()}
-        self.enabled = bool(outputs.get(ENABLE, 0)) and bool(self.console_bits["SB3"])
-        cycle = outputs.get(PULSE_CYCLE, 0)
+        get = outputs.get
+        self.lamps = {name: 1 if get(loc, 0) else 0 for name, loc in _LAMP_ITEMS}
+        self.enabled = bool(get(ENABLE, 0)) and bool(self.console_bits["SB3"])
+        cycle = get(PULSE_CYCLE, 0)
         if cycle != self.cycle_seen:
             self.cycle_seen = cycle
             self._generate(outputs)
         self.time += dt
-        for a, axis in self.axes.items():
+        for a, axis, step_loc, dir_loc in self._lines:
             if axis.pending:
                 self._spread(a, axis)
-            line = 1 if outputs.get(STEP[a], 0) else 0
+            line = 1 if get(step_loc, 0) else 0
             if line != axis.step_line:
                 axis.step_line = line
-                self._pulse(a, axis, -1 if outputs.get(DIR[a], 0) else 1, self.time)
+                self._pulse(a, axis, -1 if get(dir_loc, 0) else 1, self.time)
         return self._inputs()
 
     def _generate(self, outputs: dict[str, int]) -> None:
@@ -154,18 +159,48 @@ class CncTable(PlantModel):
             if count:
                 n, direction = abs(count), 1 if count > 0 else -1
                 pending = self.axes[a].pending
-                pending.extend((t0 + (k + 0.5) * period / n, direction, self.cycle_seen) for k in range(n))
-                pending.sort()
+                interleave = bool(pending)          # a burst alone is in time order already
+                seen = self.cycle_seen
+                pending.extend([(t0 + (k + 0.5) * period / n, direction, seen) for k in range(n)])
+                if interleave:
+                    pending.sort()
 
     def _spread(self, a: str, axis: Axis) -> None:
-        """The generator's pulses due by now go to the drive, each at its own time."""
+        """The generator's pulses due by now go to the drive, each at its own time: what
+        `_pulse` does for each, in one loop (up to tens of pulses per fine cycle)."""
+        now = self.time + 1e-12
+        rate = self._rate(a)
+        enabled = self.enabled
+        log = self.pulse_log[a] if self.pulse_log is not None else None
+        lo, hi = self.travel
+        play = self.backlash
+        budget, clock, steps, motor = axis.budget, axis.clock, axis.steps, axis.motor
         due = 0
         for t, direction, cycle in axis.pending:
-            if t > self.time + 1e-12:
+            if t > now:
                 break
             due += 1
             self.last_cycle = cycle
-            self._pulse(a, axis, direction, t)
+            budget += rate * (t - clock)
+            if budget > 1.0:                 # min(1.0, ...): the drive's rate budget is full
+                budget = 1.0
+            clock = t
+            if not enabled:
+                continue
+            axis.received += 1
+            if log is not None:
+                log.append(t)
+            if budget < 1.0:
+                axis.missed += 1
+                continue
+            budget -= 1.0
+            turned = motor + direction
+            target = min(max(steps, turned), turned + play) if play else turned
+            if not lo <= target <= hi:
+                axis.blocked += 1
+                continue
+            motor, steps = turned, target
+        axis.budget, axis.clock, axis.steps, axis.motor = budget, clock, steps, motor
         del axis.pending[:due]
 
     def _pulse(self, a: str, axis: Axis, direction: int, t: float) -> None:
@@ -254,13 +289,14 @@ class CncTable(PlantModel):
 
     def _inputs(self) -> dict[str, int]:
         out = {CONSOLE[name]: bit for name, bit in self.console_bits.items()}
-        for (a, side), loc in LIMITS.items():
-            edge = self.travel[1] if side > 0 else self.travel[0]
-            out[loc] = 1 if self.axes[a].steps == edge else 0
+        lo, hi = self.travel
+        for a, axis, low_loc, high_loc, counter_loc in self._sensed:
+            steps = axis.steps
+            out[low_loc] = 1 if steps == lo else 0
+            out[high_loc] = 1 if steps == hi else 0
+            out[counter_loc] = steps & 0xFFFF             # unsigned16
         out[PROBE] = 1 if self.holes and self.probe_contact() else 0
         out[OVERRIDE] = self.override
-        for a, loc in COUNTER.items():
-            out[loc] = unsigned16(self.axes[a].steps)
         return out
 
 
