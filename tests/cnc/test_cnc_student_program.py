@@ -84,3 +84,11 @@ def test_run_scenario_with_the_students_block(installed, tmp_path, capsys):
     assert main(["run", "cnc", "--scenario", "square", "--program", str(STUB), "--csv", csv]) == 1
     assert "scenario FAILED: frame 1 (line 3): contour error 0.0000 mm (bound 0.0100 mm), end point off by " \
            "20.0000 mm" in capsys.readouterr().out
+
+
+def test_the_installed_stands_scenario_names_the_stub_and_program(installed, tmp_path, capsys):
+    assert main(["run", "cnc", "--scenario", "square", "--csv", str(tmp_path / "sq.csv")]) == 1
+    out = capsys.readouterr().out
+    assert "scenario FAILED: frame 1 (line 3)" in out
+    assert "FB_CncEvalLinear in this program is the students' stub, Task 4: run yours with " \
+           "--program FB_CncEvalLinear.st" in out

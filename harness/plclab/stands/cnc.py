@@ -169,6 +169,7 @@ def record_until(s: Session, run: PartRun, flag: str, timeout: float) -> None:
     """Scan fine cycle by fine cycle until the global `flag` is TRUE, recording each move of
     the table with the frame it belongs to."""
     axes = [s.plant.axes[a] for a in "XYZ"]
+    ax, ay, az = axes
     frame_at, frame_key = s.plc.resolve("Frame")          # resolved once: read every cycle
     flag_at, flag_key = s.plc.resolve(flag)
     last = tuple(a.steps for a in axes)
@@ -179,7 +180,7 @@ def record_until(s: Session, run: PartRun, flag: str, timeout: float) -> None:
     cycle_frame: dict[int, int] = {}        # pulse-count drive: the frame each message (cycle) was sent in
     for _ in range(round(timeout / s.tick) + 1):
         step(1)                             # the plant took the previous scan's steps first
-        pos = tuple(a.steps for a in axes)
+        pos = (ax.steps, ay.steps, az.steps)
         if pos != last:
             run.points.append((s.now, cycle_frame.get(s.plant.last_cycle, frame) if counts else frame, *pos))
             last = pos
@@ -191,7 +192,7 @@ def record_until(s: Session, run: PartRun, flag: str, timeout: float) -> None:
     pending = getattr(s.plant, "pulses_pending", lambda: False)
     while True:                             # the last scan's steps; the generator's last pulses
         step(1)
-        pos = tuple(a.steps for a in axes)
+        pos = (ax.steps, ay.steps, az.steps)
         if pos != last:
             run.points.append((s.now, cycle_frame.get(s.plant.last_cycle, frame) if counts else frame, *pos))
             last = pos
@@ -334,7 +335,17 @@ def _require_on_contour(s: Session, run: "PartRun", method: str) -> None:
         if not block.ok:
             raise ScenarioFailure(f"frame {block.index} (line {block.line}): contour error "
                                   f"{block.error_mm:.4f} mm (bound {block.bound_mm:.4f} mm), "
-                                  f"end point off by {block.end_error_mm:.4f} mm")
+                                  f"end point off by {block.end_error_mm:.4f} mm{_stub_hint(s, method)}")
+
+
+def _stub_hint(s: Session, method: str) -> str:
+    """Why an evaluation-function run of the shipped students' program goes nowhere, and what to do."""
+    from plclab.stands import pou_path
+
+    if method == "evalfn" and str(pou_path(STUDENT_BLOCK)) in {name for name, _ in s.sources}:
+        return (f" ({STUDENT_BLOCK} in this program is the students' stub, Task 4: run yours with "
+                f"--program {STUDENT_BLOCK}.st)")
+    return ""
 
 
 def estop(s: Session) -> None:
