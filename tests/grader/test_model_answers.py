@@ -73,4 +73,7 @@ def test_plclab_build_outline_prints_the_diff_and_writes_nothing(tmp_path, capsy
     assert list(tmp_path.iterdir()) == []
     assert main(["build", "tur10", "baseline", "--outline"]) == 1
     err = capsys.readouterr().err
-    assert len(err.strip().splitlines()) == 1 and "not a task reference" in err
+    assert len(err.strip().splitlines()) == 1 and "not a task reference" in err and "task1, task2, task3, full" in err
+    assert main(["build", "cnc", "full", "--outline"]) == 1
+    err = capsys.readouterr().err
+    assert len(err.strip().splitlines()) == 1 and "cnc has none" in err

@@ -102,8 +102,10 @@ class Stand:
         clear error."""
         v = self.variant(variant)
         if not v.edited:
+            edited = [n for n, w in self.variants.items() if w.edited]
             raise PlcLabError(f"{self.name} {variant}: not a task reference made from the starting program "
-                              f"(those are: {', '.join(n for n, w in self.variants.items() if w.edited)})")
+                              + (f"(those are: {', '.join(edited)})" if edited else
+                                 f"({self.name} has none: --outline is for the robots' tasks)"))
         paths = self.files(variant)[:len(self.types) + len(v.pous)]
         start = {p.stem: (str(p.relative_to(PLC_DIR.parent.parent)), _read(p)) for p in paths}
         answer = {p.stem: text for p, (_name, text) in zip(paths, self.pou_sources(variant))}
