@@ -51,8 +51,9 @@ def test_handout_is_the_checked_starting_program_map_and_sheet(stand, tmp_path, 
     assert st.splitlines()[1:] == bundle(s, s.starting_variant).splitlines()
     assert not s.variant(s.starting_variant).reference
     check_sources([(str(out / FILES[stand]), st)])          # loads as it is
-    assert (out / "tasks.md").read_text(encoding="utf-8").endswith(
-        (HANDOUTS_DIR / f"{stand}-tasks.md").read_text(encoding="utf-8"))
+    sheet = (out / "tasks.md").read_text(encoding="utf-8")
+    assert sheet.split("\n", 1)[1].startswith((HANDOUTS_DIR / f"{stand}-tasks.md").read_text(encoding="utf-8"))
+    assert sheet.count("## What the grader checks") == 1
     assert capsys.readouterr().out.count("wrote ") == 3
 
 
@@ -139,3 +140,18 @@ def test_output_that_is_a_file_is_one_clear_error(tmp_path, capsys):
     assert main(["handout", "mp9c", "-o", str(f)]) == 1
     err = capsys.readouterr().err
     assert err.count("\n") == 1 and "not a directory" in err and f.read_text(encoding="utf-8") == "x"
+
+
+@pytest.mark.parametrize("stand", STANDS)
+def test_the_task_sheet_lists_every_requirement_the_grader_checks(stand):
+    """A student reads the acceptance criteria before handing in: every graded task's rows,
+    id and sentence, exactly as the grader declares them (one source: the grader)."""
+    from plclab.grader import requirement_table, tasks
+
+    sheet = handout_files(stand)["tasks.md"]
+    graded = tasks(stand, None)
+    assert graded, stand
+    for task in graded:
+        section = sheet.split(f"### {task}: ", 1)[1].split("\n### ", 1)[0]
+        rows = re.findall(r"^\| (\S+) \| (.*) \|$", section, re.M)[1:]          # after the header row
+        assert [(rid, text.replace("\\|", "|")) for rid, text in rows] == requirement_table(stand, task)

@@ -236,8 +236,14 @@ def _cmd_handout(args: argparse.Namespace) -> int:
 
 
 def _cmd_grade(args: argparse.Namespace) -> int:
-    from plclab.grader import grade
+    from plclab.grader import grade, requirement_table, requirements_text, task_title
 
+    if args.requirements:
+        if args.files or args.listen or args.traffic or args.duration is not None:
+            raise PlcLabError("grade: --requirements lists what the task checks; it grades nothing (no files, "
+                              "--listen, --duration or --traffic with it)")
+        print(requirements_text(task_title(args.stand, args.task), requirement_table(args.stand, args.task)), end="")
+        return 0
     if args.stand == "thermo":
         return _cmd_grade_scada(args)
     if args.listen or args.traffic or args.duration is not None:
@@ -377,6 +383,8 @@ def build_parser() -> argparse.ArgumentParser:
                    help="thermo SCADA tasks: serve the stand here and record the client (default 127.0.0.1:5020)")
     c.add_argument("--duration", type=_seconds, metavar="T", help="thermo SCADA tasks: record for T, then grade")
     c.add_argument("--traffic", metavar="FILE.csv", help="thermo SCADA tasks: grade a recorded traffic log")
+    c.add_argument("--requirements", action="store_true",
+                   help="grade nothing: list what the task checks (id and requirement, as the report's rows)")
     c.set_defaults(func=_cmd_grade)
 
     c = sub.add_parser("grade-class", help="grade a folder of submissions (a .st file or a folder per student; "

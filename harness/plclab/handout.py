@@ -3,7 +3,8 @@
 Three files: the starting program as one OpenPLC-loadable bundle (`STAND.st`, the shipped
 starting variant: never a reference solution), the I/O map (`io-map.md`, read from the
 stand's GVL, the one source of its addresses) and the task sheet (`tasks.md`, package data
-under `plclab/handouts/`, the same text as the Tasks section of `docs/STAND.md`).
+under `plclab/handouts/`, the same text as the Tasks section of `docs/STAND.md`, followed by
+what the grader checks for each task: its requirement rows, read from the grader itself).
 
 The directory may hold other files; a file of ours may be replaced (a new hand-out after
 an update), anything else is never overwritten: the whole hand-out is refused in one line
@@ -43,6 +44,24 @@ def task_sheet(stand: Stand) -> str:
         raise PlcLabError(f"handout: no task sheet for stand '{stand.name}' ({path.name} is missing)") from None
 
 
+def grader_checks(stand: Stand) -> str:
+    """The requirements of each graded task of `stand` as markdown tables: the acceptance
+    criteria in the words of the grade report's rows (empty for a stand with no grader)."""
+    from plclab.grader import requirement_table, task_title, tasks
+
+    names = tasks(stand.name, None)
+    if not names:
+        return ""
+    out = ["", "## What the grader checks", "",
+           f"`plclab grade {stand.name} TASK ...` gives one row per requirement below, PASS or FAIL with "
+           f"what was expected, what your program did and when; `plclab grade {stand.name} TASK "
+           "--requirements` prints the list."]
+    for task in names:
+        out += ["", f"### {task}: {task_title(stand.name, task)}", "", "| id | requirement |", "|---|---|"]
+        out += [f"| {rid} | {text.replace('|', chr(92) + '|')} |" for rid, text in requirement_table(stand.name, task)]
+    return "\n".join(out) + "\n"
+
+
 def handout_files(stand_name: str) -> dict[str, str]:
     """File name -> text of the hand-out of `stand_name`, each starting with the marker."""
     stand = get_stand(stand_name)
@@ -51,7 +70,7 @@ def handout_files(stand_name: str) -> dict[str, str]:
     return {
         f"{stand.name}.st": f"(* {tag}: the starting program ('{variant}'). *)\n" + bundle(stand, variant),
         "io-map.md": f"<!-- {tag} -->\n" + io_map(stand),
-        "tasks.md": f"<!-- {tag} -->\n" + task_sheet(stand),
+        "tasks.md": f"<!-- {tag} -->\n" + task_sheet(stand) + grader_checks(stand),
     }
 
 

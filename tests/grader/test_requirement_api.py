@@ -99,3 +99,31 @@ def test_a_scenario_repeating_an_unknown_one_is_refused():
         RequirementSet(stand="mp9c", task="selftest", title="t", requirements=(R1,),
                        scenarios=(Scenario("s", lambda s, c: None), Scenario("t", lambda s, c: None, repeats="nope")),
                        make_session=make_session)
+
+
+@pytest.mark.parametrize("stand,task", [("mp9c", "task2"), ("tur10", "task3"), ("thermo", "scada1"), ("cnc", "task4")])
+def test_grade_requirements_lists_the_rows_a_grade_gives_before_grading(stand, task, capsys, tmp_path, monkeypatch):
+    from plclab.cli import main
+    from plclab.grader import requirement_table
+
+    monkeypatch.chdir(tmp_path)
+    assert main(["grade", stand, task, "--requirements"]) == 0
+    out = capsys.readouterr().out
+    lines = out.splitlines()
+    assert lines[0].startswith(("MP-9C", "TUR-10", "Thermo", "CNC")) and lines[2].split() == ["id", "requirement"]
+    listed = [line.split()[0] for line in lines[4:] if line[:1].strip()]
+    assert listed == [rid for rid, _ in requirement_table(stand, task)]
+    joined = " ".join(" ".join(line.split()[1:] if line[:1].strip() else line.split()) for line in lines[4:])
+    assert all(text in joined for _, text in requirement_table(stand, task))    # each sentence, whole
+    assert list(tmp_path.iterdir()) == []                                         # graded nothing, wrote nothing
+
+
+def test_grade_requirements_ids_are_the_rows_of_a_real_grade(capsys):
+    from plclab.cli import main
+
+    assert main(["grade", "mp9c", "task1", "--requirements"]) == 0
+    listed = [line.split()[0] for line in capsys.readouterr().out.splitlines()[4:] if line[:1].strip()]
+    report = grade_sources("mp9c", "task1", sources(STAND, "baseline"))
+    assert [row.id for row in report.rows] == listed
+    assert main(["grade", "mp9c", "task1", "x.st", "--requirements"]) == 1
+    assert "grades nothing" in capsys.readouterr().err

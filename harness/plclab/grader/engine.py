@@ -157,4 +157,9 @@ def requirement_table(stand: str, task: str) -> list[tuple[str, str]]:
     return [(r.id, r.text) for r in requirement_set(stand, task).requirements]
 
 
-__all__ = ["grade", "grade_sources", "requirement_table"]
+def task_title(stand: str, task: str) -> str:
+    """The task's title as the report heads it ("MP-9C pneumatic robot, Task 2: ...")."""
+    return requirement_set(stand, task).title
+
+
+__all__ = ["grade", "grade_sources", "requirement_table", "task_title"]

@@ -117,3 +117,15 @@ class GradeReport:
             folders = sorted({str(p.parent) for p in written})
             out.append(f"traces (CSV + VCD per scenario) in {', '.join(folders)}")
         return "\n".join(out) + "\n"
+
+
+def requirements_text(title: str, table: list[tuple[str, str]]) -> str:
+    """What a task's grader checks, before any grading: the report's id and requirement
+    columns, so a student reads the acceptance criteria in the words of the later rows."""
+    width = WIDTH - ID_WIDTH - 2
+    lines = [title, "", f"{'id':<{ID_WIDTH}}  requirement", f"{'-' * ID_WIDTH}  {'-' * width}"]
+    for rid, text in table:
+        wrapped = textwrap.wrap(text, width) or [""]
+        lines.append(f"{rid:<{ID_WIDTH}}  {wrapped[0]}")
+        lines += [f"{'':<{ID_WIDTH}}  {more}" for more in wrapped[1:]]
+    return "\n".join(lines) + "\n"
