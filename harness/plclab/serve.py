@@ -152,27 +152,36 @@ def serve_forever(opts: ServeOptions, duration: Optional[float] = None, hmi: boo
         raise PlcLabError(f"{opts.stand.name} has no HMI here (the reference HMI needs the Twido map of the "
                           f"thermo stand and its Modbus face)")
     service = Service(opts)
-    service.start()
-    where = f"modbus on {opts.modbus.bind}:{service.server.port}" if service.server else "modbus disabled"
-    if service.console is not None:
-        where += f", console face on {service.console.host}:{service.console.port}"
-    print(f"serving {opts.stand.name} ({opts.sources[0][0]}{' ...' if len(opts.sources) > 1 else ''}): "
-          f"tick {service.plc.tick_ns / 1e6:g} ms, {where}; Ctrl-C stops", flush=True)
-    if hmi:
-        _start_hmi(service, opts)
 
     def on_signal(signum, frame):   # noqa: ARG001 - signal handler signature
         service._stopped.set()
+    # handlers first: a stop asked for as soon as the listening line is out is a clean stop
     old = {sig: signal.signal(sig, on_signal) for sig in (signal.SIGINT, signal.SIGTERM)}
     try:
+        service.start()
+    except BaseException:           # nothing to stop: the start's own error, handlers as they were
+        _restore(old)
+        raise
+    try:
+        where = f"modbus on {opts.modbus.bind}:{service.server.port}" if service.server else "modbus disabled"
+        if service.console is not None:
+            where += f", console face on {service.console.host}:{service.console.port}"
+        print(f"serving {opts.stand.name} ({opts.sources[0][0]}{' ...' if len(opts.sources) > 1 else ''}): "
+              f"tick {service.plc.tick_ns / 1e6:g} ms, {where}; Ctrl-C stops", flush=True)
+        if hmi:
+            _start_hmi(service, opts)
         service.wait(duration, None if hmi else sys.stderr)    # the HMI's lines are the status
     finally:
         service._stopped.clear()
         service.stop()
-        for sig, handler in old.items():
-            signal.signal(sig, handler)
+        _restore(old)
     print(f"stopped: {service.status()}", flush=True)
     return 0 if service.plc.fault is None else 1
+
+
+def _restore(handlers: dict) -> None:
+    for sig, handler in handlers.items():
+        signal.signal(sig, handler)
 
 
 def _start_hmi(service: Service, opts: ServeOptions) -> None:

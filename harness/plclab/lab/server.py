@@ -490,18 +490,18 @@ def serve_lab(server: LabServer, report=print) -> int:
     import signal
 
     async def main() -> None:
+        stop = asyncio.Event()
+        loop = asyncio.get_running_loop()
+        for sig in (signal.SIGINT, signal.SIGTERM):      # before the URL is out: a stop then is clean
+            try:
+                loop.add_signal_handler(sig, stop.set)
+            except (NotImplementedError, RuntimeError):
+                pass
         url = await server.start()
         lab = server.lab
         twido = f"; Twido Modbus face on {server.bind}:{server.modbus.port}" if server.modbus else ""
         report(f"virtual lab: {lab.module.STAND.title}, program {lab.program_name}, x{lab.speed:g}{twido}")
         report(f"open {url} in a browser; Ctrl-C stops")
-        stop = asyncio.Event()
-        loop = asyncio.get_running_loop()
-        for sig in (signal.SIGINT, signal.SIGTERM):
-            try:
-                loop.add_signal_handler(sig, stop.set)
-            except (NotImplementedError, RuntimeError):
-                pass
         try:
             await stop.wait()
         finally:
