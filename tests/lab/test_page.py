@@ -250,6 +250,19 @@ def test_grade_shows_a_table(lab_page):
     expect(page.locator("#grade-message")).to_contain_text("requirements passed: FAIL")
 
 
+def test_the_page_lists_what_each_task_checks_before_grading(lab_page):
+    """A student opens "What task2 checks" and reads the requirement rows the grade will have."""
+    from plclab.grader import requirement_table
+
+    page = lab_page("mp9c", speed=2, variant="baseline").page
+    page.get_by_text("What task2 checks").click()
+    table = page.get_by_role("table", name="requirements task2")
+    expect(table).to_be_visible(timeout=WAIT)
+    cells = table.locator("tbody tr").evaluate_all("rows => rows.map(r => [...r.cells].map(c => c.textContent))")
+    assert [tuple(c) for c in cells] == requirement_table("mp9c", "task2")
+    expect(page.get_by_text("What task3 checks")).to_be_visible()
+
+
 # --------------------------------------------------------------------------- thermo SCADA
 
 def test_thermo_registers_refuse_like_the_twido_face_which_stays_up(lab_page, shots):

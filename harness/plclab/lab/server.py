@@ -179,17 +179,18 @@ class LabServer:
         return web.FileResponse(STATIC / "index.html", headers={"Cache-Control": "no-cache"})
 
     def hello(self) -> dict:
-        from plclab.grader import tasks
+        from plclab.grader import requirement_table, tasks
         lab = self.lab
         try:
             grade_tasks = tasks(lab.stand)
         except PlcLabError:
             grade_tasks = []
+        checks = {task: requirement_table(lab.stand, task) for task in grade_tasks}   # what each grade checks
         twido = None
         if self.modbus is not None:
             twido = f"{self.bind}:{self.modbus.port}"
         return {"type": "hello", "stand": lab.stand, "title": lab.module.STAND.title, "panel": lab.panel.describe(),
-                "speeds": list(SPEEDS), "tasks": grade_tasks, "twido": twido, "pages": len(self.clients) + 1,
+                "speeds": list(SPEEDS), "tasks": grade_tasks, "checks": checks, "twido": twido, "pages": len(self.clients) + 1,
                 "trend_names": lab.trend_names, "can_reload": True}
 
     async def websocket(self, request: web.Request) -> web.StreamResponse:

@@ -51,7 +51,7 @@ def program_shape(checked: CheckedUnit) -> dict:
 
 def first_difference(a: CheckedUnit, b: CheckedUnit) -> Optional[str]:
     """None when `a` and `b` are the same program, else where they first differ, e.g.
-    `pous[3] FB_FrameStore .blocks[0] .decls[1] Reset .init: None vs ...`."""
+    `pous[3] FB_Mp9cManual .blocks[0] .decls[1] Reset .init: None vs ...`."""
     return _diff(program_shape(a), program_shape(b), "")
 
 

@@ -246,6 +246,16 @@ function buildGrade(h) {
   for (const task of h.tasks) {
     box.append(el("button", { type: "button", text: `Grade ${task}`, onclick: () => grade(task) }));
   }
+  // what each task checks, before grading: the rows the grade table will have
+  const checks = $("#grade-checks");
+  checks.replaceChildren();
+  for (const task of h.tasks) {
+    const rows = (h.checks && h.checks[task]) || [];
+    const table = el("table", { "aria-label": `requirements ${task}` },
+      el("thead", {}, el("tr", {}, el("th", { text: "id" }), el("th", { text: "requirement" }))),
+      el("tbody", {}, ...rows.map(([id, text]) => el("tr", {}, el("td", { text: id }), el("td", { text })))));
+    checks.append(el("details", {}, el("summary", { text: `What ${task} checks (${rows.length} requirements)` }), table));
+  }
 }
 
 async function grade(task) {
