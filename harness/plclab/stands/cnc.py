@@ -178,26 +178,26 @@ def record_until(s: Session, run: PartRun, flag: str, timeout: float) -> None:
     counts = bool(s.plc.read("PulseDrive"))
     cycle_at, cycle_key = s.plc.resolve("PULSE_CYCLE")
     cycle_frame: dict[int, int] = {}        # pulse-count drive: the frame each message (cycle) was sent in
-    for _ in range(round(timeout / s.tick) + 1):
+    pending = s.plant.pulses_pending
+    scans, ending = round(timeout / s.tick) + 1, False
+    while True:
         step(1)                             # the plant took the previous scan's steps first
         pos = (ax.steps, ay.steps, az.steps)
         if pos != last:
             run.points.append((s.now, cycle_frame.get(s.plant.last_cycle, frame) if counts else frame, *pos))
             last = pos
+        if ending:                          # the last scan's steps; the generator's last pulses
+            if not pending():
+                break
+            continue
         if counts:
             cycle_frame.setdefault(getattr(cycle_at, cycle_key), getattr(frame_at, frame_key))
         if getattr(flag_at, flag_key) and frame == getattr(frame_at, frame_key):
-            break
+            ending = True
+            continue
         frame = getattr(frame_at, frame_key)
-    pending = getattr(s.plant, "pulses_pending", lambda: False)
-    while True:                             # the last scan's steps; the generator's last pulses
-        step(1)
-        pos = (ax.steps, ay.steps, az.steps)
-        if pos != last:
-            run.points.append((s.now, cycle_frame.get(s.plant.last_cycle, frame) if counts else frame, *pos))
-            last = pos
-        if not pending():
-            break
+        scans -= 1
+        ending = scans == 0                 # timeout
     s._copy_trace()
     run.missed = s.plant.missed()
 
