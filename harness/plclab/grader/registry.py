@@ -69,7 +69,6 @@ class Checks:
 
     def __init__(self, requirements: Sequence[Requirement]):
         self.requirements = {r.id: r for r in requirements}
-        self.passed: set[str] = set()
         self.passed_in: dict[str, set[str]] = {}                     # requirement -> scenarios
         self.failures: dict[str, tuple[Failure, str]] = {}
         self.scenario = ""
@@ -96,8 +95,12 @@ class Checks:
         """Requirement `rid` has been checked to the end in the current scenario (it passes
         unless something failed)."""
         self._known(rid)
-        self.passed.add(rid)
         self.passed_in.setdefault(rid, set()).add(self.scenario)
+
+    @property
+    def passed(self) -> set[str]:
+        """The requirements checked to the end in at least one scenario."""
+        return set(self.passed_in)
 
     def fail(self, rid: str, expected: str, observed: str, time: Optional[float]) -> None:
         self._known(rid)
