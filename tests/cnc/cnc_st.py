@@ -1,4 +1,4 @@
-"""Run the CNC motion blocks (the shipped ST, plclab/plc/POUs) in the soft PLC for the tests in tests/cnc.
+"""Run the CNC motion blocks (the shipped ST, plc/POUs) in the soft PLC for the tests in tests/cnc.
 
 Each helper compiles the block(s) once with a small test PROGRAM around them that runs a
 whole frame inside one scan and records the visited points in arrays, so a property test

@@ -69,7 +69,7 @@ def test_plclab_build_outline_prints_the_diff_and_writes_nothing(tmp_path, capsy
     assert main(["build", "tur10", "task2", "--outline"]) == 0
     out = capsys.readouterr().out
     assert out == get_stand("tur10").outline("task2")
-    assert "+++ b/plclab/plc/POUs/FB_Tur10Manual.st" in out and "+        Cp.Frames[Cp.Count].Pause := SEL(" in out
+    assert "+++ b/plc/POUs/FB_Tur10Manual.st" in out and "+        Cp.Frames[Cp.Count].Pause := SEL(" in out
     assert list(tmp_path.iterdir()) == []
     assert main(["build", "tur10", "baseline", "--outline"]) == 1
     err = capsys.readouterr().err

@@ -1,4 +1,4 @@
-"""Where the ST lives: what ships in the package (plclab/plc) and what stays in a checkout
+"""Where the ST lives: what ships in the package (plc/ in the repository, plclab/plc in the wheel) and what stays in a checkout
 (solutions/). A student's starting program and thermo's program are built from package data
 alone; a task's reference solution needs the checkout and is refused in one line without it.
 """
@@ -92,3 +92,21 @@ def test_a_reference_without_the_checkout_is_one_clear_error_and_nothing_is_writ
     assert list(tmp_path.iterdir()) == []
     write_build(name, "baseline", str(tmp_path / "b.st"), None)      # the starting program still builds
     assert (tmp_path / "b.st").read_text(encoding="utf-8").startswith("(*")
+
+
+def test_the_repository_keeps_the_promised_layout():
+    """plc/POUs and plc/GVL at the top are the one copy of the shipped ST; a checkout and an
+    editable install read exactly those files (the wheel carries them as plclab/plc)."""
+    root = Path(__file__).resolve().parents[2]
+    for must in ("plc/POUs", "plc/GVL", "harness/plclab", "tests", "solutions", "docs"):
+        assert (root / must).is_dir(), must
+    for must in ("openplc.conf", "README.md", "pyproject.toml"):
+        assert (root / must).is_file(), must
+    assert PLC_DIR == root / "plc"
+    assert {"GVL_MP9C", "GVL_TUR10", "GVL_THERMO", "GVL_CNC"} <= _stems(root / "plc" / "GVL")
+    assert {"PRG_Mp9cBaseline", "PRG_Tur10Baseline", "PRG_Thermo", "PRG_CncStand"} <= _stems(root / "plc" / "POUs")
+    assert not (root / "harness" / "plclab" / "plc").exists(), "a second copy of the shipped ST"
+    for name in STANDS:
+        for vname in get_stand(name).variants:
+            files = get_stand(name).files(vname)
+            assert all((root / "plc") in f.parents or (root / "solutions") in f.parents for f in files), (name, vname)

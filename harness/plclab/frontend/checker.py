@@ -44,7 +44,7 @@ class Checker(DeclarationChecks, StatementChecks, ExpressionChecks, Configuratio
                 self.error(c, "only one CONFIGURATION is allowed in a program")
         # Global scopes. Inside a CONFIGURATION there is one. Without one, each GVL file is a
         # scope of its own: the files of several stands can be checked together (`plclab
-        # check harness/plclab/plc/GVL/*.st ...`), each POU against the GVL that declares its
+        # check plc/GVL/*.st ...`), each POU against the GVL that declares its
         # VAR_EXTERNALs, although two stands' consoles both have an SB1.
         config_blocks = []
         if config:

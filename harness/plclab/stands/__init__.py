@@ -4,8 +4,8 @@ globals inside CONFIGURATION Config0 / RESOURCE Res0 ON PLC), the single source 
 for `plclab build`, `run`, `serve` and `grade`.
 
 Where the ST lives: what the project ships to users (each stand's GVL, the building blocks,
-the students' starting programs, thermo's program) is package data under `plclab/plc/`, so
-an installed package carries it. The reference solutions of the lab tasks live apart, in the
+the students' starting programs, thermo's program) lives in the repository's `plc/` (POUs/,
+GVL/) and is package data under `plclab/plc/` in the wheel, so an installed package carries it. The reference solutions of the lab tasks live apart, in the
 repository's `solutions/` tree: a checkout has them (tests, grader tests, instructors), an
 installed package never does, and asking for one there is one clear error. A robot task's
 reference is the starting program with that task's edits (`solutions/<stand>.toml`, applied
@@ -22,7 +22,19 @@ from types import ModuleType
 from plclab.errors import PlcLabError
 from plclab.stands import references
 
-PLC_DIR = Path(__file__).resolve().parents[1] / "plc"
+def _plc_dir() -> Path:
+    """The shipped ST: `plc/` at the top of the repository (its one copy, where an OpenPLC
+    user or a CI job looks for `plc/POUs` and `plc/GVL`), which the wheel carries as
+    `plclab/plc` (pyproject.toml maps the folder into the package at build time). An
+    installed package reads its own copy; a checkout or an editable install reads the
+    repository's."""
+    packaged = Path(__file__).resolve().parents[1] / "plc"
+    if packaged.is_dir():
+        return packaged
+    return Path(__file__).resolve().parents[3] / "plc"
+
+
+PLC_DIR = _plc_dir()
 
 
 def _checkout_solutions() -> Path | None:
@@ -107,7 +119,7 @@ class Stand:
                               + (f"(those are: {', '.join(edited)})" if edited else
                                  f"({self.name} has none: --outline is for the robots' tasks)"))
         paths = self.files(variant)[:len(self.types) + len(v.pous)]
-        start = {p.stem: (str(p.relative_to(PLC_DIR.parent.parent)), _read(p)) for p in paths}
+        start = {p.stem: (str(p.relative_to(PLC_DIR.parent)), _read(p)) for p in paths}
         answer = {p.stem: text for p, (_name, text) in zip(paths, self.pou_sources(variant))}
         return references.outline(start, answer)
 
@@ -196,7 +208,7 @@ def pou_path(stem: str, reference: bool = False) -> Path:
     """The file of a POU. A reference solution's own version (`solutions/POUs`, checkout
     only) comes first for a whole-block reference: a block of the same name there is the
     model answer of the students' stub (the CNC lab's FB_CncEvalLinear). Everything else is
-    shipped (`plclab/plc/POUs`)."""
+    shipped (`plc/POUs`)."""
     if reference and SOLUTIONS_DIR is not None:
         solution = SOLUTIONS_DIR / "POUs" / f"{stem}.st"
         if solution.is_file():
