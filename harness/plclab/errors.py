@@ -5,19 +5,26 @@ the CLI prints them and sets the exit code. Nothing below the CLI prints.
 """
 from __future__ import annotations
 
-from dataclasses import dataclass
+from dataclasses import dataclass, field
 
 
 @dataclass(frozen=True, order=True)
 class Diagnostic:
-    """One error in ST source: printed as `file:line:col: error: message` (1-based line/col)."""
+    """One error in ST source: printed as `file:line:col: error: message` (1-based line/col).
+
+    In ST made from a drawing (a plc.xml's LD / FBD body) `where` names the spot on the
+    drawing instead (`FB_Task1 (LD), rung 3, coil L9 (localId 27)`), and the line is
+    `file: where: message`: the generated text's line and column mean nothing to the student."""
 
     file: str
     line: int
     col: int
     message: str
+    where: str = field(default="", compare=False)
 
     def __str__(self) -> str:
+        if self.where:
+            return f"{self.file}: {self.where}: {self.message}"
         return f"{self.file}:{self.line}:{self.col}: error: {self.message}"
 
 

@@ -35,7 +35,8 @@ def check_sources(sources: Iterable[tuple[str, str]]) -> CheckedUnit:
     merged = A.Unit(line=1, col=1, file="")
     diags: list[Diagnostic] = []
     names: list[str] = []
-    for name, text in sources:
+    sources_seen = list(sources)
+    for name, text in sources_seen:
         names.append(name)
         unit, errs = parse_source(text, name)
         diags.extend(errs)
@@ -44,8 +45,9 @@ def check_sources(sources: Iterable[tuple[str, str]]) -> CheckedUnit:
             merged.pous.extend(unit.pous)
             merged.configs.extend(unit.configs)
             merged.gvls.extend(unit.gvls)
+    drawn = {name: text for name, text in sources_seen if hasattr(text, "place")}
     if diags:
-        raise CompileError(diags)
+        raise CompileError(_on_drawing(diags, drawn))
     try:
         checked = check_unit(merged)
     except RecursionError as e:   # declarations nested beyond Python's stack (bodies are guarded per statement)
@@ -53,8 +55,21 @@ def check_sources(sources: Iterable[tuple[str, str]]) -> CheckedUnit:
         where = (node.file, node.line, node.col) if node is not None else (names[0] if names else "", 1, 1)
         raise CompileError([Diagnostic(*where, "declarations or initial values nested too deeply")]) from None
     if checked.diagnostics:
-        raise CompileError(checked.diagnostics)
+        raise CompileError(_on_drawing(checked.diagnostics, drawn))
     return checked
+
+
+def _on_drawing(diags: list[Diagnostic], drawn: dict) -> list[Diagnostic]:
+    """Diagnostics in ST made from a plc.xml name the POU, rung and element they concern
+    (the generated text's line means nothing to whoever drew it)."""
+    if not drawn:
+        return diags
+    out = []
+    for d in diags:
+        text = drawn.get(d.file)
+        place = text.place(d.line, d.col) if text is not None else None
+        out.append(Diagnostic(d.file, d.line, d.col, d.message, where=str(place)) if place is not None else d)
+    return out
 
 
 def _deepest_node(exc: BaseException) -> A.Node | None:
@@ -71,18 +86,61 @@ def _deepest_node(exc: BaseException) -> A.Node | None:
     return found
 
 
+def is_project_file(path: str | Path) -> bool:
+    """A PLCopen TC6 XML project (OpenPLC Editor's plc.xml) rather than an ST file."""
+    return str(path).lower().endswith(".xml")
+
+
 def read_sources(paths: Iterable[str | Path]) -> list[tuple[str, str]]:
-    """(name, text) of each ST file; raises CompileError naming every file that cannot be read."""
+    """(name, text) of each ST file; raises CompileError naming every file that cannot be read.
+
+    A `.xml` file is an OpenPLC Editor project (plc.xml): its text is the ST the Editor would
+    make of it (LD / FBD bodies translated), a `GeneratedSource` that knows the drawing, so
+    every command that takes ST files takes a plc.xml too."""
     sources = []
     diags: list[Diagnostic] = []
     for p in paths:
-        text, errs = read_source(p)
+        if is_project_file(p):
+            text, errs = _read_project(p)
+        else:
+            text, errs = read_source(p)
         diags.extend(errs)
         if not errs:
             sources.append((str(p), text))
     if diags:
         raise CompileError(diags)
     return sources
+
+
+def _read_project(path: str | Path) -> tuple[str, list[Diagnostic]]:
+    from plclab.errors import PlcLabError
+    from plclab.plcopen.project import source_from_xml
+
+    name = str(path)
+    data, errs = _read_bytes(path)
+    if errs:
+        return "", errs
+    try:
+        return source_from_xml(name, data), []
+    except CompileError as e:
+        return "", list(e.diagnostics)
+    except PlcLabError as e:
+        message = str(e)
+        if message.startswith(name + ": "):
+            message = message[len(name) + 2:]
+        return "", [Diagnostic(name, 1, 1, message, where="project")]
+
+
+def _read_bytes(path: str | Path) -> tuple[bytes, list[Diagnostic]]:
+    name = str(path)
+    try:
+        return Path(path).read_bytes(), []
+    except FileNotFoundError:
+        return b"", [Diagnostic(name, 1, 1, "no such file")]
+    except IsADirectoryError:
+        return b"", [Diagnostic(name, 1, 1, "is a directory, not a plc.xml project")]
+    except OSError as e:
+        return b"", [Diagnostic(name, 1, 1, f"cannot read file: {e.strerror}")]
 
 
 def load_files(paths: Iterable[str | Path]) -> CheckedUnit:

@@ -326,8 +326,8 @@ class ExpressionChecks(CheckerBase):
                 return b.fields[e.key][0]
             if isinstance(b, T.FBType):
                 if isinstance(b.pou, FBSig):
-                    for n, tn in b.pou.inputs + b.pou.outputs:
-                        if n == e.key:
+                    for n, tn in b.pou.inputs + b.pou.outputs + (("EN", "BOOL"), ("ENO", "BOOL")):
+                        if n == e.key:     # matiec gives every block EN and ENO (OpenPLC Editor's ladder reads ENO)
                             e.sym = n
                             return T.ELEMENTARY[tn]
                     self.error(e, f"function block {b.name} has no variable '{e.name}'")

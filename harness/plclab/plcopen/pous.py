@@ -34,8 +34,9 @@ def pou_element(parent: etree._Element, pou: A.PouDecl, src: SourceText) -> etre
     return el
 
 
-def pou_text(el: etree._Element) -> str:
-    """The ST text of one `<pou>`: its documentation as a comment, header, VAR blocks, body."""
+def pou_head(el: etree._Element) -> tuple[str, str]:
+    """The ST kind (PROGRAM...) and the text of one `<pou>` before its statements: its
+    documentation as a comment, header, VAR blocks."""
     name = el.get("name")
     kind = ST_KINDS.get(el.get("pouType", ""))
     where = f"POU {name}"
@@ -55,11 +56,25 @@ def pou_text(el: etree._Element) -> str:
         blocks = [var_list_text(c, where) for c in interface
                   if isinstance(c.tag, str) and local(c) not in ("returnType", "addData", "documentation")]
     lines.append(header)
-    text = "\n".join(lines) + "\n" + "".join(blocks)
+    return kind, "\n".join(lines) + "\n" + "".join(blocks)
+
+
+def pou_body(el: etree._Element) -> tuple[str, etree._Element]:
+    """The language (ST, IL, LD, FBD, SFC) and element of a `<pou>`'s one body."""
     bodies = el.findall("ppx:body", NS)
-    st = bodies[0].find("ppx:ST", NS) if len(bodies) == 1 else None
-    if st is None:
-        langs = ", ".join(local(c) for b in bodies for c in b if isinstance(c.tag, str)) or "no body"
-        raise PlcLabError(f"{where}: only a single ST body can be turned into ST text (found {langs})")
-    body = read_formatted_text(st) or ""
-    return text + body.strip("\n") + f"\nEND_{kind}\n"
+    inner = [c for b in bodies for c in b if isinstance(c.tag, str) and local(c) != "documentation"]
+    if len(bodies) != 1 or len(inner) != 1:
+        langs = ", ".join(local(c) for c in inner) or "no body"
+        raise PlcLabError(f"POU {el.get('name')}: a POU needs exactly one body (found {langs})")
+    return local(inner[0]), inner[0]
+
+
+def pou_text(el: etree._Element) -> str:
+    """The ST text of one `<pou>` with an ST body: its documentation as a comment, header,
+    VAR blocks, body."""
+    kind, head = pou_head(el)
+    lang, body_el = pou_body(el)
+    if lang != "ST":
+        raise PlcLabError(f"POU {el.get('name')}: only a single ST body can be turned into ST text (found {lang})")
+    body = read_formatted_text(body_el) or ""
+    return head + body.strip("\n") + f"\nEND_{kind}\n"

@@ -19,7 +19,9 @@ from plclab.errors import PlcLabError
 from plclab.frontend.checked import CheckedUnit
 from plclab.plcopen.configuration import configuration_text, configurations_element
 from plclab.plcopen.datatypes import NS, PPX, XHTML, data_type_element, data_type_text, q, sub
-from plclab.plcopen.pous import pou_element, pou_text
+from plclab.plcopen.graphical import GRAPHICAL, GeneratedSource, Place, PouGenerator, TextBuilder, generation_error
+from plclab.plcopen.pous import pou_body, pou_element, pou_head
+from plclab.plcopen.datatypes import read_formatted_text, type_text
 from plclab.plcopen.source import SourceText
 
 _XSD_NS = "http://www.w3.org/2001/XMLSchema"
@@ -88,18 +90,111 @@ def parse_xml(data: bytes, where: str) -> etree._ElementTree:
 
 
 def st_from_tree(tree: etree._ElementTree) -> str:
-    """ST text for a TC6 project: TYPE block, POUs, configurations, in the XML's order."""
+    """ST text for a TC6 project: TYPE block, POUs, configurations, in the XML's order (LD
+    and FBD bodies turned into ST as OpenPLC Editor does it)."""
+    return str(project_source(tree, ""))
+
+
+def project_source(tree: etree._ElementTree, file: str) -> GeneratedSource:
+    """The ST of a TC6 project, knowing for each piece what it was made from (`file`: the
+    name diagnostics give the project)."""
     root = tree.getroot()
-    parts = []
+    out = TextBuilder()
+    first = True
+
+    def part(text: str, place: Optional[Place]) -> None:
+        nonlocal first
+        if not first:
+            out.add("\n")
+        first = False
+        for line in text.splitlines(keepends=True):
+            out.add(line, place)
+
     title = root.findtext("ppx:contentHeader/ppx:Comment", namespaces=NS)
     if title:
-        parts.append(f"(* {title.replace('*)', '* )')} *)\n")
+        part(f"(* {title.replace('*)', '* )')} *)\n", None)
     data_types = root.findall("ppx:types/ppx:dataTypes/ppx:dataType", NS)
     if data_types:
-        parts.append("TYPE\n" + "".join(data_type_text(dt) for dt in data_types) + "END_TYPE\n")
-    parts += [pou_text(p) for p in root.findall("ppx:types/ppx:pous/ppx:pou", NS)]
-    parts += [configuration_text(c) for c in root.findall("ppx:instances/ppx:configurations/ppx:configuration", NS)]
-    return "\n".join(parts)
+        part("TYPE\n" + "".join(data_type_text(dt) for dt in data_types) + "END_TYPE\n", Place("TYPE", detail="data types"))
+    pous = root.findall("ppx:types/ppx:pous/ppx:pou", NS)
+    project_pous = {p.get("name", ""): p for p in pous}
+    globals_ = global_types(root)
+    for p in pous:
+        name = p.get("name", "")
+        kind, head = pou_head(p)
+        lang, body = pou_body(p)
+        if not first:
+            out.add("\n")
+        first = False
+        if lang == "ST":
+            for line in head.splitlines(keepends=True):
+                out.add(line, Place(name, detail="declarations"))
+            text = (read_formatted_text(body) or "").strip("\n")
+            for n, line in enumerate(text.split("\n"), 1):
+                out.add(line + "\n", Place(name, "ST", detail=f"line {n} of its body"))
+        elif lang in GRAPHICAL:
+            gen = PouGenerator(p, lang, body, file, project_pous, {**globals_, **interface_types(p)})
+            gen.generate()
+            for line in head.splitlines(keepends=True):
+                out.add(line, Place(name, detail="declarations"))
+            if gen.extra:
+                out.add("VAR\n", Place(name, lang, detail="variables the Editor adds"))
+                for var, type_name in gen.extra:
+                    out.add(f"    {var} : {type_name};\n", Place(name, lang, detail=f"variable {var} the Editor adds"))
+                out.add("END_VAR\n", Place(name, lang, detail="variables the Editor adds"))
+            elif not interface_types(p):
+                raise generation_error(file, Place(name, lang), "no variable defined in this POU (OpenPLC Editor "
+                                                                "refuses to generate it)")
+            if not gen.program:
+                raise generation_error(file, Place(name, lang), "the body is empty (OpenPLC Editor refuses to "
+                                                                "generate it)")
+            for text, info in gen.program:
+                owner = gen.by_id.get(info[2]) if len(info) > 2 else None
+                out.add(text, gen.place(owner) if owner is not None else None)
+        else:
+            what = "SFC (sequential function chart)" if lang == "SFC" else lang
+            raise generation_error(file, Place(name, lang), f"{what} bodies are not supported: "
+                                                            "write this POU in ST, LD or FBD")
+        out.add(f"END_{kind}\n", Place(name, detail="declarations"))
+    for c in root.findall("ppx:instances/ppx:configurations/ppx:configuration", NS):
+        part(configuration_text(c), Place(f"configuration {c.get('name')}"))
+    return GeneratedSource(out.text(), out.spans, file)
+
+
+def interface_types(pou: etree._Element) -> dict[str, str]:
+    """Name -> type (as ST text) of a POU's variables (a function's own name: its result)."""
+    where = f"POU {pou.get('name')}"
+    found: dict[str, str] = {}
+    interface = pou.find("ppx:interface", NS)
+    if interface is None:
+        return found
+    ret = interface.find("ppx:returnType", NS)
+    if ret is not None:
+        found[pou.get("name", "")] = type_text(ret, where)
+    for v in interface.iterfind(".//ppx:variable", NS):
+        t = v.find("ppx:type", NS)
+        if t is not None:
+            found[v.get("name", "")] = type_text(t, where)
+    return found
+
+
+def global_types(root: etree._Element) -> dict[str, str]:
+    found: dict[str, str] = {}
+    for v in root.iterfind("ppx:instances/ppx:configurations//ppx:globalVars/ppx:variable", NS):
+        t = v.find("ppx:type", NS)
+        if t is not None:
+            found[v.get("name", "")] = type_text(t, "global variables")
+    return found
+
+
+def source_from_xml(path: str | Path, data: Optional[bytes] = None) -> GeneratedSource:
+    """A plc.xml as one ST source that knows its drawing (what `read_sources` gives the front end)."""
+    if data is None:
+        try:
+            data = Path(path).read_bytes()
+        except OSError as e:
+            raise PlcLabError(f"{path}: cannot read: {e.strerror}") from None
+    return project_source(parse_xml(data, str(path)), str(path))
 
 
 def st_from_xml(path: str | Path) -> str:

@@ -1,0 +1,813 @@
+"""LD and FBD bodies of a TC6 project -> ST, the way OpenPLC Editor turns them into ST.
+
+OpenPLC Editor (Beremiz's PLCGenerator) never compiles a drawing: it writes ST and hands it to
+matiec. A drawing behaves the way that ST behaves, so this module produces the same ST: the
+same statement order, the same temporaries (`R_TRIG1`, `_TMP_ADD5_OUT`, ...), the same
+expressions. The rules, as that generator applies them:
+
+* Statement order. Out-variables, in-out variables and blocks with an `executionOrderId` > 0
+  come first, by that id. Then every coil and out-variable, then every block, then every
+  connector, each group in the order the elements stand in the XML (the generator's position
+  sort compares with `operator.eq`, which never says "less", so the sort keeps that order).
+* A coil or out-variable is assigned the expression of what feeds it. Series contacts AND
+  (the contact nearest the coil first), parallel branches OR (factorised on a common contact
+  towards the rail, operands sorted the way Python 2 sorted them), the power rail is TRUE.
+* Contacts: normally open `X`, negated `NOT(X)`, rising / falling edge `R_TRIGn(CLK := X);` /
+  `F_TRIGn(...)` emitted where the contact is met, and `R_TRIGn.Q` used. Coils: normal,
+  negated `NOT(...)`, set / reset `IF e THEN X := TRUE; (*set*) END_IF;`, edge coils through
+  a trigger. The same modifiers apply to block pins.
+* Function blocks are called once, when first needed (or at their place in the order);
+  functions likewise, their result into `<TYPE><localId>` / `_TMP_<TYPE><localId>_<PIN>`.
+  An out-variable fed by a block whose EN is wired is assigned inside `IF <ENO> THEN`.
+* Connectors compute their expression once; continuations use it.
+* Jumps, labels and returns: the generator writes no code for them (the drawing would do
+  something else than it shows), so they are refused here with one clear line.
+
+Every piece of generated text remembers the element it came from (`Place`), so a diagnostic
+in generated ST names the POU, the rung / network and the element instead of a line of text
+the student never wrote. `locate(source, line, col)` is that mapping.
+"""
+from __future__ import annotations
+
+import itertools
+from dataclasses import dataclass, field
+from typing import Any, Optional
+
+from lxml import etree
+
+from plclab.errors import CompileError, Diagnostic
+from plclab.frontend.stdsigs import FUNCTION_BLOCKS, FUNCTIONS
+from plclab.plcopen.datatypes import NS, local, type_text
+
+GRAPHICAL = ("LD", "FBD")
+# Elements the body may hold that produce no code and carry no signal
+_PASSIVE = {"comment", "rightPowerRail", "leftPowerRail"}
+_LITERAL_TYPES = {"T": "TIME", "TIME": "TIME", "D": "DATE", "DATE": "DATE", "TOD": "TOD", "TIME_OF_DAY": "TOD",
+                  "DT": "DT", "DATE_AND_TIME": "DT", "2": None, "8": None, "16": None}
+
+
+# --------------------------------------------------------------------------- places
+
+@dataclass(frozen=True)
+class Place:
+    """A spot on the drawing (or in a text body) that a piece of generated ST came from."""
+
+    pou: str
+    lang: str = ""                 # 'LD', 'FBD', 'ST', '' (declarations, configuration)
+    section: int = 0               # rung (LD) / network (FBD) number from the top, 1-based
+    element: str = ""              # 'coil L9', 'contact SB1', 'block TON0 (TON)'
+    local_id: Optional[int] = None
+    detail: str = ""               # 'declarations', 'body line 4', ...
+
+    def __str__(self) -> str:
+        head = f"{self.pou} ({self.lang})" if self.lang else self.pou
+        parts = [head]
+        if self.section:
+            parts.append(f"{'rung' if self.lang == 'LD' else 'network'} {self.section}")
+        if self.element:
+            parts.append(self.element + (f" (localId {self.local_id})" if self.local_id is not None else ""))
+        if self.detail:
+            parts.append(self.detail)
+        return ", ".join(parts)
+
+
+class GeneratedSource(str):
+    """ST text made from a TC6 project, which knows where each piece of it came from.
+
+    It is a `str` (everything that reads ST reads it as is); `place(line, col)` answers "what
+    did the student draw or write here?" for a 1-based line and column of the text."""
+
+    spans: dict[int, list[tuple[int, int, Place]]]
+    generated: str   # the file name diagnostics use
+
+    def __new__(cls, text: str, spans: dict[int, list[tuple[int, int, Place]]], name: str) -> "GeneratedSource":
+        obj = super().__new__(cls, text)
+        obj.spans = spans
+        obj.generated = name
+        return obj
+
+    def place(self, line: int, col: int = 1) -> Optional[Place]:
+        row = self.spans.get(line)
+        if not row:
+            return None
+        for c0, c1, p in row:
+            if c0 <= col < c1:
+                return p
+        left = [s for s in row if s[0] <= col]
+        return (left[-1] if left else row[0])[2]
+
+
+def locate(source: Any, line: int, col: int = 1) -> Optional[Place]:
+    """The drawing location of (line, col) of a source text read from a plc.xml, or None for
+    plain ST (or a spot with no origin). The grader names a statement with this."""
+    return source.place(line, col) if isinstance(source, GeneratedSource) else None
+
+
+class TextBuilder:
+    """Accumulates (text, place) chunks and knows each chunk's line and columns."""
+
+    def __init__(self) -> None:
+        self.parts: list[str] = []
+        self.spans: dict[int, list[tuple[int, int, Place]]] = {}
+        self.line = 1
+        self.col = 1
+
+    def add(self, text: str, place: Optional[Place] = None) -> None:
+        self.parts.append(text)
+        lines = text.split("\n")
+        for i, piece in enumerate(lines):
+            if i:
+                self.line += 1
+                self.col = 1
+            if piece and place is not None:
+                self.spans.setdefault(self.line, []).append((self.col, self.col + len(piece), place))
+            self.col += len(piece)
+
+    def text(self) -> str:
+        return "".join(self.parts)
+
+
+def generation_error(name: str, place: Place, message: str) -> CompileError:
+    return CompileError([Diagnostic(name, 1, 1, message, where=str(place))])
+
+
+# --------------------------------------------------------------------------- the drawing
+
+@dataclass
+class Conn:
+    """One `<connection>`: the element it comes from and the pin of that element."""
+
+    ref: int
+    param: Optional[str]
+    end: Optional[tuple[float, float]]     # the last point of the wire (at the source)
+
+
+@dataclass
+class Pin:
+    """A block's input / output (or the one in / out point of a contact, coil, variable)."""
+
+    param: str
+    conns: list[Conn] = field(default_factory=list)
+    rel: Optional[tuple[float, float]] = None
+    negated: bool = False
+    edge: str = "none"
+    storage: str = "none"
+
+
+@dataclass
+class Element:
+    kind: str
+    local_id: int
+    x: float
+    y: float
+    name: str = ""              # variable, expression, connector / label name, block instance
+    type_name: str = ""         # blocks
+    exec_order: int = 0
+    pin_in: Pin = field(default_factory=lambda: Pin(""))
+    inputs: list[Pin] = field(default_factory=list)
+    outputs: list[Pin] = field(default_factory=list)
+    rail_outs: list[tuple[float, float]] = field(default_factory=list)
+    rail_ins: list[Pin] = field(default_factory=list)
+
+    def describe(self) -> str:
+        if self.kind == "block":
+            return f"block {self.name} ({self.type_name})" if self.name else f"block {self.type_name}"
+        words = {"inVariable": "input variable", "outVariable": "output variable",
+                 "inOutVariable": "in-out variable", "leftPowerRail": "left power rail",
+                 "rightPowerRail": "right power rail", "jump": "jump to", "return": "return"}
+        word = words.get(self.kind, self.kind)
+        return f"{word} {self.name}".strip()
+
+
+def _truth(value: Optional[str]) -> bool:
+    return value in ("true", "1")
+
+
+def _pos(el: etree._Element) -> tuple[float, float]:
+    p = el.find("ppx:position", NS)
+    try:
+        return (float(p.get("x", 0)), float(p.get("y", 0))) if p is not None else (0.0, 0.0)
+    except ValueError:
+        return (0.0, 0.0)
+
+
+def _conns(point: Optional[etree._Element]) -> list[Conn]:
+    out = []
+    if point is None:
+        return out
+    for c in point.findall("ppx:connection", NS):
+        pts = c.findall("ppx:position", NS)
+        end = None
+        if pts:
+            try:
+                end = (float(pts[-1].get("x", 0)), float(pts[-1].get("y", 0)))
+            except ValueError:
+                end = None
+        try:
+            ref = int(c.get("refLocalId", ""))
+        except ValueError:
+            ref = -1
+        out.append(Conn(ref, c.get("formalParameter"), end))
+    return out
+
+
+def _rel(point: Optional[etree._Element]) -> Optional[tuple[float, float]]:
+    r = point.find("ppx:relPosition", NS) if point is not None else None
+    if r is None:
+        return None
+    try:
+        return (float(r.get("x", 0)), float(r.get("y", 0)))
+    except ValueError:
+        return None
+
+
+def _pin(var: etree._Element) -> Pin:
+    return Pin(var.get("formalParameter", ""), _conns(var.find("ppx:connectionPointIn", NS)),
+               _rel(var.find("ppx:connectionPointOut", NS)), _truth(var.get("negated")),
+               var.get("edge", "none"), var.get("storage", "none"))
+
+
+def read_elements(body: etree._Element) -> list[Element]:
+    """The elements of one LD / FBD body, in the order they stand in the XML."""
+    elements = []
+    for el in body:
+        if not isinstance(el.tag, str):
+            continue
+        kind = local(el)
+        try:
+            lid = int(el.get("localId", ""))
+        except ValueError:
+            lid = -1
+        x, y = _pos(el)
+        try:
+            order = int(el.get("executionOrderId") or 0)
+        except ValueError:
+            order = 0
+        e = Element(kind, lid, x, y, exec_order=order)
+        e.pin_in = Pin("", _conns(el.find("ppx:connectionPointIn", NS)), None, _truth(el.get("negated")),
+                       el.get("edge", "none"), el.get("storage", "none"))
+        if kind in ("contact", "coil"):
+            e.name = (el.findtext("ppx:variable", default="", namespaces=NS) or "").strip()
+        elif kind in ("inVariable", "outVariable", "inOutVariable"):
+            e.name = (el.findtext("ppx:expression", default="", namespaces=NS) or "").strip()
+        elif kind in ("connector", "continuation", "label"):
+            e.name = el.get("name", "")
+        elif kind == "jump":
+            e.name = el.get("label", "")
+        elif kind == "block":
+            e.name = el.get("instanceName") or ""
+            e.type_name = el.get("typeName", "")
+            e.inputs = [_pin(v) for v in el.findall("ppx:inputVariables/ppx:variable", NS)]
+            e.outputs = [_pin(v) for v in el.findall("ppx:outputVariables/ppx:variable", NS)]
+        elif kind == "leftPowerRail":
+            e.rail_outs = [r for r in (_rel(p) for p in el.findall("ppx:connectionPointOut", NS)) if r]
+        elif kind == "rightPowerRail":
+            e.rail_ins = [Pin("", _conns(p)) for p in el.findall("ppx:connectionPointIn", NS)]
+        elements.append(e)
+    return elements
+
+
+def sections(elements: list[Element]) -> dict[int, int]:
+    """localId -> rung / network number: the wired groups of elements (the power rails do not
+    join them), numbered from the top of the drawing down (then left to right)."""
+    parent: dict[int, int] = {}
+
+    def find(a: int) -> int:
+        while parent.setdefault(a, a) != a:
+            parent[a] = parent[parent[a]]
+            a = parent[a]
+        return a
+
+    by_id = {e.local_id: e for e in elements}
+    members = [e for e in elements if e.kind not in _PASSIVE]
+    for e in members:
+        find(e.local_id)
+        wires = list(e.pin_in.conns) + [c for p in e.inputs for c in p.conns]
+        for c in wires:
+            src = by_id.get(c.ref)
+            if src is not None and src.kind not in _PASSIVE:
+                parent[find(e.local_id)] = find(c.ref)
+    for rail in (e for e in elements if e.kind == "rightPowerRail"):
+        pass   # a coil's wire to the right rail joins nothing
+    groups: dict[int, list[Element]] = {}
+    for e in members:
+        groups.setdefault(find(e.local_id), []).append(e)
+    ordered = sorted(groups.values(), key=lambda g: (min(e.y for e in g), min(e.x for e in g)))
+    return {e.local_id: n for n, g in enumerate(ordered, 1) for e in g}
+
+
+# --------------------------------------------------------------------------- block types
+
+@dataclass(frozen=True)
+class BlockInfo:
+    kind: str                                  # 'function' | 'functionBlock'
+    inputs: tuple[tuple[str, str], ...]
+    outputs: tuple[tuple[str, str], ...]
+    extensible: bool = False
+    generic: tuple[str, ...] = ()              # inputs sharing the result's generic type
+
+
+def library_block(type_name: str, project_pous: dict[str, etree._Element]) -> Optional[BlockInfo]:
+    """What the Editor's block library (the standard one plus the project's POUs) says of a block."""
+    key = type_name.upper()
+    f = FUNCTIONS.get(key)
+    if f is not None:
+        return BlockInfo("function", f.params, (("OUT", f.result),), f.extensible, f.generic_params)
+    fb = FUNCTION_BLOCKS.get(key)
+    if fb is not None:
+        return BlockInfo("functionBlock", fb.inputs, fb.outputs)
+    pou = project_pous.get(type_name)
+    if pou is None:
+        return None
+    ins: list[tuple[str, str]] = []
+    outs: list[tuple[str, str]] = []
+    where = f"POU {type_name}"
+    interface = pou.find("ppx:interface", NS)
+    for vl in (interface if interface is not None else []):
+        if not isinstance(vl.tag, str):
+            continue
+        tag = local(vl)
+        for v in vl.findall("ppx:variable", NS):
+            t = v.find("ppx:type", NS)
+            item = (v.get("name", ""), type_text(t, where) if t is not None else "ANY")
+            if tag in ("inputVars", "inOutVars"):
+                ins.append(item)
+            if tag in ("outputVars", "inOutVars"):
+                outs.append(item)
+    if pou.get("pouType") == "function":
+        ret = interface.find("ppx:returnType", NS) if interface is not None else None
+        outs.insert(0, ("OUT", type_text(ret, where) if ret is not None else "ANY"))
+        return BlockInfo("function", tuple(ins), tuple(outs))
+    if pou.get("pouType") == "functionBlock":
+        return BlockInfo("functionBlock", tuple(ins), tuple(outs))
+    return None
+
+
+# --------------------------------------------------------------------------- the generator
+
+Tokens = list[tuple[str, tuple]]
+
+
+def _python2_sorted(items: list) -> list:
+    """Sort as Python 2 sorted a list of mixed strings, lists, tuples and None: items that
+    compare form groups (in order of first appearance), each group sorted in itself."""
+    groups: list[list] = []
+    for item in items:
+        for g in groups:
+            try:
+                item < g[0]
+            except TypeError:
+                continue
+            g.append(item)
+            break
+        else:
+            groups.append([item])
+    return list(itertools.chain.from_iterable(sorted(g) for g in groups))
+
+
+class PouGenerator:
+    """The ST body (and the extra VAR declarations) of one LD / FBD POU."""
+
+    def __init__(self, pou: etree._Element, lang: str, body: etree._Element, file: str,
+                 project_pous: dict[str, etree._Element], var_types: dict[str, str]):
+        self.name = pou.get("name", "")
+        self.pou_type = pou.get("pouType", "")
+        self.lang = lang
+        self.file = file
+        self.tag = f"P::{self.name}"
+        self.project_pous = project_pous
+        self.var_types = var_types                 # the POU's own declarations (and globals)
+        self.declared = set(var_types)             # names of the interface (IsAlreadyDefined)
+        self.elements = read_elements(body)
+        self.by_id = {e.local_id: e for e in self.elements}
+        self.section_of = sections(self.elements)
+        self.indent = "  "
+        self.program: Tokens = []
+        self.extra: list[tuple[str, str]] = []     # temporaries: (name, type)
+        self.computed_blocks: set[int] = set()
+        self.computed_connectors: dict[str, Tokens] = {}
+
+    # -- places ----------------------------------------------------------------------------
+    def place(self, e: Element) -> Place:
+        return Place(self.name, self.lang, self.section_of.get(e.local_id, 0), e.describe(), e.local_id)
+
+    def fail(self, e: Optional[Element], message: str) -> CompileError:
+        place = self.place(e) if e is not None else Place(self.name, self.lang)
+        return generation_error(self.file, place, message)
+
+    def info(self, e: Element, *role: Any) -> tuple:
+        kinds = {"contact": "contact", "coil": "coil", "block": "block"}
+        return (self.tag, kinds.get(e.kind, "io_variable"), e.local_id) + role
+
+    def emit(self, *tokens: tuple[str, tuple]) -> None:
+        self.program.extend(tokens)
+
+    def declare(self, name: str, type_name: str) -> None:
+        self.extra.append((name, type_name))
+        self.declared.add(name)
+
+    # -- the program ----------------------------------------------------------------------------
+    def generate(self) -> None:
+        for e in self.elements:
+            if e.kind in ("jump", "label", "return"):
+                raise self.fail(e, "OpenPLC Editor writes no code for jumps, labels and returns in a "
+                                   f"{self.lang} body (it would silently leave this one out): use coils "
+                                   "and contacts, or write this part in ST")
+            if e.kind in ("step", "transition", "actionBlock", "selectionDivergence"):
+                raise self.fail(e, f"SFC elements cannot stand in a {self.lang} body")
+        ordered = sorted((e for e in self.elements if e.exec_order > 0
+                          and e.kind in ("outVariable", "inOutVariable", "block")), key=lambda e: e.exec_order)
+        first = {id(e) for e in ordered}
+        rest = [e for e in self.elements if id(e) not in first]
+        outs = [e for e in rest if e.kind in ("outVariable", "inOutVariable", "coil")]
+        blocks = [e for e in rest if e.kind == "block"]
+        connectors = [e for e in rest if e.kind == "connector"]
+        for e in ordered + outs + blocks + connectors:
+            if e.kind in ("outVariable", "inOutVariable"):
+                self.assign_variable(e)
+            elif e.kind == "block":
+                self.block(e, None)
+            elif e.kind == "connector":
+                if not self.computed_connectors.get(e.name):
+                    expr = self.expression(e.pin_in.conns)
+                    if expr is not None:
+                        self.computed_connectors[e.name] = expr
+            elif e.kind == "coil":
+                expr = self.expression(e.pin_in.conns)
+                if expr is not None:
+                    info = self.info(e)
+                    expr = self.modifier(e.pin_in, expr, info)
+                    self.emit((self.indent, ()), (e.name, info + ("reference",)), (" := ", ()), *expr,
+                              (";\n", ()))
+
+    def assign_variable(self, e: Element) -> None:
+        expr = self.expression(e.pin_in.conns)
+        if expr is None:
+            return
+        eno = self.used_eno(e.pin_in.conns)
+        if eno is not None:
+            self.emit((self.indent + f"IF {eno}", ()), (" THEN\n  ", ()))
+            self.indent += "  "
+        self.emit((self.indent, ()), (e.name, self.info(e, "expression")), (" := ", ()), *expr, (";\n", ()))
+        if eno is not None:
+            self.indent = self.indent[:-2]
+            self.emit((self.indent + "END_IF;\n", ()))
+
+    def used_eno(self, conns: list[Conn]) -> Optional[str]:
+        if len(conns) != 1:
+            return None
+        blk = self.by_id.get(conns[0].ref)
+        if blk is None or blk.kind != "block":
+            return None
+        for pin in blk.inputs:
+            if pin.param == "EN" and pin.conns:
+                return f"{blk.name}.ENO" if blk.name else f"_TMP_{blk.type_name}{blk.local_id}_ENO"
+        return None
+
+    # -- expressions ----------------------------------------------------------------------------
+    def expression(self, conns: list[Conn], order: bool = False, to_inout: bool = False) -> Optional[Tokens]:
+        paths = self.paths(conns, order, to_inout)
+        if not paths:
+            return None
+        if len(paths) > 1:
+            fact = self.factorize(paths)
+            tree: Any = tuple(fact) if len(fact) > 1 else fact[0]
+        else:
+            tree = paths[0]
+        return self.render(tree, True)
+
+    def paths(self, conns: list[Conn], order: bool = False, to_inout: bool = False) -> list:
+        """The paths back from a point to the rail: a contact's text (the repr of its tokens,
+        as the Editor keeps it), a list (series), a tuple (parallel), None (the rail)."""
+        out: list = []
+        for c in conns:
+            src = self.by_id.get(c.ref)
+            if src is None:
+                continue
+            if src.kind == "leftPowerRail":
+                out.append(None)
+            elif src.kind in ("inVariable", "inOutVariable"):
+                out.append(str([(src.name, self.info(src, "expression"))]))
+            elif src.kind == "block":
+                out.append(str(self.block(src, c, order, to_inout)))
+            elif src.kind == "continuation":
+                value = self.computed_connectors.get(src.name)
+                if value is not None:
+                    out.append(str(value))
+                    continue
+                found = [e for e in self.elements if e.kind == "connector" and e.name == src.name]
+                if len(found) > 1:
+                    raise self.fail(src, f"more than one connector named '{src.name}' in this POU")
+                if not found:
+                    raise self.fail(src, f"no connector named '{src.name}' for this continuation")
+                value = self.expression(found[0].pin_in.conns, order)
+                if value is not None:
+                    self.computed_connectors[src.name] = value
+                    out.append(str(value))
+            elif src.kind == "contact":
+                info = self.info(src)
+                var = str(self.modifier(src.pin_in, [(src.name, info + ("reference",))], info))
+                sub = self.paths(src.pin_in.conns, order)
+                if not sub:
+                    raise self.fail(src, f"contact '{src.name}' must be connected on its left")
+                if len(sub) > 1:
+                    fact = self.factorize(sub)
+                    out.append([var, tuple(fact)] if len(fact) > 1 else [var] + fact)
+                elif isinstance(sub[0], list):
+                    out.append([var] + sub[0])
+                elif sub[0] is not None:
+                    out.append([var, sub[0]])
+                else:
+                    out.append(var)
+            elif src.kind == "coil":
+                out.append(self.paths(src.pin_in.conns, order))
+        return out
+
+    def factorize(self, paths: list) -> list:
+        """Parallel branches that end in the same element (towards the rail) share it."""
+        same: dict[str, list[tuple[list, int]]] = {}
+        tails: dict[str, list] = {}
+        left = list(range(len(paths)))
+        result: list = []
+        for num, path in enumerate(paths):
+            if isinstance(path, list):
+                if len(path) > 1:
+                    key = str(path[-1:])
+                    same.setdefault(key, []).append((path[:-1], num))
+                    tails[key] = path[-1:]
+            else:
+                result.append(path)
+                left.remove(num)
+        for key, items in same.items():
+            if len(items) > 1:
+                inner = self.factorize([p for p, _ in items])
+                result.append([tuple(inner)] + tails[key] if len(inner) > 1 else inner + tails[key])
+                for _, num in items:
+                    left.remove(num)
+        result += [paths[num] for num in left]
+        try:
+            return _python2_sorted(result)
+        except TypeError:
+            return result
+
+    def render(self, tree: Any, first: bool = False) -> Tokens:
+        if isinstance(tree, tuple):
+            if None in tree:
+                return [("TRUE", ())]
+            parts = [self.render(p) for p in tree]
+            joined = self._join(parts, " OR ")
+            return joined if first else [("(", ())] + joined + [(")", ())]
+        if isinstance(tree, list):
+            return self._join([self.render(p) for p in tree], " AND ")
+        if tree is None:
+            return [("TRUE", ())]
+        return _tokens(tree)
+
+    @staticmethod
+    def _join(parts: list[Tokens], sep: str) -> Tokens:
+        out: Tokens = []
+        for i, p in enumerate(parts):
+            if i:
+                out.append((sep, ()))
+            out.extend(p)
+        return out
+
+    def modifier(self, pin: Pin, expr: Tokens, info: tuple) -> Tokens:
+        """Negation, set / reset, rising / falling edge of a contact, coil or block pin."""
+        if pin.negated:
+            return [("NOT(", info + ("negated",))] + expr + [(")", ())]
+        if pin.storage in ("set", "reset"):
+            self.emit((self.indent + "IF ", info + (pin.storage,)), *expr, (" THEN\n  ", ()))
+            word = "TRUE; (*set*)" if pin.storage == "set" else "FALSE; (*reset*)"
+            return [(word + "\n" + self.indent + "END_IF", ())]
+        if pin.edge == "rising":
+            return self.trigger("R_TRIG", expr, info + ("rising",))
+        if pin.edge == "falling":
+            return self.trigger("F_TRIG", expr, info + ("falling",))
+        return expr
+
+    def trigger(self, fb: str, expr: Tokens, info: tuple) -> Tokens:
+        n = 1
+        while f"{fb}{n}" in self.declared:
+            n += 1
+        name = f"{fb}{n}"
+        self.declare(name, fb)
+        self.emit((self.indent, ()), (name, info), ("(CLK := ", ()), *expr, (");\n", ()))
+        return [(f"{name}.Q", info)]
+
+    # -- blocks ----------------------------------------------------------------------------------
+    def block_info(self, e: Element) -> BlockInfo:
+        info = library_block(e.type_name, self.project_pous)
+        if info is None:
+            raise self.fail(e, f"undefined block type '{e.type_name}'")
+        if info.kind == "functionBlock" and not e.name:
+            raise self.fail(e, f"function block {e.type_name} has no instance name")
+        return info
+
+    def block(self, e: Element, link: Optional[Conn], order: bool = False, to_inout: bool = False) -> Optional[Tokens]:
+        info = self.block_info(e)
+        in_names = [n for n, _ in info.inputs]
+        out_names = [n for n, _ in info.outputs]
+        out_params = {p.param for p in e.outputs}
+        inouts = {p.param for p in e.inputs if p.param in out_params}
+        inout_exprs: dict[str, Tokens] = {}
+        ordered = e.exec_order > 0
+        if e.local_id not in self.computed_blocks and not order:
+            self.computed_blocks.add(e.local_id)
+            if info.kind == "function":
+                self.call_function(e, info, in_names, out_names, inouts, inout_exprs, ordered)
+            else:
+                self.call_function_block(e, in_names, inouts, ordered)
+        return self.block_output(e, info, link, out_names, inouts, to_inout, ordered)
+
+    def call_function(self, e: Element, info: BlockInfo, in_names: list[str], out_names: list[str],
+                      inouts: set[str], inout_exprs: dict[str, Tokens], ordered: bool) -> None:
+        by_param = {p.param: p for p in e.inputs}
+        if info.extensible:
+            params = [p.param for p in e.inputs]
+        else:
+            params = (["EN"] if "EN" in by_param else []) + in_names
+        args: list[tuple[str, Tokens]] = []
+        one_connected = False
+        all_connected = True
+        for i, param in enumerate(params):
+            pin = by_param.get(param)
+            if pin is None:
+                all_connected = False
+                continue
+            pin_info = (self.tag, "block", e.local_id, "input", i)
+            if param != "EN":
+                one_connected = True
+            expr = self.expression(pin.conns, ordered, param in inouts)
+            if param in inouts:
+                if expr is None:
+                    raise self.fail(e, f"in-out variable {param} must be connected")
+                inout_exprs[param] = expr
+            if expr is not None:
+                args.append((param, self.modifier(pin, expr, pin_info)))
+        named = len(e.outputs) > 1 or not all_connected
+        values: list[Tokens] = [[(p, ()), (" := ", ())] + x if named else x for p, x in args]
+        if not one_connected:
+            return   # the Editor cancels the call (a warning); using its output fails to compile
+        result_name, result_info = "", ()
+        for i, pin in enumerate(e.outputs):
+            param = pin.param
+            if param in inouts or param not in out_names + ["", "ENO"]:
+                continue
+            name = f"{e.type_name}{e.local_id}" if param == "" else f"_TMP_{e.type_name}{e.local_id}_{param}"
+            self.declare(name, self.pin_type(e, param))
+            if len(e.outputs) > 1 and param not in ("", "OUT"):
+                values.append([(param, (self.tag, "block", e.local_id, "output", i)), (f" => {name}", ())])
+            else:
+                result_name, result_info = name, (self.tag, "block", e.local_id, "output", i)
+        if not result_name:
+            raise self.fail(e, f"function {e.type_name} has no output to take its result")
+        self.emit((self.indent, ()), (result_name, result_info), (" := ", ()),
+                  (e.type_name, (self.tag, "block", e.local_id, "type")), ("(", ()),
+                  *self._join(values, ", "), (");\n", ()))
+
+    def call_function_block(self, e: Element, in_names: list[str], inouts: set[str], ordered: bool) -> None:
+        args: list[Tokens] = []
+        offset = 0
+        for pin in e.inputs:
+            param = pin.param
+            if param not in in_names and param != "EN":
+                continue
+            if param == "EN":
+                idx, offset = 0, 1
+            else:
+                idx = offset + in_names.index(param)
+            pin_info = (self.tag, "block", e.local_id, "input", idx)
+            expr = self.expression(pin.conns, ordered, param in inouts)
+            if expr is not None:
+                args.append([(param, pin_info), (" := ", ())] + self.modifier(pin, expr, pin_info))
+            elif param in inouts:
+                raise self.fail(e, f"in-out variable {param} must be connected")
+        self.emit((self.indent, ()), (e.name, (self.tag, "block", e.local_id, "name")), ("(", ()),
+                  *self._join(args, ", "), (");\n", ()))
+
+    def block_output(self, e: Element, info: BlockInfo, link: Optional[Conn], out_names: list[str],
+                     inouts: set[str], to_inout: bool, ordered: bool) -> Optional[Tokens]:
+        wanted = link.param if link is not None else None
+        chosen: Optional[Pin] = None
+        idx = 0
+        if wanted is not None:
+            if wanted in out_names or wanted == "ENO":
+                for pin in e.outputs:
+                    if pin.param == wanted:
+                        chosen = pin
+                        if wanted != "ENO":
+                            idx = out_names.index(wanted)
+        else:
+            end = link.end if link is not None else None
+            for i, pin in enumerate(e.outputs):
+                if end is None or (pin.rel is not None and (e.x + pin.rel[0], e.y + pin.rel[1]) == end):
+                    chosen, wanted, idx = pin, pin.param, i
+        if chosen is None:
+            if link is not None:
+                raise self.fail(e, f"no output {wanted or ''} on this block: the wire must be redrawn")
+            return None
+        out_info = (self.tag, "block", e.local_id, "output", idx)
+        if info.kind == "function":
+            if wanted in inouts:
+                for pin in e.inputs:
+                    if pin.param == wanted:
+                        value = self.expression(pin.conns, ordered, True) or []
+                        break
+            else:
+                name = f"{e.type_name}{e.local_id}" if wanted == "" else f"_TMP_{e.type_name}{e.local_id}_{wanted}"
+                value = [(name, out_info)]
+            return self.modifier(chosen, value, out_info)
+        member = self.modifier(chosen, [(f"{e.name}.{wanted}", out_info)], out_info)
+        if to_inout:
+            copy = f"{e.name}_{wanted}"
+            if copy not in self.declared:
+                self.declare(copy, self.pin_type(e, wanted or ""))
+                self.emit((self.indent, ()), (f"{copy} := ", ()), *member, (";\n", ()))
+            return [(copy, ())]
+        return member
+
+    # -- types of temporaries -----------------------------------------------------------------------
+    def var_type(self, expression: str) -> Optional[str]:
+        text = expression.strip()
+        head, _, rest = text.partition(".")
+        t = self.var_types.get(head)
+        if t is not None:
+            while rest and t is not None:
+                member, _, rest = rest.partition(".")
+                t = self.member_type(t, member)
+            return t
+        if "#" in text:
+            prefix = text.split("#", 1)[0].upper()
+            return _LITERAL_TYPES.get(prefix, prefix)
+        if text.upper() in ("TRUE", "FALSE"):
+            return "BOOL"
+        return None
+
+    def member_type(self, type_name: str, member: str) -> Optional[str]:
+        info = library_block(type_name, self.project_pous)
+        if info is None:
+            return None
+        for n, t in info.inputs + info.outputs:
+            if n.upper() == member.upper():
+                return t
+        return None
+
+    def source_type(self, conn: Conn, seen: set[int]) -> Optional[str]:
+        src = self.by_id.get(conn.ref)
+        if src is None or src.local_id in seen:
+            return None
+        if src.kind in ("leftPowerRail", "contact", "coil"):
+            return "BOOL"
+        if src.kind in ("inVariable", "inOutVariable"):
+            return self.var_type(src.name)
+        if src.kind == "continuation":
+            for c in (e for e in self.elements if e.kind == "connector" and e.name == src.name):
+                for cc in c.pin_in.conns:
+                    t = self.source_type(cc, seen | {src.local_id})
+                    if t:
+                        return t
+            return None
+        if src.kind == "block":
+            param = conn.param
+            if param is None:
+                for pin in src.outputs:
+                    if pin.rel is not None and conn.end == (src.x + pin.rel[0], src.y + pin.rel[1]):
+                        param = pin.param
+            return self.pin_type(src, param or "", seen)
+        return None
+
+    def pin_type(self, e: Element, param: str, seen: Optional[set[int]] = None) -> str:
+        """The type of an output of block `e`, as the Editor infers it to declare a temporary
+        (generic outputs take the type of the generic inputs, or of what they feed)."""
+        seen = (seen or set()) | {e.local_id}
+        if param == "ENO":
+            return "BOOL"
+        info = library_block(e.type_name, self.project_pous)
+        if info is None:
+            return "ANY"
+        declared = dict(info.outputs).get(param or "OUT")
+        if declared and declared != "T" and not declared.startswith("ANY"):
+            return declared
+        if declared == "T":
+            for pin in e.inputs:
+                if pin.param in info.generic or (info.extensible and pin.param not in dict(info.inputs)
+                                                 and pin.param != "EN"):
+                    for c in pin.conns:
+                        t = self.source_type(c, seen)
+                        if t:
+                            return t
+        for other in self.elements:
+            for pin in ([other.pin_in] if other.kind in ("outVariable", "inOutVariable") else []):
+                for c in pin.conns:
+                    if c.ref == e.local_id and (c.param or "OUT") == (param or "OUT"):
+                        t = self.var_type(other.name)
+                        if t:
+                            return t
+        return "ANY"
+
+
+def _tokens(text: str) -> Tokens:
+    """A path element back from its repr (the generator keeps paths as repr strings)."""
+    import ast
+    return [tuple(t) for t in ast.literal_eval(text)]
