@@ -11,10 +11,10 @@ from pathlib import Path
 import pytest
 
 TESTS = Path(__file__).resolve().parent
-for folder in ("runtime", "grader", "stands", "modbus", "cnc"):
+for folder in ("runtime", "grader", "stands", "modbus", "cnc", "ladder"):
     if str(TESTS / folder) not in sys.path:
         sys.path.insert(0, str(TESTS / folder))
-pytest.register_assert_rewrite("st_helpers", "grader_helpers", "golden", "modbus_support", "cnc_st")
+pytest.register_assert_rewrite("st_helpers", "grader_helpers", "golden", "modbus_support", "cnc_st", "drawing")
 
 # CI is deterministic: under CI=true every property test draws the same examples each run
 # (a failure found there reproduces on the next run); a developer's run still explores anew.

@@ -97,13 +97,14 @@ def read_sources(paths: Iterable[str | Path]) -> list[tuple[str, str]]:
     A `.xml` file is an OpenPLC Editor project (plc.xml): its text is the ST the Editor would
     make of it (LD / FBD bodies translated), a `GeneratedSource` that knows the drawing, so
     every command that takes ST files takes a plc.xml too."""
+    paths = list(paths)
+    texts: dict[int, tuple[str, list[Diagnostic]]] = {
+        i: read_source(p) for i, p in enumerate(paths) if not is_project_file(p)}
+    st_texts = [(str(paths[i]), t) for i, (t, errs) in texts.items() if not errs]
     sources = []
     diags: list[Diagnostic] = []
-    for p in paths:
-        if is_project_file(p):
-            text, errs = _read_project(p)
-        else:
-            text, errs = read_source(p)
+    for i, p in enumerate(paths):
+        text, errs = texts[i] if i in texts else _read_project(p, st_texts)
         diags.extend(errs)
         if not errs:
             sources.append((str(p), text))
@@ -112,7 +113,7 @@ def read_sources(paths: Iterable[str | Path]) -> list[tuple[str, str]]:
     return sources
 
 
-def _read_project(path: str | Path) -> tuple[str, list[Diagnostic]]:
+def _read_project(path: str | Path, st_texts: list[tuple[str, str]]) -> tuple[str, list[Diagnostic]]:
     from plclab.errors import PlcLabError
     from plclab.plcopen.project import source_from_xml
 
@@ -121,7 +122,7 @@ def _read_project(path: str | Path) -> tuple[str, list[Diagnostic]]:
     if errs:
         return "", errs
     try:
-        return source_from_xml(name, data), []
+        return source_from_xml(name, data, st_texts), []
     except CompileError as e:
         return "", list(e.diagnostics)
     except PlcLabError as e:

@@ -307,8 +307,34 @@ class BlockInfo:
     generic: tuple[str, ...] = ()              # inputs sharing the result's generic type
 
 
-def library_block(type_name: str, project_pous: dict[str, etree._Element]) -> Optional[BlockInfo]:
-    """What the Editor's block library (the standard one plus the project's POUs) says of a block."""
+def st_blocks(texts: list[tuple[str, str]]) -> dict[str, BlockInfo]:
+    """The FUNCTIONs and FUNCTION_BLOCKs of ST files compiled with a plc.xml, as boxes a
+    drawing may use (what the Editor would know if they were POUs of its project)."""
+    from plclab.frontend.parser import parse_source
+    from plclab.plcopen import sttext
+
+    found: dict[str, BlockInfo] = {}
+    for name, text in texts:
+        unit, _ = parse_source(text, name)
+        for pou in (unit.pous if unit is not None else []):
+            if pou.kind == "PROGRAM":
+                continue
+            ins = [(d.name, sttext.type_ref(d.type_ref)) for b in pou.blocks if b.section in ("VAR_INPUT", "VAR_IN_OUT")
+                   for d in b.decls]
+            outs = [(d.name, sttext.type_ref(d.type_ref)) for b in pou.blocks
+                    if b.section in ("VAR_OUTPUT", "VAR_IN_OUT") for d in b.decls]
+            if pou.kind == "FUNCTION":
+                ret = sttext.type_ref(pou.return_type) if pou.return_type is not None else "ANY"
+                found[pou.name] = BlockInfo("function", tuple(ins), (("OUT", ret),) + tuple(outs))
+            else:
+                found[pou.name] = BlockInfo("functionBlock", tuple(ins), tuple(outs))
+    return found
+
+
+def library_block(type_name: str, project_pous: dict[str, etree._Element],
+                  others: Optional[dict[str, BlockInfo]] = None) -> Optional[BlockInfo]:
+    """What the Editor's block library (the standard one plus the project's POUs, plus the
+    ST files compiled with it) says of a block."""
     key = type_name.upper()
     f = FUNCTIONS.get(key)
     if f is not None:
@@ -318,7 +344,7 @@ def library_block(type_name: str, project_pous: dict[str, etree._Element]) -> Op
         return BlockInfo("functionBlock", fb.inputs, fb.outputs)
     pou = project_pous.get(type_name)
     if pou is None:
-        return None
+        return (others or {}).get(type_name)
     ins: list[tuple[str, str]] = []
     outs: list[tuple[str, str]] = []
     where = f"POU {type_name}"
@@ -369,13 +395,15 @@ class PouGenerator:
     """The ST body (and the extra VAR declarations) of one LD / FBD POU."""
 
     def __init__(self, pou: etree._Element, lang: str, body: etree._Element, file: str,
-                 project_pous: dict[str, etree._Element], var_types: dict[str, str]):
+                 project_pous: dict[str, etree._Element], var_types: dict[str, str],
+                 others: Optional[dict[str, BlockInfo]] = None):
         self.name = pou.get("name", "")
         self.pou_type = pou.get("pouType", "")
         self.lang = lang
         self.file = file
         self.tag = f"P::{self.name}"
         self.project_pous = project_pous
+        self.others = others or {}
         self.var_types = var_types                 # the POU's own declarations (and globals)
         self.declared = set(var_types)             # names of the interface (IsAlreadyDefined)
         self.elements = read_elements(body)
@@ -597,7 +625,7 @@ class PouGenerator:
 
     # -- blocks ----------------------------------------------------------------------------------
     def block_info(self, e: Element) -> BlockInfo:
-        info = library_block(e.type_name, self.project_pous)
+        info = library_block(e.type_name, self.project_pous, self.others)
         if info is None:
             raise self.fail(e, f"undefined block type '{e.type_name}'")
         if info.kind == "functionBlock" and not e.name:
@@ -745,7 +773,7 @@ class PouGenerator:
         return None
 
     def member_type(self, type_name: str, member: str) -> Optional[str]:
-        info = library_block(type_name, self.project_pous)
+        info = library_block(type_name, self.project_pous, self.others)
         if info is None:
             return None
         for n, t in info.inputs + info.outputs:
@@ -783,7 +811,7 @@ class PouGenerator:
         seen = (seen or set()) | {e.local_id}
         if param == "ENO":
             return "BOOL"
-        info = library_block(e.type_name, self.project_pous)
+        info = library_block(e.type_name, self.project_pous, self.others)
         if info is None:
             return "ANY"
         declared = dict(info.outputs).get(param or "OUT")

@@ -95,9 +95,9 @@ def st_from_tree(tree: etree._ElementTree) -> str:
     return str(project_source(tree, ""))
 
 
-def project_source(tree: etree._ElementTree, file: str) -> GeneratedSource:
+def project_source(tree: etree._ElementTree, file: str, others: Optional[dict] = None) -> GeneratedSource:
     """The ST of a TC6 project, knowing for each piece what it was made from (`file`: the
-    name diagnostics give the project)."""
+    name diagnostics give the project; `others`: blocks of ST files compiled with it)."""
     root = tree.getroot()
     out = TextBuilder()
     first = True
@@ -133,7 +133,7 @@ def project_source(tree: etree._ElementTree, file: str) -> GeneratedSource:
             for n, line in enumerate(text.split("\n"), 1):
                 out.add(line + "\n", Place(name, "ST", detail=f"line {n} of its body"))
         elif lang in GRAPHICAL:
-            gen = PouGenerator(p, lang, body, file, project_pous, {**globals_, **interface_types(p)})
+            gen = PouGenerator(p, lang, body, file, project_pous, {**globals_, **interface_types(p)}, others)
             gen.generate()
             for line in head.splitlines(keepends=True):
                 out.add(line, Place(name, detail="declarations"))
@@ -187,14 +187,17 @@ def global_types(root: etree._Element) -> dict[str, str]:
     return found
 
 
-def source_from_xml(path: str | Path, data: Optional[bytes] = None) -> GeneratedSource:
-    """A plc.xml as one ST source that knows its drawing (what `read_sources` gives the front end)."""
+def source_from_xml(path: str | Path, data: Optional[bytes] = None,
+                    st_texts: Optional[list[tuple[str, str]]] = None) -> GeneratedSource:
+    """A plc.xml as one ST source that knows its drawing (what `read_sources` gives the front
+    end); `st_texts`: the ST files compiled with it (their FBs and functions may be boxes)."""
     if data is None:
         try:
             data = Path(path).read_bytes()
         except OSError as e:
             raise PlcLabError(f"{path}: cannot read: {e.strerror}") from None
-    return project_source(parse_xml(data, str(path)), str(path))
+    from plclab.plcopen.graphical import st_blocks
+    return project_source(parse_xml(data, str(path)), str(path), st_blocks(st_texts or []))
 
 
 def st_from_xml(path: str | Path) -> str:

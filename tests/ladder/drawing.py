@@ -1,0 +1,265 @@
+"""Draw small LD / FBD diagrams and save them as OpenPLC Editor saves a plc.xml.
+
+The Editor's file: TC6 v2.01, default namespace tc6_0201, `xhtml` for text; each element has
+a localId, height/width, a position, `connectionPointIn` with `connection refLocalId` (and the
+wire's points, the last one at the source), `connectionPointOut` with a relPosition; contacts
+and coils carry negated / edge / storage and a `<variable>`; blocks carry typeName /
+instanceName and input / output variables with formalParameter; wires from a block output
+name it in `formalParameter` (as the Editor writes them). Used by the tests here and to write
+the example projects stored beside them.
+"""
+from __future__ import annotations
+
+from dataclasses import dataclass, field
+from typing import Optional, Union
+
+from lxml import etree
+
+PPX = "http://www.plcopen.org/xml/tc6_0201"
+XHTML = "http://www.w3.org/1999/xhtml"
+
+ROW = 40         # grid: a rung row is 40 px high, a column 100 px wide
+COL = 100
+RAIL_X = 20
+
+
+def q(tag: str) -> str:
+    return f"{{{PPX}}}{tag}"
+
+
+def sub(parent, tag: str, **attrs) -> etree._Element:
+    return etree.SubElement(parent, q(tag), {k: str(v) for k, v in attrs.items() if v is not None})
+
+
+@dataclass
+class Item:
+    """One drawn element; `out` is its output point (absolute), `param` the pin wired from."""
+    local_id: int
+    kind: str
+    x: float
+    y: float
+    outs: dict = field(default_factory=dict)     # pin name ('' for the one output) -> (x, y)
+
+
+Source = Union[Item, tuple]   # an Item, or (block Item, "Q") for a block output, or "rail"
+
+
+class Diagram:
+    """One LD or FBD body being drawn: elements are placed on a grid (row, col)."""
+
+    def __init__(self, lang: str = "LD"):
+        self.lang = lang
+        self.body = etree.Element(q(lang))
+        self.next_id = 1
+        self.rail = None
+        self.rail_outs: list[float] = []
+        self.right_ins: list[tuple[int, float, float]] = []
+        if lang == "LD":
+            self.rail = self._new("leftPowerRail", 0, 0)
+
+    def _new(self, kind: str, row: float, col: float, **attrs) -> Item:
+        lid = self.next_id
+        self.next_id += 1
+        x, y = (RAIL_X if kind == "leftPowerRail" else 60 + col * COL), 20 + row * ROW
+        el = sub(self.body, kind, localId=lid, height=20, width=30, **attrs)
+        sub(el, "position", x=x, y=y)
+        item = Item(lid, kind, x, y)
+        item.el = el
+        return item
+
+    def _wire_in(self, el: etree._Element, sources: list[Source], at: tuple[float, float]) -> None:
+        point = sub(el, "connectionPointIn")
+        sub(point, "relPosition", x=0, y=10)
+        for s in sources:
+            self._connection(point, s, at)
+
+    def _connection(self, point: etree._Element, s: Source, at: tuple[float, float]) -> None:
+        if isinstance(s, str) and s == "rail":
+            s = self.rail
+        param = None
+        if isinstance(s, tuple):
+            s, param = s
+        if s.kind == "leftPowerRail":
+            y = at[1]
+            if y - s.y not in self.rail_outs:
+                self.rail_outs.append(y - s.y)
+            end = (s.x + 10, y)
+        else:
+            end = s.outs[param or ""]
+        c = sub(point, "connection", refLocalId=s.local_id,
+                formalParameter=param if param else None)
+        sub(c, "position", x=at[0], y=at[1])
+        sub(c, "position", x=end[0], y=end[1])
+
+    # -- LD ------------------------------------------------------------------------------------
+    def contact(self, var: str, row: float, col: float, after: Union[Source, list] = "rail",
+                negated: bool = False, edge: Optional[str] = None) -> Item:
+        item = self._new("contact", row, col, negated="true" if negated else "false",
+                         edge=edge)
+        self._wire_in(item.el, after if isinstance(after, list) else [after], (item.x, item.y + 10))
+        out = sub(item.el, "connectionPointOut")
+        sub(out, "relPosition", x=30, y=10)
+        sub(item.el, "variable").text = var
+        item.outs[""] = (item.x + 30, item.y + 10)
+        return item
+
+    def coil(self, var: str, row: float, col: float, after: Union[Source, list], negated: bool = False,
+             storage: Optional[str] = None, edge: Optional[str] = None) -> Item:
+        item = self._new("coil", row, col, negated="true" if negated else "false", storage=storage, edge=edge)
+        self._wire_in(item.el, after if isinstance(after, list) else [after], (item.x, item.y + 10))
+        out = sub(item.el, "connectionPointOut")
+        sub(out, "relPosition", x=30, y=10)
+        sub(item.el, "variable").text = var
+        item.outs[""] = (item.x + 30, item.y + 10)
+        self.right_ins.append((item.local_id, item.x + 30, item.y + 10))
+        return item
+
+    # -- both ----------------------------------------------------------------------------------
+    def invar(self, expression: str, row: float, col: float) -> Item:
+        item = self._new("inVariable", row, col, negated="false")
+        out = sub(item.el, "connectionPointOut")
+        sub(out, "relPosition", x=70, y=10)
+        sub(item.el, "expression").text = expression
+        item.outs[""] = (item.x + 70, item.y + 10)
+        return item
+
+    def outvar(self, expression: str, row: float, col: float, src: Source, order: int = 0) -> Item:
+        item = self._new("outVariable", row, col, negated="false", executionOrderId=order or None)
+        self._wire_in(item.el, [src], (item.x, item.y + 10))
+        sub(item.el, "expression").text = expression
+        return item
+
+    def block(self, type_name: str, row: float, col: float, inputs: list[tuple[str, Optional[Source]]],
+              outputs: list[str], instance: Optional[str] = None, order: int = 0,
+              pins: Optional[dict] = None) -> Item:
+        """A function / FB box; `inputs` in pin order (None: unwired), `pins`: pin -> modifier
+        attributes (negated / edge) as the Editor writes them on the block's variables."""
+        item = self._new("block", row, col, typeName=type_name, instanceName=instance,
+                         executionOrderId=order or None)
+        item.el.set("height", str(40 + 20 * max(len(inputs), len(outputs))))
+        item.el.set("width", "80")
+        ins = sub(item.el, "inputVariables")
+        for i, (name, src) in enumerate(inputs):
+            v = sub(ins, "variable", formalParameter=name, **(pins or {}).get(name, {}))
+            at = (item.x, item.y + 30 + 20 * i)
+            if src is None:
+                p = sub(v, "connectionPointIn")
+                sub(p, "relPosition", x=0, y=30 + 20 * i)
+            else:
+                self._wire_in(v, [src], at)
+        sub(item.el, "inOutVariables")
+        outs = sub(item.el, "outputVariables")
+        for i, name in enumerate(outputs):
+            v = sub(outs, "variable", formalParameter=name, **(pins or {}).get(name, {}))
+            p = sub(v, "connectionPointOut")
+            sub(p, "relPosition", x=80, y=30 + 20 * i)
+            item.outs[name] = (item.x + 80, item.y + 30 + 20 * i)
+        return item
+
+    def connector(self, name: str, row: float, col: float, src: Source) -> Item:
+        item = self._new("connector", row, col, name=name)
+        self._wire_in(item.el, [src], (item.x, item.y + 10))
+        return item
+
+    def continuation(self, name: str, row: float, col: float) -> Item:
+        item = self._new("continuation", row, col, name=name)
+        out = sub(item.el, "connectionPointOut")
+        sub(out, "relPosition", x=60, y=10)
+        item.outs[""] = (item.x + 60, item.y + 10)
+        return item
+
+    def jump(self, label: str, row: float, col: float, after: Source) -> Item:
+        item = self._new("jump", row, col, label=label)
+        self._wire_in(item.el, [after], (item.x, item.y + 10))
+        return item
+
+    def comment(self, text: str, row: float, col: float) -> Item:
+        item = self._new("comment", row, col)
+        content = sub(item.el, "content")
+        etree.SubElement(content, f"{{{XHTML}}}p").text = etree.CDATA(text)
+        return item
+
+    def finish(self) -> etree._Element:
+        """Power rails sized to what was drawn (the Editor writes one point per rung)."""
+        if self.rail is not None:
+            for dy in sorted(self.rail_outs):
+                p = sub(self.rail.el, "connectionPointOut", formalParameter="")
+                sub(p, "relPosition", x=10, y=dy)
+            right = sub(self.body, "rightPowerRail", localId=self.next_id, height=ROW * 40, width=10)
+            self.next_id += 1
+            sub(right, "position", x=60 + 8 * COL, y=20)
+            for lid, x, y in self.right_ins:
+                p = sub(right, "connectionPointIn")
+                sub(p, "relPosition", x=0, y=y - 20)
+                c = sub(p, "connection", refLocalId=lid)
+                sub(c, "position", x=60 + 8 * COL, y=y)
+                sub(c, "position", x=x, y=y)
+        return self.body
+
+
+@dataclass
+class Pou:
+    name: str
+    pou_type: str                      # program | functionBlock | function
+    body: Union[Diagram, str]          # a Diagram, or ST text
+    vars: dict = field(default_factory=dict)     # list tag (localVars, inputVars...) -> [(name, type, init)]
+    return_type: Optional[str] = None
+
+
+def _type(parent, type_name: str, tag: str = "type") -> None:
+    t = sub(parent, tag)
+    if type_name.upper() in ("BOOL", "INT", "DINT", "UINT", "REAL", "TIME", "WORD", "BYTE", "SINT", "LREAL", "DWORD"):
+        sub(t, type_name.upper())
+    else:
+        sub(t, "derived", name=type_name)
+
+
+def project(pous: list[Pou], globals_: list[tuple[str, str, Optional[str]]] = (),
+            program: Optional[str] = None, interval: str = "T#10ms") -> bytes:
+    """The whole plc.xml: POUs, and a configuration running `program` (globals located with
+    AT addresses: (name, type, address))."""
+    root = etree.Element(q("project"), nsmap={None: PPX, "xhtml": XHTML,
+                                              "xsd": "http://www.w3.org/2001/XMLSchema"})
+    sub(root, "fileHeader", companyName="Unknown", productName="Unnamed", productVersion="1",
+        creationDateTime="2026-01-01T00:00:00")
+    header = sub(root, "contentHeader", name="Unnamed", modificationDateTime="2026-01-01T00:00:00")
+    coords = sub(header, "coordinateInfo")
+    for lang in ("fbd", "ld", "sfc"):
+        sub(sub(coords, lang), "scaling", x=10, y=10)
+    types = sub(root, "types")
+    sub(types, "dataTypes")
+    pous_el = sub(types, "pous")
+    for p in pous:
+        el = sub(pous_el, "pou", name=p.name, pouType=p.pou_type)
+        interface = sub(el, "interface")
+        if p.return_type:
+            _type(interface, p.return_type, "returnType")
+        for tag, variables in p.vars.items():
+            attrs = {}
+            if tag.endswith(" constant"):
+                tag, attrs = tag.split()[0], {"constant": "true"}
+            vl = sub(interface, tag, **attrs)
+            for name, type_name, init in variables:
+                v = sub(vl, "variable", name=name)
+                _type(v, type_name)
+                if init is not None:
+                    sub(sub(v, "initialValue"), "simpleValue", value=init)
+        body = sub(el, "body")
+        if isinstance(p.body, Diagram):
+            body.append(p.body.finish())
+        else:
+            st = sub(body, "ST")
+            etree.SubElement(st, f"{{{XHTML}}}p").text = etree.CDATA(p.body)
+    instances = sub(root, "instances")
+    confs = sub(instances, "configurations")
+    if program:
+        conf = sub(confs, "configuration", name="Config0")
+        res = sub(conf, "resource", name="Res0")
+        if globals_:
+            gv = sub(res, "globalVars")
+            for name, type_name, address in globals_:
+                v = sub(gv, "variable", name=name, address=address)
+                _type(v, type_name)
+        task = sub(res, "task", name="task0", priority=0, interval=interval)
+        sub(task, "pouInstance", name="instance0", typeName=program)
+    return etree.tostring(root, xml_declaration=True, encoding="utf-8", pretty_print=True)

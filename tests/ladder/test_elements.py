@@ -1,0 +1,303 @@
+"""Every LD / FBD element kind, drawn as OpenPLC Editor saves it, translated and run.
+
+Each test draws a small diagram (drawing.py writes the Editor's XML), loads the plc.xml the
+way every command does (`plclab.frontend.load_files`), runs it in the soft PLC scan by scan
+and checks what a student would watch: the coil, the output variable. Where the Editor's
+generator has a fixed text (temporaries, statement order), the generated ST is checked too.
+"""
+from __future__ import annotations
+
+import itertools
+from pathlib import Path
+
+import pytest
+
+from drawing import Diagram, Pou, project
+from plclab.errors import CompileError
+from plclab.frontend import load_files, read_sources
+from plclab.runtime.compiler import compile_unit
+from plclab.runtime.plc import PLC
+from plclab.runtime.sim import Simulation
+
+BOOLS = ["A", "B", "C", "Q", "Q2"]
+
+
+def run_xml(tmp_path: Path, pous: list[Pou], program: str = "main") -> Simulation:
+    path = tmp_path / "plc.xml"
+    path.write_bytes(project(pous, program=program))
+    return Simulation(PLC(compile_unit(load_files([path]))))
+
+
+def st_of(tmp_path: Path, pous: list[Pou], program: str = "main") -> str:
+    path = tmp_path / "plc.xml"
+    path.write_bytes(project(pous, program=program))
+    return str(read_sources([path])[0][1])
+
+
+def main(d: Diagram, extra: list = (), ints: list = ()) -> Pou:
+    return Pou("main", "program", d, {"localVars": [(n, "BOOL", None) for n in BOOLS]
+                                      + [(n, "INT", None) for n in ints] + list(extra)})
+
+
+def scan(sim: Simulation, **inputs) -> Simulation:
+    for name, value in inputs.items():
+        sim.set(f"instance0.{name}", value)
+    sim.step(1)
+    return sim
+
+
+def get(sim: Simulation, name: str):
+    return sim.plc.read(f"instance0.{name}")
+
+
+def truth_table(sim: Simulation, names: list[str], out: str = "Q") -> dict:
+    table = {}
+    for values in itertools.product([False, True], repeat=len(names)):
+        scan(sim, **dict(zip(names, values)))
+        table[values] = get(sim, out)
+    return table
+
+
+# --------------------------------------------------------------------------- contacts and coils
+
+def test_series_contacts_and(tmp_path):
+    d = Diagram()
+    a = d.contact("A", 0, 0)
+    b = d.contact("B", 0, 1, after=a)
+    d.coil("Q", 0, 3, after=b)
+    sim = run_xml(tmp_path, [main(d)])
+    assert truth_table(sim, ["A", "B"]) == {(a, b): a and b for a, b in itertools.product([False, True], repeat=2)}
+    assert "  Q := B AND A;\n" in st_of(tmp_path, [main(d)])     # nearest the coil first, as the Editor writes it
+
+
+def test_parallel_branches_or_and_negated_contact(tmp_path):
+    d = Diagram()
+    a = d.contact("A", 0, 0)
+    b = d.contact("B", 1, 0, negated=True)
+    c = d.contact("C", 0, 1, after=[a, b])
+    d.coil("Q", 0, 3, after=c)
+    sim = run_xml(tmp_path, [main(d)])
+    table = truth_table(sim, ["A", "B", "C"])
+    assert table == {(a, b, c): (a or not b) and c for a, b, c in itertools.product([False, True], repeat=3)}
+    assert "  Q := C AND (A OR NOT(B));\n" in st_of(tmp_path, [main(d)])
+
+
+def test_branch_to_rail_is_true(tmp_path):
+    d = Diagram()
+    a = d.contact("A", 0, 0)
+    c = d.contact("C", 0, 1, after=[a, "rail"])
+    d.coil("Q", 0, 3, after=c)
+    sim = run_xml(tmp_path, [main(d)])
+    assert truth_table(sim, ["A", "C"]) == {(a, c): c for a, c in itertools.product([False, True], repeat=2)}
+
+
+def test_negated_coil(tmp_path):
+    d = Diagram()
+    a = d.contact("A", 0, 0)
+    d.coil("Q", 0, 3, after=a, negated=True)
+    sim = run_xml(tmp_path, [main(d)])
+    assert truth_table(sim, ["A"]) == {(False,): True, (True,): False}
+
+
+def test_set_and_reset_coils_latch(tmp_path):
+    d = Diagram()
+    a = d.contact("A", 0, 0)
+    d.coil("Q", 0, 3, after=a, storage="set")
+    b = d.contact("B", 1, 0)
+    d.coil("Q", 1, 3, after=b, storage="reset")
+    sim = run_xml(tmp_path, [main(d)])
+    seen = [get(scan(sim, A=a, B=b), "Q") for a, b in
+            [(False, False), (True, False), (False, False), (False, True), (False, False), (True, True)]]
+    assert seen == [False, True, True, False, False, False]    # reset is the later rung: it wins
+    text = st_of(tmp_path, [main(d)])
+    assert "  IF A THEN\n    Q := TRUE; (*set*)\n  END_IF;\n" in text
+
+
+def test_rising_and_falling_edge_contacts(tmp_path):
+    d = Diagram()
+    a = d.contact("A", 0, 0, edge="rising")
+    d.coil("Q", 0, 3, after=a)
+    b = d.contact("A", 1, 0, edge="falling")
+    d.coil("Q2", 1, 3, after=b)
+    sim = run_xml(tmp_path, [main(d)])
+    pattern = [False, True, True, True, False, False, True, False]
+    trace = [(get(scan(sim, A=v), "Q"), get(sim, "Q2")) for v in pattern]
+    assert [q for q, _ in trace] == [False, True, False, False, False, False, True, False]
+    assert [q2 for _, q2 in trace] == [False, False, False, False, True, False, False, True]
+    text = st_of(tmp_path, [main(d)])
+    assert "  R_TRIG1(CLK := A);\n  Q := R_TRIG1.Q;\n" in text
+    assert "  F_TRIG1(CLK := A);\n  Q2 := F_TRIG1.Q;\n" in text
+    assert "    R_TRIG1 : R_TRIG;\n" in text
+
+
+def test_edge_coil(tmp_path):
+    d = Diagram()
+    a = d.contact("A", 0, 0)
+    d.coil("Q", 0, 3, after=a, edge="rising")
+    sim = run_xml(tmp_path, [main(d)])
+    assert [get(scan(sim, A=v), "Q") for v in [False, True, True, False, True]] == [False, True, False, False, True]
+
+
+def test_trigger_names_skip_a_declared_one(tmp_path):
+    d = Diagram()
+    a = d.contact("A", 0, 0, edge="rising")
+    d.coil("Q", 0, 3, after=a)
+    text = st_of(tmp_path, [main(d, extra=[("R_TRIG1", "BOOL", None)])])
+    assert "R_TRIG2(CLK := A);" in text
+
+
+# --------------------------------------------------------------------------- blocks
+
+def test_timer_block_with_en_eno_in_a_rung(tmp_path):
+    d = Diagram()
+    a = d.contact("A", 0, 0)
+    pt = d.invar("T#30ms", 1, 1)
+    t = d.block("TON", 0, 2, [("EN", "rail"), ("IN", a), ("PT", pt)], ["ENO", "Q", "ET"], instance="T1")
+    d.coil("Q", 0, 4, after=(t, "Q"))
+    pou = main(d, extra=[("T1", "TON", None)])
+    sim = run_xml(tmp_path, [pou])
+    trace = [get(scan(sim, A=True), "Q") for _ in range(5)]
+    assert trace == [False, False, False, True, True]       # 10 ms scans: Q once 30 ms have passed
+    assert "  T1(EN := TRUE, IN := A, PT := T#30ms);\n  Q := T1.Q;\n" in st_of(tmp_path, [pou])
+
+
+def test_function_with_temporaries_and_eno_guard(tmp_path):
+    d = Diagram()
+    en = d.contact("A", 0, 0)
+    x = d.invar("X", 1, 1)
+    one = d.invar("5", 2, 1)
+    add = d.block("ADD", 0, 2, [("EN", en), ("IN1", x), ("IN2", one)], ["ENO", "OUT"])
+    d.outvar("Y", 1, 4, (add, "OUT"))
+    pou = main(d, ints=["X", "Y"])
+    text = st_of(tmp_path, [pou])
+    lid = add.local_id
+    assert (f"  _TMP_ADD{lid}_OUT := ADD(EN := A, IN1 := X, IN2 := 5, ENO => _TMP_ADD{lid}_ENO);\n"
+            f"  IF _TMP_ADD{lid}_ENO THEN\n      Y := _TMP_ADD{lid}_OUT;\n  END_IF;\n") in text
+    assert f"    _TMP_ADD{lid}_OUT : INT;\n" in text
+    sim = run_xml(tmp_path, [pou])
+    assert get(scan(sim, A=False, X=7), "Y") == 0           # EN false: Y keeps its value
+    assert get(scan(sim, A=True, X=7), "Y") == 12
+    assert get(scan(sim, A=False, X=1), "Y") == 12
+
+
+def test_fbd_network_positional_call_and_comparison(tmp_path):
+    d = Diagram("FBD")
+    x = d.invar("X", 0, 0)
+    lim = d.invar("10", 1, 0)
+    gt = d.block("GT", 0, 1, [("IN1", x), ("IN2", lim)], ["OUT"])
+    d.outvar("Q", 0, 3, (gt, "OUT"))
+    pou = main(d, ints=["X"])
+    assert f"  _TMP_GT{gt.local_id}_OUT := GT(X, 10);\n" in st_of(tmp_path, [pou])
+    sim = run_xml(tmp_path, [pou])
+    assert [get(scan(sim, X=v), "Q") for v in (3, 10, 11)] == [False, False, True]
+
+
+def test_block_pin_negated_input(tmp_path):
+    d = Diagram("FBD")
+    a = d.invar("A", 0, 0)
+    b = d.invar("B", 1, 0)
+    blk = d.block("AND", 0, 1, [("IN1", a), ("IN2", b)], ["OUT"], pins={"IN2": {"negated": "true"}})
+    d.outvar("Q", 0, 3, (blk, "OUT"))
+    sim = run_xml(tmp_path, [main(d)])
+    assert truth_table(sim, ["A", "B"]) == {(a, b): a and not b for a, b in itertools.product([False, True], repeat=2)}
+
+
+def test_user_function_block_as_a_box(tmp_path):
+    fb = Pou("FB_Latch", "functionBlock", "Q := (Q OR S) AND NOT R;",
+             {"inputVars": [("S", "BOOL", None), ("R", "BOOL", None)], "outputVars": [("Q", "BOOL", None)]})
+    d = Diagram()
+    a = d.contact("A", 0, 0)
+    b = d.contact("B", 1, 0)
+    blk = d.block("FB_Latch", 0, 2, [("S", a), ("R", b)], ["Q"], instance="L1")
+    d.coil("Q", 0, 4, after=(blk, "Q"))
+    sim = run_xml(tmp_path, [fb, main(d, extra=[("L1", "FB_Latch", None)])])
+    seen = [get(scan(sim, A=a, B=b), "Q") for a, b in [(True, False), (False, False), (False, True), (False, False)]]
+    assert seen == [True, True, False, False]
+
+
+def test_execution_order_comes_first(tmp_path):
+    d = Diagram("FBD")
+    a = d.invar("A", 0, 0)
+    d.outvar("Q", 0, 2, a)
+    q = d.invar("Q", 1, 0)
+    d.outvar("Q2", 1, 2, q, order=1)        # runs before Q := A: sees last scan's Q
+    sim = run_xml(tmp_path, [main(d)])
+    trace = [(get(scan(sim, A=v), "Q"), get(sim, "Q2")) for v in (True, False, False)]
+    assert trace == [(True, False), (False, True), (False, False)]
+
+
+def test_connector_and_continuation(tmp_path):
+    d = Diagram()
+    a = d.contact("A", 0, 0)
+    b = d.contact("B", 0, 1, after=a)
+    d.connector("AB", 0, 2, b)
+    cont = d.continuation("AB", 2, 0)
+    c = d.contact("C", 2, 1, after=cont)
+    d.coil("Q", 2, 3, after=c)
+    sim = run_xml(tmp_path, [main(d)])
+    table = truth_table(sim, ["A", "B", "C"])
+    assert table == {(a, b, c): a and b and c for a, b, c in itertools.product([False, True], repeat=3)}
+
+
+# --------------------------------------------------------------------------- refused, with the place named
+
+def test_undeclared_coil_names_pou_rung_and_element(tmp_path):
+    d = Diagram()
+    a = d.contact("A", 0, 0)
+    d.coil("Q", 0, 3, after=a)
+    b = d.contact("B", 1, 0)
+    coil = d.coil("L9", 1, 3, after=b)
+    path = tmp_path / "plc.xml"
+    path.write_bytes(project([main(d)], program="main"))
+    with pytest.raises(CompileError) as e:
+        load_files([path])
+    assert str(e.value) == f"{path}: main (LD), rung 2, coil L9 (localId {coil.local_id}): undeclared identifier 'L9'"
+
+
+def test_jump_is_refused_with_its_place(tmp_path):
+    d = Diagram()
+    a = d.contact("A", 0, 0)
+    j = d.jump("END", 0, 3, a)
+    path = tmp_path / "plc.xml"
+    path.write_bytes(project([main(d)], program="main"))
+    with pytest.raises(CompileError) as e:
+        load_files([path])
+    text = str(e.value)
+    assert text.startswith(f"{path}: main (LD), rung 1, jump to END (localId {j.local_id}): ")
+    assert "\n" not in text
+
+
+def test_unknown_block_type_is_refused(tmp_path):
+    d = Diagram("FBD")
+    a = d.invar("A", 0, 0)
+    blk = d.block("NO_SUCH", 0, 1, [("IN", a)], ["OUT"])
+    d.outvar("Q", 0, 3, (blk, "OUT"))
+    path = tmp_path / "plc.xml"
+    path.write_bytes(project([main(d)], program="main"))
+    with pytest.raises(CompileError) as e:
+        load_files([path])
+    assert "network 1, block NO_SUCH" in str(e.value) and "undefined block type 'NO_SUCH'" in str(e.value)
+
+
+def test_sfc_body_is_refused_in_one_line(tmp_path):
+    path = tmp_path / "plc.xml"
+    data = project([main(Diagram())], program="main").replace(b"<LD>", b"<SFC>").replace(b"</LD>", b"</SFC>")
+    path.write_bytes(data)
+    with pytest.raises(CompileError) as e:
+        load_files([path])
+    assert str(e.value) == f"{path}: main (SFC): SFC (sequential function chart) bodies are not supported: " \
+                           f"write this POU in ST, LD or FBD"
+
+
+def test_xml_with_st_files_in_one_unit(tmp_path):
+    st = tmp_path / "fb.st"
+    st.write_text("FUNCTION_BLOCK FB_Not\nVAR_INPUT I : BOOL; END_VAR\nVAR_OUTPUT O : BOOL; END_VAR\n"
+                  "O := NOT I;\nEND_FUNCTION_BLOCK\n")
+    d = Diagram("FBD")
+    a = d.invar("A", 0, 0)
+    blk = d.block("FB_Not", 0, 1, [("I", a)], ["O"], instance="N1")
+    d.outvar("Q", 0, 3, (blk, "O"))
+    xml = tmp_path / "plc.xml"
+    xml.write_bytes(project([main(d, extra=[("N1", "FB_Not", None)])], program="main"))
+    sim = Simulation(PLC(compile_unit(load_files([xml, st]))))
+    assert [get(scan(sim, A=v), "Q") for v in (False, True)] == [True, False]
