@@ -45,7 +45,7 @@ def _solution_only_lines(stand: str) -> set[str]:
 def test_handout_is_the_checked_starting_program_map_and_sheet(stand, tmp_path, capsys):
     assert main(["handout", stand, "-o", str(tmp_path / "lab")]) == 0
     out = tmp_path / "lab"
-    assert sorted(p.name for p in out.iterdir()) == sorted([FILES[stand], "io-map.md", "tasks.md"])
+    assert sorted(p.name for p in out.iterdir()) == sorted([FILES[stand], "io-map.md", "tasks.md", f"{stand}-openplc"])
     st = (out / FILES[stand]).read_text(encoding="utf-8")
     s = get_stand(stand)
     assert st.splitlines()[1:] == bundle(s, s.starting_variant).splitlines()
@@ -54,7 +54,16 @@ def test_handout_is_the_checked_starting_program_map_and_sheet(stand, tmp_path, 
     sheet = (out / "tasks.md").read_text(encoding="utf-8")
     assert sheet.split("\n", 1)[1].startswith((HANDOUTS_DIR / f"{stand}-tasks.md").read_text(encoding="utf-8"))
     assert sheet.count("## What the grader checks") == 1
-    assert capsys.readouterr().out.count("wrote ") == 3
+    assert capsys.readouterr().out.count("wrote ") == 5
+    # the OpenPLC Editor project: the same program, in the TC6 XML the Editor opens
+    editor = out / f"{stand}-openplc"
+    assert sorted(p.name for p in editor.iterdir()) == ["beremiz.xml", "plc.xml"]
+    from plclab import plcopen
+    from plclab.frontend import load_files
+    tree = plcopen.parse_xml((editor / "plc.xml").read_bytes(), "plc.xml")
+    plcopen.validate(tree, "plc.xml")
+    assert plcopen.first_difference(check_sources([(str(out / FILES[stand]), st)]),
+                                    load_files([editor / "plc.xml"])) is None
 
 
 @pytest.mark.parametrize("stand", STANDS)

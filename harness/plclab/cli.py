@@ -14,8 +14,13 @@ from plclab.errors import CompileError, PlcLabError
 
 
 def _cmd_check(args: argparse.Namespace) -> int:
-    from plclab.frontend import load_files
+    from plclab.frontend import check_sources, is_project_file, load_files, read_sources
 
+    if args.emit_st:      # the ST OpenPLC Editor makes of a plc.xml (LD / FBD bodies translated)
+        sources = read_sources(args.files)
+        print("".join(text for name, text in sources if is_project_file(name)), end="")
+        check_sources(sources)
+        return 0
     checked = load_files(args.files)
     if args.emit_python:
         from plclab.runtime.compiler import compile_unit
@@ -322,11 +327,14 @@ def build_parser() -> argparse.ArgumentParser:
     sub = p.add_subparsers(dest="command", metavar="COMMAND")
     sub.required = True
 
-    c = sub.add_parser("check", help="parse and type-check ST files (one compilation unit)")
+    c = sub.add_parser("check", help="parse and type-check ST files (one compilation unit; a plc.xml from "
+                                     "OpenPLC Editor counts as ST, its LD / FBD translated)")
     c.add_argument("files", nargs="+", metavar="FILE.st")
     c.add_argument("--emit-python", action="store_true",
                    help="print the Python the program compiles to, each line with its ST file:line")
     c.add_argument("--plain", action="store_true", help="with --emit-python: without the compiler's fast paths")
+    c.add_argument("--emit-st", action="store_true",
+                   help="print the ST a plc.xml turns into (its LD / FBD bodies as OpenPLC Editor translates them)")
     c.set_defaults(func=_cmd_check)
 
     c = sub.add_parser("compile", help="the same as check --emit-python: print the Python the program compiles to")

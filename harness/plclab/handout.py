@@ -5,6 +5,8 @@ starting variant: never a reference solution), the I/O map (`io-map.md`, read fr
 stand's GVL, the one source of its addresses) and the task sheet (`tasks.md`, package data
 under `plclab/handouts/`, the same text as the Tasks section of `docs/STAND.md`, followed by
 what the grader checks for each task: its requirement rows, read from the grader itself).
+Plus the same starting program as an OpenPLC Editor project (`STAND-openplc/plc.xml` and
+`beremiz.xml`), for students who draw in ladder.
 
 The directory may hold other files; a file of ours may be replaced (a new hand-out after
 an update), anything else is never overwritten: the whole hand-out is refused in one line
@@ -63,14 +65,36 @@ def grader_checks(stand: Stand) -> str:
 
 
 def handout_files(stand_name: str) -> dict[str, str]:
-    """File name -> text of the hand-out of `stand_name`, each starting with the marker."""
+    """File name (relative to the hand-out directory) -> text of the hand-out of `stand_name`,
+    each with the marker on its first line."""
     stand = get_stand(stand_name)
     variant = stand.starting_variant
     tag = f"{MARKER} {stand.name}"
-    return {
-        f"{stand.name}.st": f"(* {tag}: the starting program ('{variant}'). *)\n" + bundle(stand, variant),
+    program = f"(* {tag}: the starting program ('{variant}'). *)\n" + bundle(stand, variant)
+    files = {
+        f"{stand.name}.st": program,
         "io-map.md": f"<!-- {tag} -->\n" + io_map(stand),
         "tasks.md": f"<!-- {tag} -->\n" + task_sheet(stand) + grader_checks(stand),
+    }
+    files.update(editor_project(stand, program, tag))
+    return files
+
+
+def editor_project(stand: Stand, program: str, tag: str) -> dict[str, str]:
+    """The starting program as an OpenPLC Editor project folder (`STAND-openplc/`: plc.xml and
+    the beremiz.xml the Editor's "Open Project" looks for), so a student can add ladder POUs.
+    The plc.xml is the one `plclab build --xml` makes: schema-valid TC6, proven to read back
+    to the same program."""
+    from plclab.build import xml_project
+
+    data, _ = xml_project(program, stand.name, f"{stand.name}-openplc/plc.xml")
+    head, _, rest = data.decode("utf-8").partition("\n")
+    folder = f"{stand.name}-openplc"
+    return {
+        f"{folder}/plc.xml": f"{head}<!-- {tag} -->\n{rest}",
+        f"{folder}/beremiz.xml": f"<?xml version='1.0' encoding='utf-8'?><!-- {tag} -->\n"
+                                 "<BeremizRoot xmlns:xsd=\"http://www.w3.org/2001/XMLSchema\" URI_location=\"LOCAL://\">\n"
+                                 "  <TargetType/>\n</BeremizRoot>\n",
     }
 
 
@@ -95,4 +119,4 @@ def write_handout(stand_name: str, out_dir: str) -> list[Path]:
                               f"(choose another directory, or move it away)")
     for target in targets:
         fileio.check_output(target)
-    return [fileio.write_text(target, files[target.name]) for target in targets]
+    return [fileio.write_text(out / name, text) for name, text in files.items()]

@@ -147,7 +147,9 @@ def find_submissions(folder: str | Path, exclude: Sequence[str | Path] = (),
 
 
 def _is_a(p: Path, kind: SubmissionKind) -> bool:
-    return p.suffix.lower() == kind.suffix and p.is_file()
+    # an ST program may also be handed in as an OpenPLC Editor project (plc.xml, ladder inside)
+    suffixes = (kind.suffix, ".xml") if kind is ST_PROGRAM else (kind.suffix,)
+    return p.suffix.lower() in suffixes and p.is_file()
 
 
 # ---------------------------------------------------------------------------- grading
