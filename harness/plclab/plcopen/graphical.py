@@ -307,16 +307,31 @@ class BlockInfo:
     generic: tuple[str, ...] = ()              # inputs sharing the result's generic type
 
 
-def st_blocks(texts: list[tuple[str, str]]) -> dict[str, BlockInfo]:
-    """The FUNCTIONs and FUNCTION_BLOCKs of ST files compiled with a plc.xml, as boxes a
-    drawing may use (what the Editor would know if they were POUs of its project)."""
+@dataclass
+class Library:
+    """What a drawing may use beyond its own project: the FUNCTIONs and FUNCTION_BLOCKs of ST
+    files compiled with the plc.xml (as boxes) and the structures of the TYPEs of both (to
+    type the Editor's temporaries, as its GetVariableType follows `a.b` into structures)."""
+
+    blocks: dict[str, "BlockInfo"] = field(default_factory=dict)
+    structs: dict[str, dict[str, str]] = field(default_factory=dict)   # TYPE -> field -> type
+
+
+def st_library(texts: list[tuple[str, str]]) -> Library:
+    """The blocks and structures of ST files compiled with a plc.xml."""
+    from plclab.frontend import ast as A
     from plclab.frontend.parser import parse_source
     from plclab.plcopen import sttext
 
-    found: dict[str, BlockInfo] = {}
+    lib = Library()
     for name, text in texts:
         unit, _ = parse_source(text, name)
-        for pou in (unit.pous if unit is not None else []):
+        if unit is None:
+            continue
+        for t in unit.types:
+            if isinstance(t.type_ref, A.StructTypeRef):
+                lib.structs[t.name.upper()] = {f.name.upper(): sttext.type_ref(f.type_ref) for f in t.type_ref.fields}
+        for pou in unit.pous:
             if pou.kind == "PROGRAM":
                 continue
             ins = [(d.name, sttext.type_ref(d.type_ref)) for b in pou.blocks if b.section in ("VAR_INPUT", "VAR_IN_OUT")
@@ -325,14 +340,29 @@ def st_blocks(texts: list[tuple[str, str]]) -> dict[str, BlockInfo]:
                     if b.section in ("VAR_OUTPUT", "VAR_IN_OUT") for d in b.decls]
             if pou.kind == "FUNCTION":
                 ret = sttext.type_ref(pou.return_type) if pou.return_type is not None else "ANY"
-                found[pou.name] = BlockInfo("function", tuple(ins), (("OUT", ret),) + tuple(outs))
+                lib.blocks[pou.name] = BlockInfo("function", tuple(ins), (("OUT", ret),) + tuple(outs))
             else:
-                found[pou.name] = BlockInfo("functionBlock", tuple(ins), tuple(outs))
+                lib.blocks[pou.name] = BlockInfo("functionBlock", tuple(ins), tuple(outs))
+    return lib
+
+
+def xml_structs(root: etree._Element) -> dict[str, dict[str, str]]:
+    """TYPE -> field -> type of the structures among a project's data types."""
+    found: dict[str, dict[str, str]] = {}
+    for dt in root.iterfind("ppx:types/ppx:dataTypes/ppx:dataType", NS):
+        struct = dt.find("ppx:baseType/ppx:struct", NS)
+        if struct is None:
+            continue
+        fields = {}
+        for v in struct.findall("ppx:variable", NS):
+            t = v.find("ppx:type", NS)
+            fields[v.get("name", "").upper()] = type_text(t, f"type {dt.get('name')}") if t is not None else "ANY"
+        found[dt.get("name", "").upper()] = fields
     return found
 
 
 def library_block(type_name: str, project_pous: dict[str, etree._Element],
-                  others: Optional[dict[str, BlockInfo]] = None) -> Optional[BlockInfo]:
+                  others: Optional[Library] = None) -> Optional[BlockInfo]:
     """What the Editor's block library (the standard one plus the project's POUs, plus the
     ST files compiled with it) says of a block."""
     key = type_name.upper()
@@ -344,7 +374,7 @@ def library_block(type_name: str, project_pous: dict[str, etree._Element],
         return BlockInfo("functionBlock", fb.inputs, fb.outputs)
     pou = project_pous.get(type_name)
     if pou is None:
-        return (others or {}).get(type_name)
+        return others.blocks.get(type_name) if others is not None else None
     ins: list[tuple[str, str]] = []
     outs: list[tuple[str, str]] = []
     where = f"POU {type_name}"
@@ -396,14 +426,14 @@ class PouGenerator:
 
     def __init__(self, pou: etree._Element, lang: str, body: etree._Element, file: str,
                  project_pous: dict[str, etree._Element], var_types: dict[str, str],
-                 others: Optional[dict[str, BlockInfo]] = None):
+                 others: Optional[Library] = None):
         self.name = pou.get("name", "")
         self.pou_type = pou.get("pouType", "")
         self.lang = lang
         self.file = file
         self.tag = f"P::{self.name}"
         self.project_pous = project_pous
-        self.others = others or {}
+        self.others = others or Library()
         self.var_types = var_types                 # the POU's own declarations (and globals)
         self.declared = set(var_types)             # names of the interface (IsAlreadyDefined)
         self.elements = read_elements(body)
@@ -773,6 +803,9 @@ class PouGenerator:
         return None
 
     def member_type(self, type_name: str, member: str) -> Optional[str]:
+        fields = self.others.structs.get(type_name.upper())
+        if fields is not None:
+            return fields.get(member.upper())
         info = library_block(type_name, self.project_pous, self.others)
         if info is None:
             return None

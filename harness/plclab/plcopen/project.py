@@ -19,7 +19,8 @@ from plclab.errors import PlcLabError
 from plclab.frontend.checked import CheckedUnit
 from plclab.plcopen.configuration import configuration_text, configurations_element
 from plclab.plcopen.datatypes import NS, PPX, XHTML, data_type_element, data_type_text, q, sub
-from plclab.plcopen.graphical import GRAPHICAL, GeneratedSource, Place, PouGenerator, TextBuilder, generation_error
+from plclab.plcopen.graphical import (GRAPHICAL, GeneratedSource, Library, Place, PouGenerator, TextBuilder,
+                                      generation_error, xml_structs)
 from plclab.plcopen.pous import pou_body, pou_element, pou_head
 from plclab.plcopen.datatypes import read_formatted_text, type_text
 from plclab.plcopen.source import SourceText
@@ -95,7 +96,7 @@ def st_from_tree(tree: etree._ElementTree) -> str:
     return str(project_source(tree, ""))
 
 
-def project_source(tree: etree._ElementTree, file: str, others: Optional[dict] = None) -> GeneratedSource:
+def project_source(tree: etree._ElementTree, file: str, others: Optional[Library] = None) -> GeneratedSource:
     """The ST of a TC6 project, knowing for each piece what it was made from (`file`: the
     name diagnostics give the project; `others`: blocks of ST files compiled with it)."""
     root = tree.getroot()
@@ -119,6 +120,7 @@ def project_source(tree: etree._ElementTree, file: str, others: Optional[dict] =
     pous = root.findall("ppx:types/ppx:pous/ppx:pou", NS)
     project_pous = {p.get("name", ""): p for p in pous}
     globals_ = global_types(root)
+    library = Library(dict(others.blocks) if others else {}, {**(others.structs if others else {}), **xml_structs(root)})
     for p in pous:
         name = p.get("name", "")
         kind, head = pou_head(p)
@@ -133,7 +135,7 @@ def project_source(tree: etree._ElementTree, file: str, others: Optional[dict] =
             for n, line in enumerate(text.split("\n"), 1):
                 out.add(line + "\n", Place(name, "ST", detail=f"line {n} of its body"))
         elif lang in GRAPHICAL:
-            gen = PouGenerator(p, lang, body, file, project_pous, {**globals_, **interface_types(p)}, others)
+            gen = PouGenerator(p, lang, body, file, project_pous, {**globals_, **interface_types(p)}, library)
             gen.generate()
             for line in head.splitlines(keepends=True):
                 out.add(line, Place(name, detail="declarations"))
@@ -196,8 +198,8 @@ def source_from_xml(path: str | Path, data: Optional[bytes] = None,
             data = Path(path).read_bytes()
         except OSError as e:
             raise PlcLabError(f"{path}: cannot read: {e.strerror}") from None
-    from plclab.plcopen.graphical import st_blocks
-    return project_source(parse_xml(data, str(path)), str(path), st_blocks(st_texts or []))
+    from plclab.plcopen.graphical import st_library
+    return project_source(parse_xml(data, str(path)), str(path), st_library(st_texts or []))
 
 
 def st_from_xml(path: str | Path) -> str:
