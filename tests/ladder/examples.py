@@ -57,18 +57,27 @@ def sb1_button() -> bytes:
     return project([pou])
 
 
-def mp9c_manual() -> bytes:
+def mp9c_manual(every_mechanism: bool = False) -> bytes:
     """FB_Mp9cManual, the MP-9C manual mode subroutine (textbook Fig. 3): the valves follow
     the console switches (here the lift, SA5), a short SB1 press records a frame, a 3 s press
-    resets the program."""
+    resets the program. `every_mechanism`: MP-9C Task 1 done in ladder (SA2..SA5 each drive
+    their valves), for the grading test."""
     d = Diagram("LD")
-    d.coil("L1", 0, 4, after="rail", storage="reset")
+    if every_mechanism:
+        d.coil("L1", 0, 4, after=d.contact("SA2", 0, 0))
+    else:
+        d.coil("L1", 0, 4, after="rail", storage="reset")
     n5 = d.contact("SA5", 1, 0, negated=True)
     d.coil("L2", 1, 4, after=n5)
     s5 = d.contact("SA5", 2, 0)
     d.coil("L3", 2, 4, after=s5)
-    for row, coil in enumerate(("L4", "L5", "L6", "L7"), 3):
-        d.coil(coil, row, 4, after="rail", storage="reset")
+    if every_mechanism:
+        for row, (coil, switch, on) in enumerate((("L4", "SA3", False), ("L5", "SA3", True), ("L6", "SA4", True),
+                                                  ("L7", "SA4", False)), 3):
+            d.coil(coil, row, 4, after=d.contact(switch, row, 0, negated=not on))
+    else:
+        for row, coil in enumerate(("L4", "L5", "L6", "L7"), 3):
+            d.coil(coil, row, 4, after="rail", storage="reset")
     d.coil("Full", 7, 4, after="rail", storage="reset")
     # 3 s press: the program is emptied
     r = d.contact("Reset", 8, 0)
@@ -104,7 +113,8 @@ def mp9c_manual() -> bytes:
         "inputVars": [("Sensors", "INT", None), ("Record", "BOOL", None), ("Reset", "BOOL", None)],
         "inOutVars": [("Cp", "ST_ControlProgram", None)],
         "outputVars": [("Full", "BOOL", None)],
-        "externalVars": [(n, "BOOL", None) for n in ("SA5", "L1", "L2", "L3", "L4", "L5", "L6", "L7")],
+        "externalVars": [(n, "BOOL", None) for n in (("SA2", "SA3", "SA4") if every_mechanism else ())
+                         + ("SA5", "L1", "L2", "L3", "L4", "L5", "L6", "L7")],
         "localVars constant": [("MAX_FRAMES", "INT", "32")],
         "localVars": [("DoRecord", "BOOL", None)]})
     return project([pou])

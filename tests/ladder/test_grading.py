@@ -1,0 +1,41 @@
+"""A ladder program is graded like ST: the handed-out OpenPLC Editor project, with a POU
+redrawn in ladder, goes to `plclab grade` as the student saves it (plc.xml)."""
+from __future__ import annotations
+
+import copy
+
+from lxml import etree
+
+from examples import mp9c_manual
+from plclab.cli import main
+from plclab.grader import grade
+from plclab.handout import handout_files
+
+PPX = {"ppx": "http://www.plcopen.org/xml/tc6_0201"}
+
+
+def handout_with_ladder_manual(every_mechanism: bool) -> bytes:
+    """The mp9c hand-out's plc.xml with FB_Mp9cManual replaced by the drawn one (what a
+    student does in OpenPLC Editor: delete the ST POU, draw a ladder POU of the same name)."""
+    text = handout_files("mp9c")["mp9c-openplc/plc.xml"]
+    root = etree.fromstring(text.encode("utf-8"))
+    drawn = etree.fromstring(mp9c_manual(every_mechanism))
+    new = drawn.find("ppx:types/ppx:pous/ppx:pou[@name='FB_Mp9cManual']", PPX)
+    old = root.find("ppx:types/ppx:pous/ppx:pou[@name='FB_Mp9cManual']", PPX)
+    old.getparent().replace(old, copy.deepcopy(new))
+    return etree.tostring(root, xml_declaration=True, encoding="utf-8")
+
+
+def test_task1_drawn_in_ladder_passes(tmp_path):
+    path = tmp_path / "plc.xml"
+    path.write_bytes(handout_with_ladder_manual(every_mechanism=True))
+    report = grade("mp9c", "task1", [str(path)])
+    assert report.exit_code == 0, report.text()
+
+
+def test_starting_program_in_ladder_fails_task1_on_the_valves(tmp_path, capsys):
+    path = tmp_path / "plc.xml"
+    path.write_bytes(handout_with_ladder_manual(every_mechanism=False))
+    assert main(["grade", "mp9c", "task1", str(path), "--out", str(tmp_path / "out")]) == 1
+    out = capsys.readouterr().out
+    assert "FAIL" in out and "Traceback" not in out
