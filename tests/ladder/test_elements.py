@@ -301,3 +301,29 @@ def test_xml_with_st_files_in_one_unit(tmp_path):
     xml.write_bytes(project([main(d, extra=[("N1", "FB_Not", None)])], program="main"))
     sim = Simulation(PLC(compile_unit(load_files([xml, st]))))
     assert [get(scan(sim, A=v), "Q") for v in (False, True)] == [True, False]
+
+
+def test_generated_lines_map_back_to_the_drawing(tmp_path):
+    """What the grader uses to name a statement of a ladder POU: (file, line) -> rung, element."""
+    from plclab.plcopen.graphical import drawing_location
+
+    d = Diagram()
+    a = d.contact("A", 0, 0)
+    d.coil("Q", 0, 3, after=a)
+    b = d.contact("B", 2, 0, edge="rising")
+    coil = d.coil("Q2", 2, 3, after=b)
+    st = Pou("helper", "function", "helper := NOT X;", {"inputVars": [("X", "BOOL", None)]}, return_type="BOOL")
+    path = tmp_path / "plc.xml"
+    path.write_bytes(project([st, main(d)], program="main"))
+    plain_st = tmp_path / "more.st"
+    plain_st.write_text("FUNCTION F : BOOL\nVAR_INPUT X : BOOL; END_VAR\nF := X;\nEND_FUNCTION\n")
+    sources = read_sources([path, plain_st])
+    text = sources[0][1]
+    lines = text.splitlines()
+    at = {line: n for n, line in enumerate(lines, 1)}
+    assert drawing_location(sources, str(path), at["  Q2 := R_TRIG1.Q;"], 3) == \
+        f"main (LD), rung 2, coil Q2 (localId {coil.local_id})"
+    assert drawing_location(sources, str(path), at["  R_TRIG1(CLK := B);"]) == \
+        f"main (LD), rung 2, contact B (localId {b.local_id})"
+    assert drawing_location(sources, str(path), at["helper := NOT X;"]) == "helper (ST), line 1 of its body"
+    assert drawing_location(sources, str(plain_st), 3) is None     # an ST file names its own lines

@@ -103,6 +103,18 @@ def locate(source: Any, line: int, col: int = 1) -> Optional[Place]:
     return source.place(line, col) if isinstance(source, GeneratedSource) else None
 
 
+def drawing_location(sources: Any, file: str, line: int, col: int = 1) -> Optional[str]:
+    """Where (file, line[, col]) of the program's ST is on the student's drawing, as the text a
+    report puts in place of the line: `FB_Task1 (LD), rung 3, coil L9 (localId 27)` (for an
+    ST body kept in a plc.xml: `FB_X (ST), line 4 of its body`). None for a plain ST file,
+    which names its own lines. `sources`: the (name, text) pairs `read_sources` gave."""
+    for name, text in sources:
+        if name == file:
+            place = locate(text, line, col)
+            return str(place) if place is not None else None
+    return None
+
+
 class TextBuilder:
     """Accumulates (text, place) chunks and knows each chunk's line and columns."""
 
