@@ -116,15 +116,18 @@ class Diagram:
 
     # -- both ----------------------------------------------------------------------------------
     def invar(self, expression: str, row: float, col: float) -> Item:
+        width = max(30, 7 * len(expression) + 10)      # the Editor sizes a variable to its text
         item = self._new("inVariable", row, col, negated="false")
+        item.el.set("width", str(width))
         out = sub(item.el, "connectionPointOut")
-        sub(out, "relPosition", x=70, y=10)
+        sub(out, "relPosition", x=width, y=10)
         sub(item.el, "expression").text = expression
-        item.outs[""] = (item.x + 70, item.y + 10)
+        item.outs[""] = (item.x + width, item.y + 10)
         return item
 
     def outvar(self, expression: str, row: float, col: float, src: Source, order: int = 0) -> Item:
         item = self._new("outVariable", row, col, negated="false", executionOrderId=order or None)
+        item.el.set("width", str(max(30, 7 * len(expression) + 10)))
         self._wire_in(item.el, [src], (item.x, item.y + 10))
         sub(item.el, "expression").text = expression
         return item
@@ -185,7 +188,12 @@ class Diagram:
             for dy in sorted(self.rail_outs):
                 p = sub(self.rail.el, "connectionPointOut", formalParameter="")
                 sub(p, "relPosition", x=10, y=dy)
-            right = sub(self.body, "rightPowerRail", localId=self.next_id, height=ROW * 40, width=10)
+            bottom = max([float(e.find(q("position")).get("y")) + float(e.get("height", 20))
+                          for e in self.body if e.find(q("position")) is not None] + [ROW])
+            height = int(bottom + 10 - 20)
+            self.rail.el.set("height", str(height))
+            self.rail.el.set("width", "10")
+            right = sub(self.body, "rightPowerRail", localId=self.next_id, height=height, width=10)
             self.next_id += 1
             sub(right, "position", x=60 + 8 * COL, y=20)
             for lid, x, y in self.right_ins:
