@@ -327,3 +327,23 @@ def test_generated_lines_map_back_to_the_drawing(tmp_path):
         f"main (LD), rung 2, contact B (localId {b.local_id})"
     assert drawing_location(sources, str(path), at["helper := NOT X;"]) == "helper (ST), line 1 of its body"
     assert drawing_location(sources, str(plain_st), 3) is None     # an ST file names its own lines
+
+
+def test_cascaded_timers_through_eno_blink(tmp_path):
+    """Two timers chained EN <- ENO, the second's Q fed back through a negated contact: a
+    square wave of 2 x 30 ms, as the Editor's own blink example is drawn."""
+    d = Diagram()
+    n = d.contact("Q", 0, 0, negated=True)
+    pt1 = d.invar("T#30ms", 1, 1)
+    t1 = d.block("TON", 0, 2, [("EN", "rail"), ("IN", n), ("PT", pt1)], ["ENO", "Q", "ET"], instance="T1")
+    pt2 = d.invar("T#30ms", 1, 4)
+    t2 = d.block("TOF", 0, 5, [("EN", (t1, "ENO")), ("IN", (t1, "Q")), ("PT", pt2)], ["ENO", "Q", "ET"],
+                 instance="T2")
+    d.coil("Q", 0, 7, after=(t2, "Q"))
+    pou = main(d, extra=[("T1", "TON", None), ("T2", "TOF", None)])
+    assert "  T2(EN := T1.ENO, IN := T1.Q, PT := T#30ms);\n" in st_of(tmp_path, [pou])
+    sim = run_xml(tmp_path, [pou])
+    trace = [get(scan(sim), "Q") for _ in range(16)]
+    changes = [i for i in range(1, 16) if trace[i] != trace[i - 1]]
+    assert len(changes) >= 3
+    assert {b - a for a, b in zip(changes, changes[1:])} == {4}    # each half: 30 ms + the scan that sees it

@@ -39,3 +39,16 @@ def test_starting_program_in_ladder_fails_task1_on_the_valves(tmp_path, capsys):
     assert main(["grade", "mp9c", "task1", str(path), "--out", str(tmp_path / "out")]) == 1
     out = capsys.readouterr().out
     assert "FAIL" in out and "Traceback" not in out
+
+
+def test_grade_class_takes_plc_xml_submissions(tmp_path):
+    from plclab.grader.classroom import grade_class
+
+    folder = tmp_path / "class"
+    (folder / "alice").mkdir(parents=True)
+    (folder / "alice" / "plc.xml").write_bytes(handout_with_ladder_manual(every_mechanism=True))
+    (folder / "bob.xml").write_bytes(handout_with_ladder_manual(every_mechanism=False))
+    report = grade_class("mp9c", "task1", folder, tmp_path / "out", jobs=1)
+    verdicts = {r.student: r.status for r in report.results}
+    assert verdicts == {"alice": "PASS", "bob": "FAIL"}
+    assert report.ignored == []
