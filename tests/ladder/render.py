@@ -38,7 +38,6 @@ def render(xml: bytes, out: str, pou: str | None = None) -> None:
     ax.set_xlim(0, max_x)
     ax.set_ylim(max_y, 0)
     ax.axis("off")
-    by_id = {e.local_id: e for e in elements}
     wire = dict(color="#1f4e79", lw=1.4)
     for w_el in body.iter(f"{{{NS['ppx']}}}connection"):
         pts = [(float(p.get("x")), float(p.get("y"))) for p in w_el.findall("ppx:position", NS)]
@@ -80,7 +79,6 @@ def render(xml: bytes, out: str, pou: str | None = None) -> None:
             ax.text(x + w / 2, y + h / 2, e.name, ha="center", va="center", fontsize=7)
     fig.savefig(out, bbox_inches="tight")
     plt.close(fig)
-    del by_id
 
 
 if __name__ == "__main__":

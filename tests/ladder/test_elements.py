@@ -347,3 +347,18 @@ def test_cascaded_timers_through_eno_blink(tmp_path):
     changes = [i for i in range(1, 16) if trace[i] != trace[i - 1]]
     assert len(changes) >= 3
     assert {b - a for a, b in zip(changes, changes[1:])} == {4}    # each half: 30 ms + the scan that sees it
+
+
+def test_errors_in_st_bodies_and_declarations_of_a_project_name_them(tmp_path):
+    fb = Pou("FB_Text", "functionBlock", "Y := X +;", {"inputVars": [("X", "INT", None)],
+                                                      "outputVars": [("Y", "INT", None)]})
+    path = tmp_path / "plc.xml"
+    path.write_bytes(project([fb]))
+    with pytest.raises(CompileError) as e:
+        load_files([path])
+    assert str(e.value).startswith(f"{path}: FB_Text (ST), line 1 of its body: ")
+    bad_type = Pou("FB_Decl", "functionBlock", "Y := 1;", {"outputVars": [("Y", "NO_SUCH_TYPE", None)]})
+    path.write_bytes(project([bad_type]))
+    with pytest.raises(CompileError) as e:
+        load_files([path])
+    assert str(e.value).startswith(f"{path}: FB_Decl, variable Y: ")

@@ -299,8 +299,6 @@ def sections(elements: list[Element]) -> dict[int, int]:
             src = by_id.get(c.ref)
             if src is not None and src.kind not in _PASSIVE:
                 parent[find(e.local_id)] = find(c.ref)
-    for rail in (e for e in elements if e.kind == "rightPowerRail"):
-        pass   # a coil's wire to the right rail joins nothing
     groups: dict[int, list[Element]] = {}
     for e in members:
         groups.setdefault(find(e.local_id), []).append(e)

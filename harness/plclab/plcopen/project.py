@@ -9,6 +9,7 @@ from __future__ import annotations
 
 import datetime as _dt
 import os
+import re
 from importlib import metadata
 from pathlib import Path
 from typing import Optional
@@ -130,7 +131,7 @@ def project_source(tree: etree._ElementTree, file: str, others: Optional[Library
         first = False
         if lang == "ST":
             for line in head.splitlines(keepends=True):
-                out.add(line, Place(name, detail="declarations"))
+                out.add(line, _declaration_place(name, line))
             text = (read_formatted_text(body) or "").strip("\n")
             for n, line in enumerate(text.split("\n"), 1):
                 out.add(line + "\n", Place(name, "ST", detail=f"line {n} of its body"))
@@ -138,7 +139,7 @@ def project_source(tree: etree._ElementTree, file: str, others: Optional[Library
             gen = PouGenerator(p, lang, body, file, project_pous, {**globals_, **interface_types(p)}, library)
             gen.generate()
             for line in head.splitlines(keepends=True):
-                out.add(line, Place(name, detail="declarations"))
+                out.add(line, _declaration_place(name, line))
             if gen.extra:
                 out.add("VAR\n", Place(name, lang, detail="variables the Editor adds"))
                 for var, type_name in gen.extra:
@@ -161,6 +162,15 @@ def project_source(tree: etree._ElementTree, file: str, others: Optional[Library
     for c in root.findall("ppx:instances/ppx:configurations/ppx:configuration", NS):
         part(configuration_text(c), Place(f"configuration {c.get('name')}"))
     return GeneratedSource(out.text(), out.spans, file)
+
+
+_DECLARED = re.compile(r"^\s+([A-Za-z_]\w*)\s*(?:AT\s+\S+\s*)?:")
+
+
+def _declaration_place(pou: str, line: str) -> Place:
+    """A line of a POU's header and VAR blocks: the variable it declares, if it declares one."""
+    m = _DECLARED.match(line)
+    return Place(pou, detail=f"variable {m.group(1)}" if m else "declarations")
 
 
 def interface_types(pou: etree._Element) -> dict[str, str]:
