@@ -362,3 +362,21 @@ def test_errors_in_st_bodies_and_declarations_of_a_project_name_them(tmp_path):
     with pytest.raises(CompileError) as e:
         load_files([path])
     assert str(e.value).startswith(f"{path}: FB_Decl, variable Y: ")
+
+
+def test_a_fault_in_a_drawn_pou_names_the_rung_and_element(tmp_path):
+    d = Diagram("FBD")
+    d.outvar("Q", 0, 2, d.invar("A", 0, 0))
+    one = d.invar("1", 2, 0)
+    out = d.outvar("Arr[K]", 2, 2, one)
+    pou = main(d, extra=[("Arr", "ARR3", None)], ints=["K"])
+    path = tmp_path / "plc.xml"
+    path.write_bytes(project([pou], program="main"))
+    types = tmp_path / "types.st"
+    types.write_text("TYPE ARR3 : ARRAY[1..3] OF INT; END_TYPE\n")
+    sim = Simulation(PLC(compile_unit(load_files([path, types]))))
+    scan(sim, K=2)
+    assert sim.plc.fault is None and get(sim, "Arr")[1] == 1
+    scan(sim, K=7)
+    fault = str(sim.plc.fault)
+    assert fault.startswith(f"{path}: main (FBD), network 2, output variable Arr[K] (localId {out.local_id}): PLC FAULT")

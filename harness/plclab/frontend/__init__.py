@@ -56,6 +56,7 @@ def check_sources(sources: Iterable[tuple[str, str]]) -> CheckedUnit:
         raise CompileError([Diagnostic(*where, "declarations or initial values nested too deeply")]) from None
     if checked.diagnostics:
         raise CompileError(_on_drawing(checked.diagnostics, drawn))
+    checked.drawings = drawn
     return checked
 
 

@@ -39,10 +39,13 @@ class FaultRecord:
     time_ns: int
     internal: bool = False
     detail: str = field(default="", compare=False, repr=False)
+    place: str = ""          # in a plc.xml's LD / FBD: the POU, rung and element, instead of the line
 
     def __str__(self) -> str:
         where = ""
-        if self.file is not None:
+        if self.place:
+            where = f"{self.file}: {self.place}: "
+        elif self.file is not None:
             where = f"{self.file}:{self.line}: "
         pou = f" in {self.pou}" if self.pou else ""
         if self.internal:

@@ -313,10 +313,13 @@ class PLC:
         else:
             message = getattr(exc, "message", None) or str(exc) or type(exc).__name__
         where = self._locate(exc)
+        drawing = self.checked.drawings.get(where.file) if where else None
+        place = drawing.place(where.line) if drawing is not None else None
         self.fault = FaultRecord(kind, message, where.pou if where else None,
                                  where.file if where else None, where.line if where else None, self.now_ns,
                                  internal=internal,
-                                 detail="".join(traceback.format_exception(exc)) if internal else "")
+                                 detail="".join(traceback.format_exception(exc)) if internal else "",
+                                 place=str(place) if place is not None else "")
         self.state = FAULT
         self._safe_outputs()
 
