@@ -380,3 +380,48 @@ def test_a_fault_in_a_drawn_pou_names_the_rung_and_element(tmp_path):
     scan(sim, K=7)
     fault = str(sim.plc.fault)
     assert fault.startswith(f"{path}: main (FBD), network 2, output variable Arr[K] (localId {out.local_id}): PLC FAULT")
+
+
+def test_a_wiring_loop_is_refused_in_one_line(tmp_path):
+    d = Diagram()
+    a = d.contact("A", 0, 0)
+    b = d.contact("B", 0, 1, after=a)
+    d.coil("Q", 0, 3, after=b)
+    # rewire A's input to come from B: a loop with no block in it
+    point = a.el.find("{http://www.plcopen.org/xml/tc6_0201}connectionPointIn")
+    point.find("{http://www.plcopen.org/xml/tc6_0201}connection").set("refLocalId", str(b.local_id))
+    path = tmp_path / "plc.xml"
+    path.write_bytes(project([main(d)], program="main"))
+    with pytest.raises(CompileError) as e:
+        load_files([path])
+    assert "loops back" in str(e.value) and "\n" not in str(e.value)
+
+
+def test_branches_multiplying_beyond_the_bound_are_refused(tmp_path):
+    """Each stage: two contacts in parallel, both fed by the stage before: 2**n paths to the
+    rail. The Editor would walk them all; plclab stops at a bound, in one line."""
+    d = Diagram()
+    prev = "rail"
+    for stage in range(24):
+        x = d.contact("A", 0, 2 * stage, after=prev)
+        y = d.contact("B", 1, 2 * stage, after=prev)
+        prev = d.contact("C", 0, 2 * stage + 1, after=[x, y])
+    d.coil("Q", 0, 50, after=prev)
+    path = tmp_path / "plc.xml"
+    path.write_bytes(project([main(d)], program="main"))
+    with pytest.raises(CompileError) as e:
+        load_files([path])
+    assert "too many paths" in str(e.value)
+
+
+def test_a_very_long_series_is_refused_or_translated_never_a_traceback(tmp_path):
+    d = Diagram()
+    prev = "rail"
+    for i in range(2_000):
+        prev = d.contact("A", 0, i, after=prev)
+    d.coil("Q", 0, 2_001, after=prev)
+    path = tmp_path / "plc.xml"
+    path.write_bytes(project([main(d)], program="main"))
+    with pytest.raises(CompileError) as e:
+        load_files([path])
+    assert "too deep" in str(e.value)

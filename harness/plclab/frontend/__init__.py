@@ -87,6 +87,9 @@ def _deepest_node(exc: BaseException) -> A.Node | None:
     return found
 
 
+MAX_PROJECT_BYTES = 32 * 2**20     # a plc.xml read as a program (a student's file: bounded)
+
+
 def is_project_file(path: str | Path) -> bool:
     """A PLCopen TC6 XML project (OpenPLC Editor's plc.xml) rather than an ST file."""
     return str(path).lower().endswith(".xml")
@@ -122,6 +125,10 @@ def _read_project(path: str | Path, st_texts: list[tuple[str, str]]) -> tuple[st
     data, errs = _read_bytes(path)
     if errs:
         return "", errs
+    if len(data) > MAX_PROJECT_BYTES:
+        return "", [Diagnostic(name, 1, 1, f"{len(data):,} bytes: too large for a project (at most "
+                                           f"{MAX_PROJECT_BYTES // 2**20} MiB; a lab program's plc.xml is a few "
+                                           f"hundred kB)")]
     try:
         return source_from_xml(name, data, st_texts), []
     except CompileError as e:

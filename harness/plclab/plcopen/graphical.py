@@ -40,6 +40,7 @@ from plclab.frontend.stdsigs import FUNCTION_BLOCKS, FUNCTIONS
 from plclab.plcopen.datatypes import NS, local, type_text
 
 GRAPHICAL = ("LD", "FBD")
+MAX_VISITS = 200_000   # elements walked per POU: parallel branches fed by parallel branches multiply
 # Elements the body may hold that produce no code and carry no signal
 _PASSIVE = {"comment", "rightPowerRail", "leftPowerRail"}
 _LITERAL_TYPES = {"T": "TIME", "TIME": "TIME", "D": "DATE", "DATE": "DATE", "TOD": "TOD", "TIME_OF_DAY": "TOD",
@@ -454,6 +455,15 @@ class PouGenerator:
         self.extra: list[tuple[str, str]] = []     # temporaries: (name, type)
         self.computed_blocks: set[int] = set()
         self.computed_connectors: dict[str, Tokens] = {}
+        self.connectors: dict[str, list[Element]] = {}
+        self.readers: dict[int, list[tuple[Element, Conn]]] = {}    # localId -> what reads it
+        for e in self.elements:
+            if e.kind == "connector":
+                self.connectors.setdefault(e.name, []).append(e)
+            for c in e.pin_in.conns + [c for p in e.inputs for c in p.conns]:
+                self.readers.setdefault(c.ref, []).append((e, c))
+        self.visits = 0                            # elements walked: a bound on a hostile drawing
+        self.walking: set[int] = set()             # contacts / coils / continuations being expanded
 
     # -- places ----------------------------------------------------------------------------
     def place(self, e: Element) -> Place:
@@ -552,43 +562,62 @@ class PouGenerator:
             src = self.by_id.get(c.ref)
             if src is None:
                 continue
-            if src.kind == "leftPowerRail":
-                out.append(None)
-            elif src.kind in ("inVariable", "inOutVariable"):
-                out.append(str([(src.name, self.info(src, "expression"))]))
-            elif src.kind == "block":
-                out.append(str(self.block(src, c, order, to_inout)))
-            elif src.kind == "continuation":
-                value = self.computed_connectors.get(src.name)
-                if value is not None:
-                    out.append(str(value))
-                    continue
-                found = [e for e in self.elements if e.kind == "connector" and e.name == src.name]
-                if len(found) > 1:
-                    raise self.fail(src, f"more than one connector named '{src.name}' in this POU")
-                if not found:
-                    raise self.fail(src, f"no connector named '{src.name}' for this continuation")
-                value = self.expression(found[0].pin_in.conns, order)
-                if value is not None:
-                    self.computed_connectors[src.name] = value
-                    out.append(str(value))
-            elif src.kind == "contact":
-                info = self.info(src)
-                var = str(self.modifier(src.pin_in, [(src.name, info + ("reference",))], info))
-                sub = self.paths(src.pin_in.conns, order)
-                if not sub:
-                    raise self.fail(src, f"contact '{src.name}' must be connected on its left")
-                if len(sub) > 1:
-                    fact = self.factorize(sub)
-                    out.append([var, tuple(fact)] if len(fact) > 1 else [var] + fact)
-                elif isinstance(sub[0], list):
-                    out.append([var] + sub[0])
-                elif sub[0] is not None:
-                    out.append([var, sub[0]])
-                else:
-                    out.append(var)
-            elif src.kind == "coil":
-                out.append(self.paths(src.pin_in.conns, order))
+            self.visits += 1
+            if self.visits > MAX_VISITS:
+                raise self.fail(src, f"this diagram has too many paths to translate (more than {MAX_VISITS:,} "
+                                     "steps): split it into smaller rungs or POUs")
+            if src.kind in ("contact", "coil", "continuation"):
+                if src.local_id in self.walking:
+                    raise self.fail(src, "the wiring loops back into this element: OpenPLC Editor cannot "
+                                         "translate a loop that does not go through a block")
+                self.walking.add(src.local_id)
+                try:
+                    out.extend(self._path_from(src, c, order, to_inout))
+                finally:
+                    self.walking.discard(src.local_id)
+            else:
+                out.extend(self._path_from(src, c, order, to_inout))
+        return out
+
+    def _path_from(self, src: Element, c: Conn, order: bool, to_inout: bool) -> list:
+        """The paths (zero or one) that element `src` gives the wire `c` leaving it."""
+        out: list = []
+        if src.kind == "leftPowerRail":
+            out.append(None)
+        elif src.kind in ("inVariable", "inOutVariable"):
+            out.append(str([(src.name, self.info(src, "expression"))]))
+        elif src.kind == "block":
+            out.append(str(self.block(src, c, order, to_inout)))
+        elif src.kind == "continuation":
+            value = self.computed_connectors.get(src.name)
+            if value is not None:
+                return [str(value)]
+            found = self.connectors.get(src.name, [])
+            if len(found) > 1:
+                raise self.fail(src, f"more than one connector named '{src.name}' in this POU")
+            if not found:
+                raise self.fail(src, f"no connector named '{src.name}' for this continuation")
+            value = self.expression(found[0].pin_in.conns, order)
+            if value is not None:
+                self.computed_connectors[src.name] = value
+                out.append(str(value))
+        elif src.kind == "contact":
+            info = self.info(src)
+            var = str(self.modifier(src.pin_in, [(src.name, info + ("reference",))], info))
+            sub = self.paths(src.pin_in.conns, order)
+            if not sub:
+                raise self.fail(src, f"contact '{src.name}' must be connected on its left")
+            if len(sub) > 1:
+                fact = self.factorize(sub)
+                out.append([var, tuple(fact)] if len(fact) > 1 else [var] + fact)
+            elif isinstance(sub[0], list):
+                out.append([var] + sub[0])
+            elif sub[0] is not None:
+                out.append([var, sub[0]])
+            else:
+                out.append(var)
+        elif src.kind == "coil":
+            out.append(self.paths(src.pin_in.conns, order))
         return out
 
     def factorize(self, paths: list) -> list:
@@ -833,7 +862,7 @@ class PouGenerator:
         if src.kind in ("inVariable", "inOutVariable"):
             return self.var_type(src.name)
         if src.kind == "continuation":
-            for c in (e for e in self.elements if e.kind == "connector" and e.name == src.name):
+            for c in self.connectors.get(src.name, []):
                 for cc in c.pin_in.conns:
                     t = self.source_type(cc, seen | {src.local_id})
                     if t:
@@ -868,13 +897,11 @@ class PouGenerator:
                         t = self.source_type(c, seen)
                         if t:
                             return t
-        for other in self.elements:
-            for pin in ([other.pin_in] if other.kind in ("outVariable", "inOutVariable") else []):
-                for c in pin.conns:
-                    if c.ref == e.local_id and (c.param or "OUT") == (param or "OUT"):
-                        t = self.var_type(other.name)
-                        if t:
-                            return t
+        for other, c in self.readers.get(e.local_id, []):
+            if other.kind in ("outVariable", "inOutVariable") and (c.param or "OUT") == (param or "OUT"):
+                t = self.var_type(other.name)
+                if t:
+                    return t
         return "ANY"
 
 

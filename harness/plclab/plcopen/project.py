@@ -137,7 +137,11 @@ def project_source(tree: etree._ElementTree, file: str, others: Optional[Library
                 out.add(line + "\n", Place(name, "ST", detail=f"line {n} of its body"))
         elif lang in GRAPHICAL:
             gen = PouGenerator(p, lang, body, file, project_pous, {**globals_, **interface_types(p)}, library)
-            gen.generate()
+            try:
+                gen.generate()
+            except RecursionError:
+                raise generation_error(file, Place(name, lang), "the diagram is wired too deep to translate "
+                                                                "(a chain of hundreds of elements): split it") from None
             for line in head.splitlines(keepends=True):
                 out.add(line, _declaration_place(name, line))
             if gen.extra:
