@@ -425,3 +425,29 @@ def test_a_very_long_series_is_refused_or_translated_never_a_traceback(tmp_path)
     with pytest.raises(CompileError) as e:
         load_files([path])
     assert "too deep" in str(e.value)
+
+
+@pytest.mark.parametrize("data,words", [(b"<project><unclosed>", "not well-formed XML"),
+                                        (b"<?xml version='1.0'?><other/>", "not a PLCopen TC6"),
+                                        (b"", "not well-formed XML")])
+def test_a_broken_project_file_is_one_line_from_the_cli(tmp_path, capsys, data, words):
+    from plclab.cli import main as cli
+
+    path = tmp_path / "plc.xml"
+    path.write_bytes(data)
+    assert cli(["check", str(path)]) == 1
+    err = capsys.readouterr().err.strip()
+    assert err.startswith(f"{path}: ") and words in err and "\n" not in err and "Traceback" not in err
+
+
+def test_check_emit_st_prints_the_translation(tmp_path, capsys):
+    from plclab.cli import main as cli
+
+    d = Diagram()
+    a = d.contact("A", 0, 0)
+    d.coil("Q", 0, 3, after=a, negated=True)
+    path = tmp_path / "plc.xml"
+    path.write_bytes(project([main(d)], program="main"))
+    assert cli(["check", "--emit-st", str(path)]) == 0
+    out = capsys.readouterr().out
+    assert "PROGRAM main\n" in out and "  Q := NOT(A);\n" in out and "CONFIGURATION Config0" in out

@@ -126,9 +126,8 @@ def _read_project(path: str | Path, st_texts: list[tuple[str, str]]) -> tuple[st
     if errs:
         return "", errs
     if len(data) > MAX_PROJECT_BYTES:
-        return "", [Diagnostic(name, 1, 1, f"{len(data):,} bytes: too large for a project (at most "
-                                           f"{MAX_PROJECT_BYTES // 2**20} MiB; a lab program's plc.xml is a few "
-                                           f"hundred kB)")]
+        return "", [Diagnostic(name, 1, 1, f"too large for a project (more than {MAX_PROJECT_BYTES // 2**20} MiB; "
+                                           f"a lab program's plc.xml is a few hundred kB)")]
     try:
         return source_from_xml(name, data, st_texts), []
     except CompileError as e:
@@ -143,7 +142,8 @@ def _read_project(path: str | Path, st_texts: list[tuple[str, str]]) -> tuple[st
 def _read_bytes(path: str | Path) -> tuple[bytes, list[Diagnostic]]:
     name = str(path)
     try:
-        return Path(path).read_bytes(), []
+        with open(path, "rb") as f:
+            return f.read(MAX_PROJECT_BYTES + 1), []      # never more than the bound into memory
     except FileNotFoundError:
         return b"", [Diagnostic(name, 1, 1, "no such file")]
     except IsADirectoryError:
