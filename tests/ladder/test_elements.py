@@ -451,3 +451,17 @@ def test_check_emit_st_prints_the_translation(tmp_path, capsys):
     assert cli(["check", "--emit-st", str(path)]) == 0
     out = capsys.readouterr().out
     assert "PROGRAM main\n" in out and "  Q := NOT(A);\n" in out and "CONFIGURATION Config0" in out
+
+
+def test_a_temporary_the_editor_cannot_type_is_refused_at_its_block(tmp_path):
+    """ADD of two literals feeding nothing typed: the Editor declares its result ANY, which
+    matiec refuses; the error names the box."""
+    d = Diagram("FBD")
+    blk = d.block("ADD", 0, 1, [("IN1", d.invar("5", 0, 0)), ("IN2", d.invar("3", 1, 0))], ["OUT"])
+    d.connector("SUM", 0, 3, (blk, "OUT"))
+    path = tmp_path / "plc.xml"
+    path.write_bytes(project([main(d)], program="main"))
+    assert f"_TMP_ADD{blk.local_id}_OUT : ANY;" in str(read_sources([path])[0][1])
+    with pytest.raises(CompileError) as e:
+        load_files([path])
+    assert str(e.value).startswith(f"{path}: main (FBD), network 1, block ADD (localId {blk.local_id}): ")

@@ -452,7 +452,7 @@ class PouGenerator:
         self.section_of = sections(self.elements)
         self.indent = "  "
         self.program: Tokens = []
-        self.extra: list[tuple[str, str]] = []     # temporaries: (name, type)
+        self.extra: list[tuple[str, str, Optional[int]]] = []   # temporaries: (name, type, localId of its element)
         self.computed_blocks: set[int] = set()
         self.computed_connectors: dict[str, Tokens] = {}
         self.connectors: dict[str, list[Element]] = {}
@@ -480,8 +480,8 @@ class PouGenerator:
     def emit(self, *tokens: tuple[str, tuple]) -> None:
         self.program.extend(tokens)
 
-    def declare(self, name: str, type_name: str) -> None:
-        self.extra.append((name, type_name))
+    def declare(self, name: str, type_name: str, owner: Optional[int] = None) -> None:
+        self.extra.append((name, type_name, owner))
         self.declared.add(name)
 
     # -- the program ----------------------------------------------------------------------------
@@ -688,7 +688,7 @@ class PouGenerator:
         while f"{fb}{n}" in self.declared:
             n += 1
         name = f"{fb}{n}"
-        self.declare(name, fb)
+        self.declare(name, fb, info[2] if len(info) > 2 else None)
         self.emit((self.indent, ()), (name, info), ("(CLK := ", ()), *expr, (");\n", ()))
         return [(f"{name}.Q", info)]
 
@@ -752,7 +752,7 @@ class PouGenerator:
             if param in inouts or param not in out_names + ["", "ENO"]:
                 continue
             name = f"{e.type_name}{e.local_id}" if param == "" else f"_TMP_{e.type_name}{e.local_id}_{param}"
-            self.declare(name, self.pin_type(e, param))
+            self.declare(name, self.pin_type(e, param), e.local_id)
             if len(e.outputs) > 1 and param not in ("", "OUT"):
                 values.append([(param, (self.tag, "block", e.local_id, "output", i)), (f" => {name}", ())])
             else:
@@ -819,7 +819,7 @@ class PouGenerator:
         if to_inout:
             copy = f"{e.name}_{wanted}"
             if copy not in self.declared:
-                self.declare(copy, self.pin_type(e, wanted or ""))
+                self.declare(copy, self.pin_type(e, wanted or ""), e.local_id)
                 self.emit((self.indent, ()), (f"{copy} := ", ()), *member, (";\n", ()))
             return [(copy, ())]
         return member

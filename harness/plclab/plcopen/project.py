@@ -146,8 +146,11 @@ def project_source(tree: etree._ElementTree, file: str, others: Optional[Library
                 out.add(line, _declaration_place(name, line))
             if gen.extra:
                 out.add("VAR\n", Place(name, lang, detail="variables the Editor adds"))
-                for var, type_name in gen.extra:
-                    out.add(f"    {var} : {type_name};\n", Place(name, lang, detail=f"variable {var} the Editor adds"))
+                for var, type_name, owner in gen.extra:
+                    element = gen.by_id.get(owner) if owner is not None else None
+                    out.add(f"    {var} : {type_name};\n",
+                            gen.place(element) if element is not None else
+                            Place(name, lang, detail=f"variable {var} the Editor adds"))
                 out.add("END_VAR\n", Place(name, lang, detail="variables the Editor adds"))
             elif not interface_types(p):
                 raise generation_error(file, Place(name, lang), "no variable defined in this POU (OpenPLC Editor "
