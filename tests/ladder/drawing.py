@@ -176,6 +176,25 @@ class Diagram:
         self._wire_in(item.el, [after], (item.x, item.y + 10))
         return item
 
+    def label(self, name: str, row: float, col: float) -> Item:
+        return self._new("label", row, col, label=name)
+
+    def return_(self, row: float, col: float, after: Source) -> Item:
+        item = self._new("return", row, col)
+        self._wire_in(item.el, [after], (item.x, item.y + 10))
+        return item
+
+    def inoutvar(self, expression: str, row: float, col: float, src: Source) -> Item:
+        width = max(30, 7 * len(expression) + 10)
+        item = self._new("inOutVariable", row, col, negated="false")
+        item.el.set("width", str(width))
+        self._wire_in(item.el, [src], (item.x, item.y + 10))
+        out = sub(item.el, "connectionPointOut")
+        sub(out, "relPosition", x=width, y=10)
+        sub(item.el, "expression").text = expression
+        item.outs[""] = (item.x + width, item.y + 10)
+        return item
+
     def comment(self, text: str, row: float, col: float) -> Item:
         item = self._new("comment", row, col)
         content = sub(item.el, "content")

@@ -254,17 +254,24 @@ def test_undeclared_coil_names_pou_rung_and_element(tmp_path):
     assert str(e.value) == f"{path}: main (LD), rung 2, coil L9 (localId {coil.local_id}): undeclared identifier 'L9'"
 
 
-def test_jump_is_refused_with_its_place(tmp_path):
+@pytest.mark.parametrize("kind", ["jump", "label", "return"])
+def test_jump_label_and_return_are_refused_with_their_place(tmp_path, kind):
+    """The Editor writes no code for them (the drawing would not do what it shows)."""
     d = Diagram()
     a = d.contact("A", 0, 0)
-    j = d.jump("END", 0, 3, a)
+    d.coil("Q", 0, 3, after=a)
+    b = d.contact("B", 1, 0)
+    item = {"jump": lambda: d.jump("END", 1, 3, b), "label": lambda: d.label("END", 1, 3),
+            "return": lambda: d.return_(1, 3, b)}[kind]()
+    what = {"jump": "jump to END", "label": "label END", "return": "return"}[kind]
+    rung = 3 if kind == "label" else 2      # a label is wired to nothing: a group of its own, right of B
     path = tmp_path / "plc.xml"
     path.write_bytes(project([main(d)], program="main"))
     with pytest.raises(CompileError) as e:
         load_files([path])
     text = str(e.value)
-    assert text.startswith(f"{path}: main (LD), rung 1, jump to END (localId {j.local_id}): ")
-    assert "\n" not in text
+    assert text.startswith(f"{path}: main (LD), rung {rung}, {what} (localId {item.local_id}): ")
+    assert "writes no code for jumps, labels and returns" in text and "\n" not in text
 
 
 def test_unknown_block_type_is_refused(tmp_path):
@@ -465,3 +472,53 @@ def test_a_temporary_the_editor_cannot_type_is_refused_at_its_block(tmp_path):
     with pytest.raises(CompileError) as e:
         load_files([path])
     assert str(e.value).startswith(f"{path}: main (FBD), network 1, block ADD (localId {blk.local_id}): ")
+
+
+def test_falling_edge_coil(tmp_path):
+    d = Diagram()
+    a = d.contact("A", 0, 0)
+    d.coil("Q", 0, 3, after=a, edge="falling")
+    sim = run_xml(tmp_path, [main(d)])
+    assert [get(scan(sim, A=v), "Q") for v in [True, True, False, False, True, False]] == \
+        [False, False, True, False, False, True]
+
+
+def test_coils_in_series_both_follow_the_rung(tmp_path):
+    d = Diagram()
+    a = d.contact("A", 0, 0)
+    q = d.coil("Q", 0, 2, after=a)
+    d.coil("Q2", 0, 3, after=q, negated=True)
+    sim = run_xml(tmp_path, [main(d)])
+    assert [(get(scan(sim, A=v), "Q"), get(sim, "Q2")) for v in (True, False)] == [(True, False), (False, True)]
+
+
+def test_in_out_variable_is_assigned_and_read(tmp_path):
+    d = Diagram("FBD")
+    add = d.block("ADD", 0, 1, [("IN1", d.invar("X", 0, 0)), ("IN2", d.invar("1", 1, 0))], ["OUT"])
+    y = d.inoutvar("Y", 0, 3, (add, "OUT"))
+    d.outvar("Z", 0, 5, y)
+    sim = run_xml(tmp_path, [main(d, ints=["X", "Y", "Z"])])
+    scan(sim, X=41)
+    assert (get(sim, "Y"), get(sim, "Z")) == (42, 42)
+
+
+def test_edge_on_a_block_input_pin(tmp_path):
+    d = Diagram("FBD")
+    blk = d.block("AND", 0, 1, [("IN1", d.invar("A", 0, 0)), ("IN2", d.invar("B", 1, 0))], ["OUT"],
+                  pins={"IN1": {"edge": "rising"}})
+    d.outvar("Q", 0, 3, (blk, "OUT"))
+    assert "R_TRIG1(CLK := A);" in st_of(tmp_path, [main(d)])
+    sim = run_xml(tmp_path, [main(d)])
+    assert [get(scan(sim, A=a, B=True), "Q") for a in (False, True, True, False, True)] == \
+        [False, True, False, False, True]
+
+
+def test_user_function_as_a_box(tmp_path):
+    twice = Pou("F_Twice", "function", "F_Twice := 2 * X;", {"inputVars": [("X", "INT", None)]}, return_type="INT")
+    d = Diagram("FBD")
+    blk = d.block("F_Twice", 0, 1, [("X", d.invar("K", 0, 0))], ["OUT"])
+    d.outvar("Y", 0, 3, (blk, "OUT"))
+    pou = main(d, ints=["K", "Y"])
+    assert f"  _TMP_F_Twice{blk.local_id}_OUT := F_Twice(K);\n" in st_of(tmp_path, [twice, pou])
+    sim = run_xml(tmp_path, [twice, pou])
+    assert get(scan(sim, K=21), "Y") == 42

@@ -133,9 +133,9 @@ def read_elements(body: etree._Element) -> list[Element]:
             e.name = (el.findtext("ppx:variable", default="", namespaces=NS) or "").strip()
         elif kind in ("inVariable", "outVariable", "inOutVariable"):
             e.name = (el.findtext("ppx:expression", default="", namespaces=NS) or "").strip()
-        elif kind in ("connector", "continuation", "label"):
+        elif kind in ("connector", "continuation"):
             e.name = el.get("name", "")
-        elif kind == "jump":
+        elif kind in ("jump", "label"):
             e.name = el.get("label", "")
         elif kind == "block":
             e.name = el.get("instanceName") or ""

@@ -119,11 +119,11 @@ class PouGenerator:
     def generate(self) -> None:
         for e in self.elements:
             if e.kind in ("jump", "label", "return"):
-                raise self.fail(e, "OpenPLC Editor writes no code for jumps, labels and returns in a "
+                raise self.fail(e, "OpenPLC Editor writes no code for jumps, labels and returns in an "
                                    f"{self.lang} body (it would silently leave this one out): use coils "
                                    "and contacts, or write this part in ST")
             if e.kind in ("step", "transition", "actionBlock", "selectionDivergence"):
-                raise self.fail(e, f"SFC elements cannot stand in a {self.lang} body")
+                raise self.fail(e, f"SFC elements cannot stand in an {self.lang} body")
         ordered = sorted((e for e in self.elements if e.exec_order > 0
                           and e.kind in ("outVariable", "inOutVariable", "block")), key=lambda e: e.exec_order)
         first = {id(e) for e in ordered}
