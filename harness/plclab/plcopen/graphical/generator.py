@@ -79,7 +79,9 @@ class PouGenerator:
         self.var_types = var_types                 # the POU's own declarations (and globals)
         self.declared = set(var_types)             # names of the interface (IsAlreadyDefined)
         self.elements = read_elements(body)
-        self.by_id = {e.local_id: e for e in self.elements}
+        self.by_id: dict[int, Element] = {}
+        for e in self.elements:            # a localId used twice: the first one, as the Editor finds it
+            self.by_id.setdefault(e.local_id, e)
         self.section_of = sections(self.elements)
         self.indent = "  "
         self.program: Tokens = []
