@@ -136,7 +136,8 @@ def project_source(tree: etree._ElementTree, file: str, others: Optional[Library
             for n, line in enumerate(text.split("\n"), 1):
                 out.add(line + "\n", Place(name, "ST", detail=f"line {n} of its body"))
         elif lang in GRAPHICAL:
-            gen = PouGenerator(p, lang, body, file, project_pous, {**globals_, **interface_types(p)}, library)
+            own = interface_types(p)
+            gen = PouGenerator(p, lang, body, file, project_pous, {**globals_, **own}, library, set(own))
             try:
                 gen.generate()
             except RecursionError:

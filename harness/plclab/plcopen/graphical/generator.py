@@ -68,7 +68,10 @@ class PouGenerator:
 
     def __init__(self, pou: etree._Element, lang: str, body: etree._Element, file: str,
                  project_pous: dict[str, etree._Element], var_types: dict[str, str],
-                 others: Optional[Library] = None):
+                 others: Optional[Library] = None, own: Optional[set[str]] = None):
+        """`var_types`: name -> type of what the body may name (its variables, the globals),
+        for the temporaries' types; `own`: the POU's own variable names (a trigger's name
+        skips those, as the Editor's IsAlreadyDefined does)."""
         self.name = pou.get("name", "")
         self.pou_type = pou.get("pouType", "")
         self.lang = lang
@@ -77,7 +80,7 @@ class PouGenerator:
         self.project_pous = project_pous
         self.others = others or Library()
         self.var_types = var_types                 # the POU's own declarations (and globals)
-        self.declared = set(var_types)             # names of the interface (IsAlreadyDefined)
+        self.declared = set(var_types if own is None else own)   # the interface's names, then the temporaries
         self.elements = read_elements(body)
         self.by_id: dict[int, Element] = {}
         for e in self.elements:            # a localId used twice: the first one, as the Editor finds it
