@@ -186,7 +186,7 @@ class Diagram:
 
     def inoutvar(self, expression: str, row: float, col: float, src: Source) -> Item:
         width = max(30, 7 * len(expression) + 10)
-        item = self._new("inOutVariable", row, col, negated="false")
+        item = self._new("inOutVariable", row, col)      # TC6: negatedIn / negatedOut, no negated
         item.el.set("width", str(width))
         self._wire_in(item.el, [src], (item.x, item.y + 10))
         out = sub(item.el, "connectionPointOut")
