@@ -21,9 +21,13 @@ from plclab.runtime.sim import Simulation
 from plclab.stands import get_stand, sources
 
 
-def test_stored_examples_are_what_examples_py_draws():
+def test_stored_examples_are_what_examples_py_draws_and_valid_tc6():
+    from plclab import plcopen
+
     for name, make in EXAMPLES.items():
-        assert (EXAMPLES_DIR / name).read_bytes() == make(), f"{name}: run examples.py to redraw it"
+        data = (EXAMPLES_DIR / name).read_bytes()
+        assert data == make(), f"{name}: run examples.py to redraw it"
+        plcopen.validate(plcopen.parse_xml(data, name), name)       # the TC6 model: raises on a bad file
 
 
 def stand_sources(stand: str) -> list[tuple[str, str]]:
