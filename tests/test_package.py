@@ -82,7 +82,7 @@ def test_installed_plclab_builds_runs_and_grades_from_another_folder(installed, 
 
     r = _run([plclab, "handout", "tur10", "-o", "lab"], cwd=tmp_path)
     assert r.returncode == 0, r.stderr
-    assert sorted(p.name for p in (tmp_path / "lab").iterdir()) == ["io-map.md", "tasks.md", "tur10.st"]
+    assert sorted(p.name for p in (tmp_path / "lab").iterdir()) == ["io-map.md", "tasks.md", "tur10-openplc", "tur10.st"]
 
     r = _run([plclab, "run", "mp9c", "--scenario", "lift", "--csv", "lift.csv"], cwd=tmp_path)
     assert r.returncode == 0, r.stdout + r.stderr
