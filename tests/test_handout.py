@@ -123,6 +123,20 @@ def test_a_file_not_written_by_handout_is_never_replaced(tmp_path):
     assert mine.read_text(encoding="utf-8") == "my notes\n"
 
 
+def test_the_students_saved_editor_project_is_never_replaced(tmp_path):
+    """Saved in OpenPLC Editor, the plc.xml loses the hand-out's marker: it is the student's
+    work now, and a new hand-out into the same folder is refused before anything is written."""
+    out = tmp_path / "lab"
+    write_handout("mp9c", str(out))
+    saved = out / "mp9c-openplc" / "plc.xml"
+    saved.write_text("<?xml version='1.0' encoding='utf-8'?>\n<project>my ladder</project>\n", encoding="utf-8")
+    before = {p: p.read_bytes() for p in out.rglob("*") if p.is_file()}
+    with pytest.raises(PlcLabError) as e:
+        write_handout("mp9c", str(out))
+    assert str(saved) in str(e.value) and "\n" not in str(e.value)
+    assert {p: p.read_bytes() for p in out.rglob("*") if p.is_file()} == before
+
+
 def test_a_symlink_in_place_of_a_handout_file_is_refused(tmp_path):
     out = tmp_path / "lab"
     out.mkdir()
