@@ -522,3 +522,16 @@ def test_user_function_as_a_box(tmp_path):
     assert f"  _TMP_F_Twice{blk.local_id}_OUT := F_Twice(K);\n" in st_of(tmp_path, [twice, pou])
     sim = run_xml(tmp_path, [twice, pou])
     assert get(scan(sim, K=21), "Y") == 42
+
+
+def test_a_continuation_without_its_connector_is_refused_even_unused(tmp_path):
+    d = Diagram()
+    a = d.contact("A", 0, 0)
+    d.coil("Q", 0, 3, after=a)
+    lost = d.continuation("NOWHERE", 2, 0)
+    path = tmp_path / "plc.xml"
+    path.write_bytes(project([main(d)], program="main"))
+    with pytest.raises(CompileError) as e:
+        load_files([path])
+    assert str(e.value) == (f"{path}: main (LD), rung 2, continuation NOWHERE (localId {lost.local_id}): "
+                            f"no connector named 'NOWHERE' for this continuation")

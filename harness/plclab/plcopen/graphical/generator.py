@@ -129,6 +129,11 @@ class PouGenerator:
                                    "and contacts, or write this part in ST")
             if e.kind in ("step", "transition", "actionBlock", "selectionDivergence"):
                 raise self.fail(e, f"SFC elements cannot stand in an {self.lang} body")
+            if e.kind == "continuation":     # the Editor checks every one, used or not
+                found = self.connectors.get(e.name, [])
+                if len(found) != 1:
+                    raise self.fail(e, f"more than one connector named '{e.name}' in this POU" if found else
+                                       f"no connector named '{e.name}' for this continuation")
         ordered = sorted((e for e in self.elements if e.exec_order > 0
                           and e.kind in ("outVariable", "inOutVariable", "block")), key=lambda e: e.exec_order)
         first = {id(e) for e in ordered}
