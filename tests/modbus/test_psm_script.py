@@ -155,3 +155,33 @@ def test_psm_script_cli_prints_the_script_for_openplc_s_fixed_port():
     assert set(STANDS) == {"mp9c", "tur10", "thermo", "cnc"}
     with pytest.raises(PlcLabError, match="unknown stand 'kuka'"):
         psm_script("kuka")
+
+
+def test_cnc_emergency_stop_on_the_console_face_is_pressed_only_while_the_operator_presses_it(tmp_path):
+    """SB3 is normally closed: released at power-up (the PLC reads %IX0.3 = 1, the face's coil
+    says 0 = not pressed); `plclab console cnc --press SB3` presses and releases it; --set
+    SB3=1 keeps it pressed (the PLC reads 0) until SB3=0."""
+    from plclab.modbus.console import run_console
+
+    proc, psm_port, console_port = start_script(tmp_path, "cnc")
+    where = ("127.0.0.1", console_port)
+    try:
+        openplc = OpenPlcPsm(psm_port)
+        sb3 = 3                                               # %IX0.3 and coil 3
+        bits, _ = poll(openplc, [0] * 400, [0] * 50)
+        assert bits[sb3] == 1                                 # released: the contact conducts
+        lines = run_console("cnc", where)
+        assert lines[0] == "switches: SB1=0 SB2=0 SA1=0 SB3=0"      # nothing pressed
+        lines = run_console("cnc", where, presses=["SB3=0.05"])
+        assert lines[0] == "switches: SB1=0 SB2=0 SA1=0 SB3=0"
+        assert poll(openplc, [0] * 400, [0] * 50)[0][sb3] == 1      # released again after the press
+        run_console("cnc", where, sets=["SB3=1"])
+        assert poll(openplc, [0] * 400, [0] * 50)[0][sb3] == 0      # held pressed: the contact is open
+        assert run_console("cnc", where)[0] == "switches: SB1=0 SB2=0 SA1=0 SB3=1"
+        run_console("cnc", where, sets=["SB3=0"])
+        assert poll(openplc, [0] * 400, [0] * 50)[0][sb3] == 1
+        stop_script(proc, openplc)
+    finally:
+        if proc.poll() is None:
+            proc.kill()
+            proc.wait(TIMEOUT)

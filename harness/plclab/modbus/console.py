@@ -5,7 +5,9 @@ own Modbus server cannot write %IX, so a switch or SB1 can only be operated thro
 This face serves a PlantHost (plclab.plants.host) with the stand's FACE table
 (plclab.plants.<stand>.FACE, documented in docs/openplc.md):
 
-  coils             0..  the console switches, in FACE.switches order (read and write)
+  coils             0..  the console switches, in FACE.switches order (read and write):
+                         what the operator did, 1 = on / pressed; for a normally closed
+                         button (the CNC stand's emergency stop SB3) the PLC then reads 0
   discrete inputs   0..  the lamps (PLC outputs) in FACE.lamps order, then PLANT_FAULT
   input registers   0..  the plant readouts in FACE.readouts order (raw 16-bit)
   holding registers none (exception 01)
@@ -62,7 +64,8 @@ class ConsoleMap(RegisterMap):
         _check(table, start, len(values), len(self.switches))
         for i, value in enumerate(values, start):
             self.coils[i] = 1 if value else 0
-            self.host.set_switch(self.switches[i], self.coils[i])
+            name = self.switches[i]        # the contact: a pressed normally closed button opens
+            self.host.set_switch(name, self.coils[i] ^ (name in self.host.normally_closed))
 
 
 def _check(table: Table, start: int, count: int, size: int) -> None:

@@ -43,6 +43,9 @@ class PlantHost:
                  report: Callable[[str], None] = _to_stderr, traceback: bool = False):
         self.plant = plant
         self.face = plant.FACE
+        # push buttons whose contact opens when pressed (an emergency stop): the console face
+        # shows what the operator did (1 = pressed), the plant gives the PLC the contact's level
+        self.normally_closed = frozenset(getattr(plant, "NORMALLY_CLOSED", ()))
         self.outputs = list(plant.outputs)
         self.period = plant.period
         self.clock = clock

@@ -133,15 +133,20 @@ class PartRun:
     drive: str = "step"
 
 
+SB1_HOLD_S = 0.005          # run_part's press of SB1
+
+
 def run_part(s: Session, frames: list[Frame], method: str = "evalfn", diagonal: bool = False,
              timeout: float = 600.0, drive: str = "step") -> PartRun:
     """Load the frames, press SB1 and run until the program ends (or `timeout` s) and the
-    pulse generator has spread its last counts."""
+    pulse generator has spread its last counts. Every move is recorded, from the first scan
+    that sees SB1 (the press is held SB1_HOLD_S while the recording runs)."""
     load_frames(s, frames, method, diagonal, drive)
     run = PartRun(frames, s.plant.step_mm, start=s.now, frames_start=s.now, method=method, drive=drive,
                   origin=tuple(s.plant.axes[a].steps for a in "XYZ"))
-    s.console.press("SB1", hold=0.005)
-    record_until(s, run, "ProgramEnd", timeout)
+    s.plant.press("SB1")                 # held 5 ms, recorded from the first scan that sees it
+    s.log("SB1 pressed (0.005 s)")
+    record_until(s, run, "ProgramEnd", timeout, release=("SB1", s.now + SB1_HOLD_S))
     before = [p for p in run.points if p[1] == 0]          # a measuring cycle's moves
     if before:
         run.frames_start, run.origin = before[-1][0], before[-1][2:]
@@ -165,9 +170,11 @@ def executed_frames(s: Session, frames: list[Frame], origin: tuple[int, ...] = (
     return out
 
 
-def record_until(s: Session, run: PartRun, flag: str, timeout: float) -> None:
+def record_until(s: Session, run: PartRun, flag: str, timeout: float,
+                 release: Optional[tuple[str, float]] = None) -> None:
     """Scan fine cycle by fine cycle until the global `flag` is TRUE, recording each move of
-    the table with the frame it belongs to."""
+    the table with the frame it belongs to; `release` (button, time s): release that push
+    button once the time is reached (a press held while recording)."""
     axes = [s.plant.axes[a] for a in "XYZ"]
     ax, ay, az = axes
     frame_at, frame_key = s.plc.resolve("Frame")          # resolved once: read every cycle
@@ -181,6 +188,9 @@ def record_until(s: Session, run: PartRun, flag: str, timeout: float) -> None:
     pending = s.plant.pulses_pending
     scans, ending = round(timeout / s.tick) + 1, False
     while True:
+        if release is not None and s.now >= release[1] - 1e-9:
+            s.plant.release(release[0])
+            release = None
         step(1)                             # the plant took the previous scan's steps first
         pos = (ax.steps, ay.steps, az.steps)
         if pos != last:
@@ -211,7 +221,7 @@ Y20
 X0
 Y0
 """
-CIRCLE = """(full circle R10 around (10, 0), then a half circle back by R)
+CIRCLE = """(full circle R10 around X10 Y0, then a half circle back by R)
 G21 G90 G17 F300
 G01 X20 Y0
 G03 X20 Y0 I-10 J0
