@@ -32,13 +32,25 @@ class BuildOutput:
     schema: Optional[Path]       # the XSD the XML was validated against; None: no schema here
 
 
-def build_outputs(stand: str, variant: str, xml: bool = True, xml_name: Optional[str] = None) -> BuildOutput:
-    """Make and check the bundle (and the XML project) of `variant` of `stand`."""
+def build_outputs(stand: str, variant: str, xml: bool = True, xml_name: Optional[str] = None,
+                  part: Optional[str] = None, method: str = "evalfn",
+                  tools: Optional[dict[int, float]] = None) -> BuildOutput:
+    """Make and check the bundle (and the XML project) of `variant` of `stand`. The cnc
+    stand's bundle is made for OpenPLC (plclab.cnc.openplc: its fine cycle, and with `part`
+    a G-code part program in its frame table, run with `method`, tool table `tools`)."""
     s = get_stand(stand)
     s.variant(variant)                       # an unknown variant is one clear error
+    if part is not None and stand != "cnc":
+        raise PlcLabError(f"build: --part is for the cnc stand (a G-code part program), not {stand}")
     name = f"{stand}_{variant}"
     check_sources(sources(s, variant))
     text = bundle(s, variant)
+    if stand == "cnc":
+        from plclab.cnc.gcode import parse_file
+        from plclab.cnc.openplc import STEP_MM, openplc_bundle
+
+        frames = parse_file(part, tools, STEP_MM).frames if part is not None else None
+        text = openplc_bundle(text, frames, method, part=part or "")
     checked = check_sources([(f"{name}.st", text)])
     if not xml:
         return BuildOutput(name, text, None, None)
@@ -66,10 +78,13 @@ def xml_project(text: str, name: str, where: str,
     return data, schema
 
 
-def write_build(stand: str, variant: str, st_path: str | None, xml_path: str | None) -> list[Path]:
+def write_build(stand: str, variant: str, st_path: str | None, xml_path: str | None,
+                part: Optional[str] = None, method: str = "evalfn",
+                tools: Optional[dict[int, float]] = None) -> list[Path]:
     """Write `<stand>_<variant>.st` (or `st_path`) and, if `xml_path` is given, the PLCopen XML
     project; returns the paths written. Raises PlcLabError / CompileError, writing nothing."""
-    out = build_outputs(stand, variant, xml=xml_path is not None, xml_name=xml_path)
+    out = build_outputs(stand, variant, xml=xml_path is not None, xml_name=xml_path, part=part, method=method,
+                        tools=tools)
     targets = [(Path(st_path) if st_path else Path.cwd() / f"{out.name}.st", out.st_text.encode("utf-8"))]
     if xml_path is not None:
         targets.append((Path(xml_path), out.xml_bytes))

@@ -222,7 +222,15 @@ def _cmd_build(args: argparse.Namespace) -> int:
         from plclab.stands import get_stand
         print(get_stand(args.stand).outline(args.variant), end="")
         return 0
-    for path in write_build(args.stand, args.variant, args.output, args.xml):
+    from plclab.cnc.gcode import GcodeError
+
+    try:
+        paths = write_build(args.stand, args.variant, args.output, args.xml, part=args.part, method=args.method,
+                            tools=dict(args.tool or []))
+    except GcodeError as e:              # already `file:line:col: error: ...`; nothing written
+        print(e, file=sys.stderr)
+        return 1
+    for path in paths:
         print(f"wrote {path}")
     return 0
 
@@ -356,6 +364,10 @@ def build_parser() -> argparse.ArgumentParser:
     c.add_argument("--xml", metavar="FILE.xml", help="also write the PLCopen XML project")
     c.add_argument("--outline", action="store_true",
                    help="write nothing; print a task reference's changes to the starting program as a diff")
+    c.add_argument("--part", metavar="PART.nc", help="cnc: a G-code part program in the frame table (OpenPLC)")
+    c.add_argument("--method", choices=("evalfn", "dda", "integration"), default="evalfn",
+                   help="cnc --part: the interpolator (default evalfn)")
+    c.add_argument("--tool", type=_tool, action="append", metavar="DN=R", help="cnc --part: the tool-radius table")
     c.set_defaults(func=_cmd_build)
 
     c = sub.add_parser("handout", help="the student's starting program, I/O map and task sheet (no solution)")

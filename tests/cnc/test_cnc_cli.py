@@ -29,7 +29,7 @@ def test_cnc_bad_part_program_is_one_line_and_nothing_runs(tmp_path, capsys):
     err = capsys.readouterr().err
     assert rc == 1
     assert err.strip() == f"{part}:2:11: error: unknown word 'W3' (supported: G00 G01 G02 G03 (I/J or R) " \
-                          f"G17 G20 G21 G40 G41 G42 D G90 G91 F X Y Z N; S M T O ignored)"
+                          f"G17 G20 G21 G40 G41 G42 D G90 G91 F X Y Z N M02 M30; S T O and other M words ignored)"
     assert not csv.exists()
 
 

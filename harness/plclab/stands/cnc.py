@@ -85,33 +85,49 @@ def _setup(s: Session) -> None:
 DRIVES = ("step", "pulse")     # step/direction bits on %QX, or pulse counts per cycle on %QW
 
 
-def load_frames(s: Session, frames: list[Frame], method: str = "evalfn", diagonal: bool = False,
-                drive: str = "step") -> None:
-    """Write the frame table into the PLC (GVL_CNC), in steps of the drives, and the drive
-    interface the program uses (GVL_CNC.PulseDrive)."""
+FRAME_ARRAYS = ("FrameKind", "FrameX", "FrameY", "FrameZ", "FrameI", "FrameJ", "FrameFeed", "FrameComp",
+                "FrameRadius")
+
+
+def frame_table(frames: list[Frame], step_mm: float, method: str = "evalfn", diagonal: bool = False,
+                drive: str = "step") -> dict[str, object]:
+    """The PLC's frame table (GVL_CNC) for `frames`, in steps of `step_mm`: each of FRAME_ARRAYS
+    as the list of its first len(frames) elements, and FrameCount, Method, Diagonal and
+    PulseDrive. One source for load_frames (the harness writes it) and for the OpenPLC bundle
+    (plclab.cnc.openplc: its initial values)."""
     if len(frames) > MAX_FRAMES:
         raise ScenarioFailure(f"{len(frames)} frames: the frame table holds {MAX_FRAMES}")
     if method not in METHODS:
         raise ScenarioFailure(f"unknown method {method!r} (one of {', '.join(METHODS)})")
     if drive not in DRIVES:
         raise ScenarioFailure(f"unknown drive {drive!r} (one of {', '.join(DRIVES)})")
-    h = s.plant.step_mm
-    write = s.plc.write
-    for k, f in enumerate(frames, start=1):
-        write(f"FrameKind[{k}]", f.kind)
+    h = step_mm
+    table: dict[str, list[int]] = {name: [] for name in FRAME_ARRAYS}
+    for f in frames:
+        table["FrameKind"].append(f.kind)
         for axis, v in zip("XYZ", f.end):
-            write(f"Frame{axis}[{k}]", round(v / h))
-        if f.is_arc:
-            cx, cy = f.centre
-            write(f"FrameI[{k}]", round(cx / h) - round(f.start[0] / h))
-            write(f"FrameJ[{k}]", round(cy / h) - round(f.start[1] / h))
-        write(f"FrameFeed[{k}]", round(f.feed / 60.0 / h))
-        write(f"FrameComp[{k}]", f.comp)
-        write(f"FrameRadius[{k}]", round(f.tool_radius / h))
-    write("FrameCount", len(frames))
-    write("Method", METHODS[method])
-    write("Diagonal", bool(diagonal))
-    write("PulseDrive", drive == "pulse")
+            table[f"Frame{axis}"].append(round(v / h))
+        cx, cy = f.centre
+        table["FrameI"].append(round(cx / h) - round(f.start[0] / h) if f.is_arc else 0)
+        table["FrameJ"].append(round(cy / h) - round(f.start[1] / h) if f.is_arc else 0)
+        table["FrameFeed"].append(round(f.feed / 60.0 / h))
+        table["FrameComp"].append(f.comp)
+        table["FrameRadius"].append(round(f.tool_radius / h))
+    return {**table, "FrameCount": len(frames), "Method": METHODS[method], "Diagonal": bool(diagonal),
+            "PulseDrive": drive == "pulse"}
+
+
+def load_frames(s: Session, frames: list[Frame], method: str = "evalfn", diagonal: bool = False,
+                drive: str = "step") -> None:
+    """Write the frame table into the PLC (GVL_CNC), in steps of the drives, and the drive
+    interface the program uses (GVL_CNC.PulseDrive)."""
+    write = s.plc.write
+    for name, value in frame_table(frames, s.plant.step_mm, method, diagonal, drive).items():
+        if isinstance(value, list):
+            for k, v in enumerate(value, start=1):
+                write(f"{name}[{k}]", v)
+        else:
+            write(name, value)
     s.log(f"{len(frames)} frames loaded ({method})")
 
 
