@@ -226,7 +226,7 @@ def _cmd_build(args: argparse.Namespace) -> int:
 
     try:
         paths = write_build(args.stand, args.variant, args.output, args.xml, part=args.part, method=args.method,
-                            tools=dict(args.tool or []))
+                            tools=dict(args.tool or []), report=lambda line: print(line, file=sys.stderr))
     except GcodeError as e:              # already `file:line:col: error: ...`; nothing written
         print(e, file=sys.stderr)
         return 1

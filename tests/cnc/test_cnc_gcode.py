@@ -138,7 +138,10 @@ def test_the_program_ends_at_m30_or_m02_and_blocks_after_it_do_not_run(end):
     assert [f.end for f in prog.frames] == [(10.0, 0.0, 0.0), (20.0, 0.0, 0.0)]   # the end block's own move runs
     assert "p.nc:5: warning: blocks after the program end (line 2) are not run" in prog.notes
     assert not any("M words ignored" in n for n in prog.notes)
-    quiet = parse("G01 X10 F100\nM30\n%\n", "p.nc")
+    after = parse("G01 X10 F100\nM30\n(unread (nested\nG91.1 X5\n", "p.nc")      # not read after the end
+    assert len(after.frames) == 1 and after.notes == ["p.nc:3: warning: blocks after the program end (line 2) "
+                                                      "are not run"]
+    quiet = parse("G01 X10 F100\nM30\n%\n(a comment)\n", "p.nc")
     assert len(quiet.frames) == 1 and quiet.notes == []             # nothing after the end: nothing said
 
 

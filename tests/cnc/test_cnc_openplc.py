@@ -71,6 +71,11 @@ def test_build_part_cli_writes_the_bundle_and_refuses_bad_input_in_one_line(buil
     assert main(["build", "cnc", "full", "--part", str(part), "-o", str(out), "--xml", str(tmp_path / "c.xml")]) == 0
     assert out.read_text(encoding="utf-8") == text
     assert f"Part program {part}: 4 frames in the frame table (GVL_CNC), method evalfn" in text
+    assert capsys.readouterr().err == ""
+    tail = tmp_path / "tail.nc"
+    tail.write_text(PART + "G00 X50\n", encoding="utf-8")               # a block after M30: a warning
+    assert main(["build", "cnc", "full", "--part", str(tail), "-o", str(tmp_path / "tail.st")]) == 0
+    assert capsys.readouterr().err == f"{tail}:8: warning: blocks after the program end (line 7) are not run\n"
     bad = tmp_path / "bad.nc"
     bad.write_text("G01 X1 F100\nG91.1 X2\n", encoding="utf-8")
     capsys.readouterr()

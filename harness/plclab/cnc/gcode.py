@@ -110,13 +110,19 @@ def parse(text: str, filename: str = "<part>", tools: Optional[dict[int, float]]
     ignored: set[str] = set()
     ended = 0                          # the line of M02/M30: the program ends there
     for lineno, raw in enumerate(text.splitlines(), start=1):
+        if ended:                      # not read any more (LinuxCNC ignores it): said once if not empty
+            try:
+                rest = _strip_comments(raw, filename, lineno).strip()
+            except GcodeError:
+                rest = raw.strip()
+            if rest and rest != "%":
+                prog.notes.append(f"{filename}:{lineno}: warning: blocks after the program end (line {ended}) "
+                                  f"are not run")
+                break
+            continue
         line = _strip_comments(raw, filename, lineno)
         if not line.strip() or line.strip() == "%":
             continue
-        if ended:
-            prog.notes.append(f"{filename}:{lineno}: warning: blocks after the program end (line {ended}) "
-                              f"are not run")
-            break
         words: dict[str, tuple[float, int]] = {}
         gcodes: list[tuple[int, int]] = []
         groups: dict[tuple[str, int], str] = {}         # (G or M, modal group) -> code in this block
