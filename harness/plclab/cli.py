@@ -187,8 +187,12 @@ def _cmd_plant(args: argparse.Namespace) -> int:
 
     psm = _host_port(args.psm, "--psm")
     console = None if args.console == "none" else _host_port(args.console, "--console")
+    params = {}
+    if args.stand == "cnc":                  # as the PSM script: in step with `plclab build cnc`
+        from plclab.cnc.openplc import plant_params
+        params = plant_params()
     return run_plant(args.stand, psm, console, traceback=bool(os.environ.get("PLCLAB_DEBUG")),
-                     out=lambda line: print(line, flush=True))
+                     out=lambda line: print(line, flush=True), params=params)
 
 
 def _cmd_psm_script(args: argparse.Namespace) -> int:
@@ -202,7 +206,22 @@ def _cmd_console(args: argparse.Namespace) -> int:
     from plclab.modbus.console import CONSOLE_PORT, run_console
 
     where = _host_port(args.where, "the console face") if args.where else ("127.0.0.1", CONSOLE_PORT)
-    for line in run_console(args.stand, where, sets=args.set or (), presses=args.press or ()):
+    tape = None
+    if args.part:
+        from plclab.cnc.gcode import GcodeError
+        from plclab.cnc.openplc import part_tape
+
+        if args.stand != "cnc":
+            raise PlcLabError(f"console: --part is for the cnc stand (a G-code part program), not {args.stand}")
+        try:
+            method, frames, notes = part_tape(args.part, args.method, dict(args.tool or []))
+        except GcodeError as e:          # already `file:line:col: error: ...`; nothing sent
+            print(e, file=sys.stderr)
+            return 1
+        for note in notes:
+            print(note, file=sys.stderr)
+        tape = (method, frames)
+    for line in run_console(args.stand, where, sets=args.set or (), presses=args.press or (), tape=tape):
         print(line)
     return 0
 
@@ -469,6 +488,10 @@ def build_parser() -> argparse.ArgumentParser:
     c.add_argument("--set", nargs="+", metavar="NAME=V", help="set switches, e.g. SA5=1 SA6=0")
     c.add_argument("--press", nargs="+", metavar="NAME[=SECONDS]",
                    help="press and release, e.g. SB1 (0.3 s) or SA1_FWD=1.5")
+    c.add_argument("--part", metavar="PART.nc", help="cnc: load a G-code part program through the tape reader")
+    c.add_argument("--method", choices=("evalfn", "dda", "integration"), default="evalfn",
+                   help="cnc --part: the interpolator (default evalfn)")
+    c.add_argument("--tool", type=_tool, action="append", metavar="DN=R", help="cnc --part: the tool-radius table")
     c.set_defaults(func=_cmd_console)
 
     c = sub.add_parser("cnc", help="run a G-code part program on the CNC stand; contour error per frame")

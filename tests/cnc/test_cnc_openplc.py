@@ -9,7 +9,7 @@ import pytest
 from plclab.build import build_outputs
 from plclab.cli import main
 from plclab.cnc.gcode import parse
-from plclab.cnc.openplc import OPENPLC_FINE_MS, plant_params
+from plclab.cnc.openplc import OPENPLC_FINE_MS, part_tape, plant_params
 from plclab.cnc.toolpath import check_blocks
 from plclab.modbus.psm import psm_script
 from plclab.stands import cnc
@@ -85,4 +85,63 @@ def test_build_part_cli_writes_the_bundle_and_refuses_bad_input_in_one_line(buil
     assert not (tmp_path / "bad.st").exists()
     assert main(["build", "mp9c", "full", "--part", str(part), "-o", str(tmp_path / "m.st")]) == 1
     assert capsys.readouterr().err == "plclab: error: build: --part is for the cnc stand (a G-code part " \
+                                      "program), not mp9c\n"
+
+
+# ------------------------------------------------------------------ the tape reader (console --part)
+
+def test_a_tape_is_stored_while_no_program_runs_and_sb1_runs_it(built):
+    """The shipped program stores the frames the plant's tape reader shows, one a scan, only
+    while no program runs; then SB1 runs them, within every frame's bound."""
+    part, _text = built
+    method, frames, notes = part_tape(str(part), "dda")
+    assert method == 1 and notes == []
+    s = cnc.session()
+    s.plant.load_tape(method, frames)
+    s.run(0.02)
+    assert s.plant.readouts()[-1] == len(frames) == s.plc.read("FrameCount") == 4
+    table = cnc.frame_table(parse(PART).frames, s.plant.step_mm, "dda")
+    for name in cnc.FRAME_ARRAYS:
+        assert [s.plc.read(f"{name}[{k}]") for k in range(1, 5)] == table[name], name
+    assert s.plc.read("Method") == 1
+    run = cnc.PartRun(parse(PART).frames, s.plant.step_mm, start=s.now, method="dda")
+    s.plant.press("SB1")
+    cnc.record_until(s, run, "KM1", timeout=1.0, release=("SB1", s.now + 0.005))     # running
+    s.plant.load_tape(0, frames[:2])             # a second tape while the part runs: it waits
+    cnc.record_until(s, run, "ProgramEnd", timeout=30.0)
+    assert s.plc.read("ProgramEnd") and run.points[-1][2:] == (0, 0, 0)
+    for block in check_blocks(run.frames, run.points, s.plant.step_mm, "dda", run.start):
+        assert block.ok, block.row()
+    assert s.plant.readouts()[-1] == 0                       # the second tape waited
+    s.run(0.02)
+    assert s.plant.readouts()[-1] == 2 and s.plc.read("FrameCount") == 2 and s.plc.read("Method") == 0
+
+
+@pytest.mark.parametrize("method, frames, message", [
+    (0, [], "a tape holds 1..200 frames"),
+    (3, [(1, 0, 0, 0, 0, 0, 500, 0, 0)], "tape method 3"),
+    (0, [(7, 0, 0, 0, 0, 0, 500, 0, 0)], "tape frame 1: kind 7"),
+    (0, [(1, 0, 0, 0, 0, 0, 500, 0)], "tape frame 1: 9 values"),
+])
+def test_the_tape_reader_refuses_a_bad_tape_in_one_line(method, frames, message):
+    from plclab.plants.base import PlantError
+    from plclab.plants.cnc import CncTable
+
+    with pytest.raises(PlantError, match=message):
+        CncTable().load_tape(method, frames)
+
+
+def test_console_part_refuses_bad_input_before_sending_anything(tmp_path, capsys):
+    bad = tmp_path / "bad.nc"
+    bad.write_text("G01 X1 F100\nG00 G01 X2\n", encoding="utf-8")
+    assert main(["console", "cnc", "127.0.0.1:1", "--part", str(bad)]) == 1     # port 1: never reached
+    assert capsys.readouterr().err == f"{bad}:2:5: error: G00 and G01 in one block: both of modal group 1 " \
+                                      f"(motion), one of each group per block\n"
+    fast = tmp_path / "fast.nc"
+    fast.write_text("G01 X1 F30000\n", encoding="utf-8")            # 50,000 steps/s: not a 16-bit word
+    assert main(["console", "cnc", "127.0.0.1:1", "--part", str(fast)]) == 1
+    assert capsys.readouterr().err == f"plclab: error: {fast}:1: FrameFeed of 50000 steps does not fit the " \
+                                      f"tape reader's 16-bit words (-32768..32767)\n"
+    assert main(["console", "mp9c", "127.0.0.1:1", "--part", str(bad)]) == 1
+    assert capsys.readouterr().err == "plclab: error: console: --part is for the cnc stand (a G-code part " \
                                       "program), not mp9c\n"

@@ -92,3 +92,26 @@ def _expect(text: str, pattern: str, value: str, what: str) -> None:
     if found != [value] and [float(v) for v in found] != [float(value)]:
         raise PlcLabError(f"build: the cnc program's {what} is {found or 'missing'}, the OpenPLC bundle "
                           f"expects {value}")
+
+
+def part_tape(part: str, method: str = "evalfn", tools: Optional[dict[int, float]] = None
+              ) -> tuple[int, list[tuple[int, ...]], list[str]]:
+    """A part program for the stand's tape reader (`plclab console cnc --part`): the method's
+    number, per frame the frame table's nine values in steps (plclab.plants.cnc: TAPE_WORDS
+    order), and the part's notes. The same table `plclab cnc` and the bundle's --part load."""
+    from plclab.cnc.gcode import parse_file
+    from plclab.stands.cnc import FRAME_ARRAYS, MAX_FRAMES, frame_table
+
+    program = parse_file(part, tools, STEP_MM)
+    if not program.frames:
+        raise PlcLabError(f"{part}: no motion in the part program")
+    if len(program.frames) > MAX_FRAMES:
+        raise PlcLabError(f"{part}: {len(program.frames)} frames: the frame table holds {MAX_FRAMES}")
+    table = frame_table(program.frames, STEP_MM, method)
+    frames = list(zip(*(table[name] for name in FRAME_ARRAYS)))
+    for f, values in zip(program.frames, frames):
+        for name, v in zip(FRAME_ARRAYS, values):
+            if not -0x8000 <= v <= 0x7FFF:
+                raise PlcLabError(f"{part}:{f.line}: {name} of {v} steps does not fit the tape reader's "
+                                  f"16-bit words (-32768..32767)")
+    return int(table["Method"]), frames, list(program.notes)

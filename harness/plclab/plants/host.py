@@ -107,6 +107,14 @@ class PlantHost:
                 except Exception as exc:  # noqa: BLE001 - the face only sends FACE names
                     self._freeze(exc)
 
+    def load_tape(self, method: int, frames: list[tuple[int, ...]]) -> None:
+        """Put a part program on the plant's tape reader (FACE.tape); a bad tape raises the
+        plant's PlantError (a ValueError), a failed plant a ValueError too: nothing is loaded."""
+        with self._lock:
+            if self.fault is not None:
+                raise ValueError(f"the plant has failed ({self.fault})")
+            self.plant.load_tape(method, frames)
+
     def lamps(self) -> list[int]:
         """The FACE lamps (PLC outputs of the last exchange), then the plant fault lamp."""
         with self._lock:
