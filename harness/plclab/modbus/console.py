@@ -80,7 +80,6 @@ class ConsoleMap(RegisterMap):
             name = self.switches[i]        # the contact: a pressed normally closed button opens
             self.host.set_switch(name, self.coils[i] ^ (name in self.host.normally_closed))
 
-
     def _write_tape(self, start: int, values: tuple[int, ...]) -> None:
         """Tape registers; writing register 0 (the frame count) loads the tape onto the
         reader, refused whole (exception 03) if the plant refuses it."""
@@ -88,12 +87,11 @@ class ConsoleMap(RegisterMap):
         tape = list(self.tape)
         tape[start:start + len(values)] = [v & 0xFFFF for v in values]
         if start == 0:
-            count, method = tape[0], tape[1]
-            fields = (len(tape) - 2) // max(1, self.host.face.tape_fields)
-            if not 1 <= count <= fields:
+            count, method, n = tape[0], tape[1], self.host.face.tape_fields
+            most = (len(tape) - 2) // n
+            if not 1 <= count <= most:
                 raise ModbusException(ExceptionCode.ILLEGAL_DATA_VALUE,
-                                      f"tape: frame count {count} outside 1..{fields}")
-            n = self.host.face.tape_fields
+                                      f"tape: frame count {count} outside 1..{most}")
             words = [v - 0x10000 if v & 0x8000 else v for v in tape[2:2 + n * count]]
             try:
                 self.host.load_tape(method, [tuple(words[k:k + n]) for k in range(0, len(words), n)])
