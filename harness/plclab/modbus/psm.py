@@ -522,6 +522,8 @@ def psm_script(stand: str, *, psm: tuple[str, int] = (DEFAULT_HOST, PSM_PORT),
               ("input registers", [f"{name} ({unit})" for name, unit in face.readouts]))
     face_lines = [textwrap.fill(f"{table} 0..: " + ", ".join(names), 92, initial_indent="#   ",
                                 subsequent_indent="#       ") for table, names in tables]
+    if face.tape:
+        face_lines.append(f"#   holding registers 0..{face.tape - 1}: the tape reader (plclab console {stand} --part)")
     plant: dict[str, Any] = {}
     if stand == "cnc":                       # in step with `plclab build cnc`'s fine cycle
         from plclab.cnc.openplc import plant_params
