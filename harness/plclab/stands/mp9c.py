@@ -15,7 +15,7 @@ from __future__ import annotations
 from typing import Callable, Optional
 
 from plclab.plants.mp9c import FACE
-from plclab.scenario import ScenarioFailure, Session
+from plclab.scenario import ABSENT, ScenarioFailure, Session
 from plclab.stands import Stand, Task, Variant, gvl_labels
 from plclab.stands.base import Fault, FaultParam, StandSpec
 
@@ -109,7 +109,7 @@ def timeline(s: Session) -> list[str]:
         frame = str(tr.value_at(FRAME_PTR, t)) if auto and FRAME_PTR in tr else "-"   # ABSENT if the program lacks it
         text = "; ".join(acts.get(round(t, 6), []))
         if not text and last is not None and auto and valves != last[0]:
-            text = f"frame {frame} starts"
+            text = "a frame starts" if frame == ABSENT else f"frame {frame} starts"
         key = (valves, sensors, frame, hl1)
         if not text and key == last:
             continue
