@@ -129,6 +129,12 @@ def _broken(tmp_path: Path, stand: str, program: str, file: str, old: str, new: 
     # a regulator that takes over from 0 instead of the actuator's command: a bump
     ("thermo", "blocks", "FB_PositionPI.st", "IPart := Out - Gain * Dev;", "IPart := 0.0;",
      "modes", "jumped by"),
+    # the emergency stop not read: the table goes on
+    ("cnc", "axes", "P_CncAxes.st", "IF NOT SB3 OR ((SQ1", "IF FALSE AND ((SQ1", "estop", "HL2 not lit or KM1 still closed"),
+    # Task 4 wrong: the evaluation function updated with the wrong sign leaves a sloped line
+    # (the blank lies turned: its rectangle's sides are sloped)
+    ("cnc", "split", "FB_CncLinearSteps.st", "Fn[Minor] := Fn[Minor] - Span[Minor];",
+     "Fn[Minor] := Fn[Minor] + Span[Minor];", "blank", "contour error"),
 ])
 def test_a_broken_program_fails_the_scenario_that_checks_it(tmp_path, stand, program, file, old, new,
                                                             scenario, message):
