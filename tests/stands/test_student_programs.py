@@ -113,6 +113,9 @@ def _broken(tmp_path: Path, stand: str, program: str, file: str, old: str, new: 
      "            LongWait[Taught] := I07;\n            Taught := Taught + 1;\n"
      "            OutCode[Taught] := OutCode[Taught - 1];\n            InCode[Taught] := InCode[Taught - 1];\n",
      "bounce", "after step press 2"),
+    # SB1 does not stop continuous execution
+    ("mp9c", "onefile", "robot.st", "        IF PressEv AND NOT Stepping THEN", "        IF FALSE THEN",
+     "demo", "a frame started after SB1 stopped"),
     # the taught frames not retained: lost at the power cycle
     ("mp9c", "blocks", "P_Mp9cBlocks.st", "VAR RETAIN\n    Memory", "VAR\n    Memory",
      "retain", "HL1 on after the restart"),
