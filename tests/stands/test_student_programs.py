@@ -144,3 +144,24 @@ def test_a_broken_program_fails_the_scenario_that_checks_it(tmp_path, stand, pro
     files = _broken(tmp_path, stand, program, file, old, new)
     r = run(stand, PROGRAMS / stand / program, scenario, tmp_path, files)
     assert r.failure is not None and message in r.failure, r.failure
+
+
+def test_plclab_run_on_such_a_program_names_and_marks_what_it_lacks(tmp_path, capsys):
+    """The command a student types: timeline, the one line naming the missing observables,
+    and CSV / VCD / plot that carry them as "absent"."""
+    from plclab.cli import main
+
+    files = program_files("tur10", PROGRAMS / "tur10" / "twotasks")
+    csv, vcd, png = tmp_path / "d.csv", tmp_path / "d.vcd", tmp_path / "d.png"
+    code = main(["run", "tur10", "--program", *files, "--scenario", "demo", "--csv", str(csv), "--vcd", str(vcd),
+                 "--plot", str(png)])
+    out = capsys.readouterr().out
+    assert code == 0, out
+    assert "scenario demo passed" in out
+    assert 'not in this program, shown as "absent" in the timeline and traces: FramePtr (Main.Robot.Sequencer.Ptr)' in out
+    assert "(absent: the program has no InFrame, FramePtr)" in out          # no positioning table invented
+    assert '0,FramePtr,"absent"' in csv.read_text().splitlines()
+    assert "sabsent" in vcd.read_text()
+    assert png.stat().st_size > 0
+    # what the program does have of the stand's globals is recorded as usual
+    assert any(row.startswith("0,Position1,") and "absent" not in row for row in csv.read_text().splitlines())
