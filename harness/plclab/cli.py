@@ -333,6 +333,8 @@ def _cmd_run(args: argparse.Namespace) -> int:
     r = run_scenario(args.stand, args.variant, args.scenario, args.csv, args.vcd, args.plot,
                      program=args.program)
     print("\n".join(r.timeline))
+    if r.absent_note:
+        print(r.absent_note)
     for f in r.files:
         print(f"wrote {f}")
     if r.session.fault is not None:
