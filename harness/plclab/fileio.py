@@ -125,6 +125,39 @@ def check_output(path: PathLike, parents: bool = True) -> Path:
     return p
 
 
+PROBE_BYTES = 256 * 1024     # check_writable: a folder that cannot take this much is full
+
+
+def check_writable(directory: PathLike) -> Path:
+    """Before a long computation whose results go into `directory`: create it if missing (only
+    directories, as the writers would) and write, sync and remove a temporary file of
+    PROBE_BYTES there, so a read-only or full folder is refused (one line) now, not after the
+    work. Nothing but our own temporary file is created or removed."""
+    d = Path(directory)
+    check_output(d / ".probe")
+    kind = existing_kind(d)
+    if kind is not None:
+        raise OutputError(f"{d}: cannot write: it is {kind}, not a directory")
+    tmp = temporary_name(d / ".probe")
+    fd = -1
+    try:
+        d.mkdir(parents=True, exist_ok=True)
+        fd = os.open(tmp, os.O_WRONLY | os.O_CREAT | os.O_EXCL | getattr(os, "O_CLOEXEC", 0), 0o600)
+        data = bytes(PROBE_BYTES)
+        written = 0
+        while written < len(data):
+            written += os.write(fd, data[written:])
+        os.fsync(fd)
+    except OSError as exc:
+        raise OutputError(f"{d}: cannot write: {_reason(exc)}") from None
+    finally:
+        if fd >= 0:
+            os.close(fd)
+            with contextlib.suppress(OSError):
+                os.unlink(tmp)
+    return d
+
+
 def temporary_name(path: PathLike) -> Path:
     """A fresh name for the temporary file of `path` (same directory, hidden, tagged with
     this process's id so a later start can tell a stale one from a live one)."""

@@ -18,6 +18,17 @@ NOT_CHECKED = "NOT CHECKED"
 RESULT_WIDTH = len(NOT_CHECKED)   # the widest result
 
 
+MAX_QUOTE = 2000     # a message quotes at most this many characters of what it shows
+
+
+def clip(text: str, limit: int = MAX_QUOTE) -> str:
+    """`text` cut to `limit` characters, saying how much was left out: a message never
+    repeats a student's 1 MB identifier whole."""
+    if len(text) <= limit:
+        return text
+    return f"{text[:limit]}... ({len(text) - limit} more characters not shown)"
+
+
 @dataclass(frozen=True)
 class Row:
     """The verdict on one requirement."""
@@ -82,7 +93,7 @@ class GradeReport:
         out = [self.title, f"{self.noun}: " + " ".join(self.files)]
         if self.errors:
             out.append(self.unreadable)
-            out.extend(self.errors)
+            out.extend(clip(e) for e in self.errors)
             out.append("FAIL")
             return "\n".join(out) + "\n"
         text_width = WIDTH - ID_WIDTH - RESULT_WIDTH - 4
@@ -96,7 +107,7 @@ class GradeReport:
             out.extend(indent + line for line in lines[1:])
             if not r.passed:
                 detail_width = WIDTH - len(indent) - 10
-                for label, value in (("expected", r.expected), ("observed", r.observed)):
+                for label, value in (("expected", clip(r.expected)), ("observed", clip(r.observed))):
                     if value:
                         wrapped = textwrap.wrap(value, detail_width) or [""]
                         out.append(f"{indent}{label}: {wrapped[0]}")
