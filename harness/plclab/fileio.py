@@ -134,10 +134,7 @@ def check_writable(directory: PathLike) -> Path:
     PROBE_BYTES there, so a read-only or full folder is refused (one line) now, not after the
     work. Nothing but our own temporary file is created or removed."""
     d = Path(directory)
-    check_output(d / ".probe")
-    kind = existing_kind(d)
-    if kind is not None:
-        raise OutputError(f"{d}: cannot write: it is {kind}, not a directory")
+    check_output(d / ".probe")                 # no file where a directory of the path must be
     tmp = temporary_name(d / ".probe")
     fd = -1
     try:
