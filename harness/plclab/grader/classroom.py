@@ -531,7 +531,7 @@ def _run_on_cluster(address: str, stand: str, task: str, submissions: list[Submi
     except ImportError:                             # pragma: no cover - dask is a dependency
         raise PlcLabError("grade-class: --scheduler needs dask.distributed (pip install distributed)") from None
     try:
-        client = Client(address, timeout="10s", set_as_default=False)
+        client = Client(address, timeout="5s", set_as_default=False)
     except (OSError, TimeoutError, ValueError) as e:
         raise PlcLabError(f"grade-class: --scheduler {address}: cannot reach the Dask scheduler ({e})") from None
     futures = {}
@@ -552,7 +552,7 @@ def _run_on_cluster(address: str, stand: str, task: str, submissions: list[Submi
                                    key=f"plclab-grade-{n}-{uuid.uuid4().hex}", pure=False)
             futures[future] = (n, sub)
             started[n] = time.monotonic()
-        for future in as_completed(list(futures)):
+        for future in as_completed(list(futures), loop=client.loop):
             n, sub = futures[future]
             try:
                 kind, value, traces = future.result()
