@@ -70,7 +70,7 @@ def test_on_a_worker_each_student_keeps_the_time_limit(tmp_path):
 
 def test_on_a_worker_each_student_keeps_the_memory_limit():
     task1 = sources(get_stand("mp9c"), "task1")
-    kind, value, _ = grade_on_worker("mp9c", "task1", task1, 120.0, 64)   # less than Python and the grader need
+    kind, value, _ = grade_on_worker("mp9c", "task1", task1, 120.0, 4)    # less than one grading needs
     assert (kind, value) == ("memory", None)
 
 

@@ -12,8 +12,18 @@ graded" row and nothing else. The results go to three files an instructor and th
     junit.xml     one <testsuite> per student, one <testcase> per requirement (CI, LMS import)
     report.html   one row per student, one column per requirement, failures with their traces
 
-Results: PASS and FAIL are the grader's verdicts; ERROR means "not graded" (a grader crash or
-the time limit), which is never a verdict on the student's program.
+Results: PASS and FAIL are the grader's verdicts; NOT CHECKED marks a requirement an earlier
+failure kept from being checked (no pass, no second mistake); ERROR means "not graded" (a
+grader crash or the time limit), which is never a verdict on the student's program.
+
+Hand-ins are untrusted: only regular files inside DIR are read (a link, FIFO or device where a
+submission would be refuses it, unread); each student's process runs in its own process
+group, dies with this one, keeps its temporary files in a folder removed whatever happens, and
+is held to the time limit and a memory limit (RLIMIT_AS; reaching it is that student's FAIL).
+A signal stops every child and removes every temporary folder (ClassInterrupted). The traces
+are staged in a temporary folder and moved into OUT after the three result files (verdicts
+first); messages are capped and results.csv fields that start like a spreadsheet formula are
+quoted. `scheduler` sends the same per-student work to a Dask distributed cluster.
 """
 from __future__ import annotations
 
@@ -319,30 +329,43 @@ def _stop_signals_raise() -> Iterator[list[int]]:
 
 
 # ----------------------------------------------------------------- inside a grading process
-def _isolate(scratch: str, memory_limit_mib: Optional[int]) -> None:
+def _isolate(scratch: str, memory_limit_mib: Optional[int], parent: int) -> None:
     """First thing in a grading process: its own process group (the parent stops the group),
-    killed if the parent dies (Linux), default signal handlers (not the parent's), temporary
-    files in `scratch` (removed by the parent whatever happens here), and the memory limit."""
+    killed if the parent (process `parent`) dies (Linux), default signal handlers (not the
+    parent's), temporary files in `scratch` (removed by the parent whatever happens here), and
+    the memory limit: `memory_limit_mib` more address space than the process has now (the
+    grader, loaded: a parent's size must not eat a student's share)."""
     with contextlib.suppress(OSError):
         os.setsid()
-    _die_with_parent()
+    _die_with_parent(parent)
     for s in STOP_SIGNALS:
         signal.signal(s, signal.SIG_DFL)
     os.environ["TMPDIR"] = scratch
     tempfile.tempdir = scratch
     if memory_limit_mib is not None:
-        limit = memory_limit_mib * 1024 * 1024
+        limit = _address_space() + memory_limit_mib * 1024 * 1024
         resource.setrlimit(resource.RLIMIT_AS, (limit, limit))
 
 
-def _die_with_parent() -> None:
+def _address_space() -> int:
+    """This process's address space now (bytes), 0 where /proc cannot tell."""
+    try:
+        return int(Path("/proc/self/statm").read_text().split()[0]) * os.sysconf("SC_PAGE_SIZE")
+    except (OSError, ValueError, IndexError):
+        return 0
+
+
+def _die_with_parent(parent: int) -> None:
     """prctl(PR_SET_PDEATHSIG, SIGKILL): the kernel kills this process when its parent dies,
-    even by SIGKILL (no handler of ours runs then). Linux only; elsewhere a no-op."""
+    even by SIGKILL (no handler of ours runs then); if the parent died before that, exit now.
+    Linux only; elsewhere a no-op."""
     if not sys.platform.startswith("linux"):
         return
     with contextlib.suppress(Exception):
         import ctypes
         ctypes.CDLL(None, use_errno=True).prctl(1, int(signal.SIGKILL), 0, 0, 0)   # 1 = PR_SET_PDEATHSIG
+    if os.getppid() != parent:
+        os._exit(1)
 
 
 def _grade_isolated(grade_one: GradeOne, stand: str, task: str, files: list[str],
@@ -357,6 +380,8 @@ def _grade_isolated(grade_one: GradeOne, stand: str, task: str, files: list[str]
     except PlcLabError as e:
         return "not graded", f"not graded: {e}"
     except BaseException as e:     # a grader bug: reported in the student's row, never charged to them
+        if _at_memory_limit():     # ... unless C code failed an allocation at the limit (a SystemError)
+            return "memory", None
         last = traceback.extract_tb(e.__traceback__)[-1:] or [None]
         where = f" at {Path(last[0].filename).name}:{last[0].lineno}" if last[0] else ""
         return "not graded", (f"not graded: the grader failed on this submission ({type(e).__name__}: {e}{where}); "
@@ -364,16 +389,43 @@ def _grade_isolated(grade_one: GradeOne, stand: str, task: str, files: list[str]
 
 
 def _ran_out_of_memory(report: GradeReport) -> bool:
-    """A MemoryError the grading turned into a row or a fault (the runtime records one as an
-    internal fault, a scenario as a stop): under the process limit it is the limit."""
-    return any("MemoryError" in text for text in report.errors) or \
-        any("MemoryError" in r.observed for r in report.rows if not r.passed)
+    """A MemoryError the grading turned into a row instead of raising it: the runtime records
+    one in a scan as an internal fault ("PLC STOPPED by an internal error of plclab ...:
+    MemoryError"), which stops the scenario; the engine records one in a check as a grader
+    error. Under the process limit it is the limit. (Only these two forms: a student's
+    identifier named MemoryError in a compile error is not the limit.)"""
+    for r in report.rows:
+        if r.passed:
+            continue
+        if r.internal and ("(MemoryError" in r.observed or _at_memory_limit()):
+            return True
+        if "internal error of plclab" in r.observed and (" s: MemoryError" in r.observed or _at_memory_limit()):
+            return True
+    return False
+
+
+AT_LIMIT = 16 * 1024 * 1024      # bytes: a process that came this close to its memory limit reached it
+
+
+def _at_memory_limit() -> bool:
+    """This process's peak address space came within AT_LIMIT of its RLIMIT_AS: an error it
+    raised is most likely a failed allocation (C code reports one as a SystemError, or as any
+    error of its own), not a bug of the grader."""
+    soft, _hard = resource.getrlimit(resource.RLIMIT_AS)
+    if soft == resource.RLIM_INFINITY:
+        return False
+    try:
+        status = Path("/proc/self/status").read_text()
+        peak = next(int(line.split()[1]) * 1024 for line in status.splitlines() if line.startswith("VmPeak:"))
+    except (OSError, ValueError, StopIteration):
+        return False
+    return peak >= soft - AT_LIMIT
 
 
 def _grade_in_child(conn, grade_one: GradeOne, stand: str, task: str, files: list[str],
-                    out_dir: str, scratch: str, memory_limit_mib: Optional[int]) -> None:
+                    out_dir: str, scratch: str, memory_limit_mib: Optional[int], parent: int) -> None:
     """Runs in the submission's own (forked) process: the outcome down the pipe."""
-    _isolate(scratch, memory_limit_mib)
+    _isolate(scratch, memory_limit_mib, parent)
     try:
         conn.send(_grade_isolated(grade_one, stand, task, files, out_dir))
     finally:
@@ -449,10 +501,10 @@ def _run_parallel(stand: str, task: str, submissions: list[Submission], out: Pat
                 receive, send = ctx.Pipe(duplex=False)
                 p = ctx.Process(target=_grade_in_child, name=f"grade-{sub.student}", daemon=True,
                                 args=(send, grade_one, stand, task, [str(f) for f in sub.files],
-                                      str(work / "traces"), str(work / "tmp"), limits.memory_mib))
+                                      str(work / "traces"), str(work / "tmp"), limits.memory_mib, os.getpid()))
                 p.start()
+                running.append(_Running(sub, p, receive, time.monotonic(), work))   # at once: stopped if we are
                 send.close()
-                running.append(_Running(sub, p, receive, time.monotonic(), work))
             if not running:
                 continue
             next_deadline = min(j.started for j in running) + limits.time_s
@@ -581,7 +633,8 @@ def grade_on_worker(stand: str, task: str, sources: list[tuple[str, str]], time_
     work = Path(tempfile.mkdtemp(prefix="plclab-class-"))
     try:
         (work / "tmp").mkdir()
-        payload = pickle.dumps((stand, task, sources, str(work / "traces"), str(work / "tmp"), memory_limit_mib))
+        payload = pickle.dumps((stand, task, sources, str(work / "traces"), str(work / "tmp"), memory_limit_mib,
+                                os.getpid()))
         env = {**os.environ, "PYTHONPATH": os.pathsep.join(p for p in sys.path if p), "TMPDIR": str(work / "tmp")}
         child = subprocess.Popen([sys.executable, "-c", "from plclab.grader.classroom import _worker_child; "
                                   "_worker_child()"], stdin=subprocess.PIPE, stdout=subprocess.PIPE,
@@ -611,9 +664,9 @@ def grade_on_worker(stand: str, task: str, sources: list[tuple[str, str]], time_
 def _worker_child() -> None:
     """The grading process a Dask worker starts: the arguments pickled on stdin, the outcome
     pickled on stdout (a report of our own grader: trusted data between our processes)."""
-    stand, task, sources, traces, scratch, memory_limit_mib = pickle.loads(sys.stdin.buffer.read())
+    stand, task, sources, traces, scratch, memory_limit_mib, parent = pickle.loads(sys.stdin.buffer.read())
     out = sys.stdout.buffer
-    _isolate(scratch, memory_limit_mib)
+    _isolate(scratch, memory_limit_mib, parent)
 
     def grade_read(stand: str, task: str, _files, out_dir) -> GradeReport:
         return grade_sources(stand, task, sources, out_dir)
