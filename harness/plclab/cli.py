@@ -408,8 +408,8 @@ def build_parser() -> argparse.ArgumentParser:
     c.add_argument("--time-limit", type=_seconds, default=300.0, metavar="T",
                    help="per submission; past it the student's row says 'not graded' (default 300 s)")
     c.add_argument("--memory-limit", type=int, default=1024, metavar="MIB",
-                   help="address space of each submission's grading process; past it the student FAILs "
-                        "'memory limit of N MiB exceeded' (default 1024; 0: no limit)")
+                   help="address space each submission's grading may take beyond the grader's own; past it "
+                        "the student FAILs 'memory limit of N MiB exceeded' (default 1024; 0: no limit)")
     c.add_argument("--scheduler", metavar="ADDRESS",
                    help="grade on a Dask distributed cluster (e.g. tcp://host:8786) instead of this machine")
     c.set_defaults(func=_cmd_grade_class)

@@ -65,7 +65,7 @@ from .registry import ST_PROGRAM, Submission as SubmissionKind, requirement_set
 from .report import MAX_QUOTE, NOT_CHECKED, GradeReport, Row, clip
 
 DEFAULT_TIME_LIMIT_S = 300.0        # one submission; normal grading takes seconds
-DEFAULT_MEMORY_LIMIT_MIB = 1024     # one grading process's address space (the grader itself: ~300 MiB)
+DEFAULT_MEMORY_LIMIT_MIB = 1024     # address space one student's grading may add to the loaded grader's
 MAX_MESSAGE_CHARS = MAX_QUOTE       # a cell's message quotes at most this much (a 1 MB identifier ...)
 MAX_REPORT_CHARS = 20000            # ... and a student's report in junit.xml's <system-out>
 OUTPUT_FILES = ("results.csv", "junit.xml", "report.html")
