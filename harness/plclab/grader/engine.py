@@ -81,8 +81,6 @@ def grade_sources(stand: str, task: str, sources: Sequence[tuple[str, str]],
                 scenario.run(s, checks)
             except ScenarioFailure as e:
                 checks.stop(str(e), s.now)
-            except MemoryError:                      # the program's memory, not a grader bug (grade-class's limit)
-                raise
             except Exception as e:                   # a bug of the grader, not of the program
                 checks.grader_error(e, s.now)
             for hook in req.every:
