@@ -210,18 +210,12 @@ def test_a_full_out_is_refused_before_the_work_and_verdicts_are_written_before_t
 
 # --------------------------------------------------------------------------- signals (item 5)
 DRIVER = """
-import sys
-from plclab.grader.classroom import ClassInterrupted, grade_class, write_class_outputs, write_partial_results
+import functools, sys
+import plclab.grader.classroom as classroom
+from plclab.cli import main
 from classroom_faults import grade_or_misbehave
-folder, out = sys.argv[1], sys.argv[2]
-try:
-    report = grade_class("mp9c", "task1", folder, out, jobs=2, time_limit_s=600, grade_one=grade_or_misbehave)
-except ClassInterrupted as e:
-    print(e, flush=True)
-    if e.report.results:
-        write_partial_results(e.report, out)
-    sys.exit(128 + e.signum)
-write_class_outputs(report, out)
+classroom.grade_class = functools.partial(classroom.grade_class, grade_one=grade_or_misbehave)
+sys.exit(main(["grade-class", "mp9c", "task1", sys.argv[1], "--out", sys.argv[2], "--jobs", "2"]))
 """
 
 
@@ -273,7 +267,12 @@ def test_a_signal_to_grade_class_takes_every_child_and_temporary_folder_with_it(
     if sig == signal.SIGKILL:              # no handler runs: the kernel ends the children (PR_SET_PDEATHSIG)
         return
     assert parent.returncode == 128 + sig, stderr
-    assert "grade-class: stopped by" in stdout and "after 1 of 3 submissions" in stdout
+    assert stderr.splitlines() == [
+        f"plclab: grade-class: stopped by {signal.Signals(sig).name} after 1 of 3 submissions; every grading "
+        "process and temporary folder was removed",
+        f"wrote {out / 'results.partial.csv'} (the verdicts so far; results.csv, junit.xml, report.html and traces/ "
+        "were left as they were)"]
+    assert "[1/3] a_quick: FAIL" in stdout
     assert list(tmp.iterdir()) == []                                          # every temporary folder gone
     partial = read_csv(out / "results.partial.csv")
     assert {r["student"] for r in partial} == {"a_quick"}
