@@ -269,8 +269,8 @@ def grade_class(stand: str, task: str, folder: str | Path, out_dir: str | Path,
                          len(submissions))
     cleanup = weakref.finalize(report, shutil.rmtree, str(staging), True)   # if never written out
     limits = _Limits(time_limit_s, memory_limit_mib)
-    try:
-        with _stop_signals_raise() as stopped:
+    with _stop_signals_raise() as stopped:      # a second signal is ignored until the cleanup is done
+        try:
             try:
                 if scheduler is None:
                     if grade_one is grade:        # builds the parser once, before forking
@@ -281,11 +281,12 @@ def grade_class(stand: str, task: str, folder: str | Path, out_dir: str | Path,
                     _run_on_cluster(scheduler, stand, task, submissions, out, staging, limits, on_result,
                                     grade_one, kind, report.results)
             except _Stop:
+                report.results.sort(key=lambda r: r.student)
                 raise ClassInterrupted(stopped[0], report) from None
-    except BaseException:
-        cleanup()                                 # interrupted or failed: no temporary folder stays
-        report.staging = None
-        raise
+        except BaseException:
+            cleanup()                             # interrupted or failed: no temporary folder stays
+            report.staging = None
+            raise
     report.results.sort(key=lambda r: r.student)
     return report
 
@@ -477,11 +478,11 @@ def _run_parallel(stand: str, task: str, submissions: list[Submission], out: Pat
     running: list[_Running] = []
 
     def finish(job: _Running, kind: str, value) -> None:
-        job.process.join(timeout=5)
-        if job.process.is_alive():               # sent its report but does not exit
-            _kill(job.process)
         with contextlib.suppress(OSError, TypeError):
-            os.killpg(job.process.pid, signal.SIGKILL)   # anything it left running
+            os.killpg(job.process.pid, signal.SIGKILL)   # done: it and anything it left running
+        job.process.join(timeout=5)
+        if job.process.is_alive():
+            _kill(job.process)
         job.conn.close()
         shutil.rmtree(job.work / "tmp", ignore_errors=True)
         running.remove(job)
