@@ -323,6 +323,20 @@ def test_a_memory_error_inside_a_scenario_is_the_limit_not_a_grader_error(tmp_pa
     assert report.results[0].report.errors[0].startswith("memory limit of 2048 MiB exceeded")
 
 
+def test_the_memory_limit_holds_the_real_grading_of_a_real_program(tmp_path, own_tmp):
+    """No injected fault: the grading of an ordinary program, allowed 1 MiB beyond the grader,
+    is stopped by the limit and reported as the student's FAIL; with the default it is graded."""
+    folder = tmp_path / "class"
+    folder.mkdir()
+    (folder / "pia.st").write_bytes((FIXTURES_DIR / "mp9c" / "task1_gripper_inverted.st").read_bytes())
+    tight = grade_class("mp9c", "task1", folder, tmp_path / "out", jobs=1, memory_limit_mib=1)
+    assert tight.results[0].status == "FAIL"
+    assert tight.results[0].report.errors[0].startswith("memory limit of 1 MiB exceeded")
+    normal = grade_class("mp9c", "task1", folder, tmp_path / "out", jobs=1)
+    assert normal.results[0].status == "FAIL" and not normal.results[0].report.errors
+    assert normal.results[0].report.row("T1.1").result == "FAIL"      # its mistake, graded
+
+
 def test_memory_limit_option_and_refusal(tmp_path, capsys):
     (tmp_path / "eve.st").write_text(BROKEN, encoding="utf-8")
     assert main(["grade-class", "mp9c", "task1", str(tmp_path), "--out", str(tmp_path / "o"),
