@@ -132,6 +132,15 @@ def test_a_huge_identifier_is_quoted_capped_and_names_that_look_like_formulas_ar
     assert all(not r[k].startswith(("=", "+", "-", "@", "\t", "\r")) for r in rows for k in r)
 
 
+def test_plclab_grade_quotes_a_huge_identifier_capped_too(tmp_path, capsys):
+    (tmp_path / "big.st").write_text(f"PROGRAM Student1\nVAR x : INT; END_VAR\nx := {'b' * 200_000};\nEND_PROGRAM\n",
+                                     encoding="utf-8")
+    assert main(["grade", "mp9c", "task1", str(tmp_path / "big.st"), "--out", str(tmp_path / "out")]) == 1
+    out = capsys.readouterr().out
+    assert "undeclared identifier 'bbbb" in out and "more characters not shown" in out
+    assert len(out) < MAX_MESSAGE_CHARS + 1000
+
+
 # --------------------------------------------------------------------------- --out before the work (item 8)
 @contextlib.contextmanager
 def read_only(folder: Path):
