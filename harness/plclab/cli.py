@@ -310,13 +310,21 @@ def _cmd_grade_scada(args: argparse.Namespace) -> int:
 
 
 def _cmd_grade_class(args: argparse.Namespace) -> int:
-    from plclab.grader.classroom import grade_class, write_class_outputs
+    from plclab.grader.classroom import ClassInterrupted, grade_class, write_class_outputs, write_partial_results
 
     def progress(result, done: int, total: int) -> None:
         print(f"[{done:>{len(str(total))}}/{total}] {result.student}: {result.summary()}", flush=True)
 
-    report = grade_class(args.stand, args.task, args.folder, args.out, jobs=args.jobs,
-                         time_limit_s=args.time_limit, on_result=progress)
+    try:
+        report = grade_class(args.stand, args.task, args.folder, args.out, jobs=args.jobs,
+                             time_limit_s=args.time_limit, on_result=progress,
+                             memory_limit_mib=args.memory_limit or None, scheduler=args.scheduler)
+    except ClassInterrupted as e:       # the verdicts so far apart from a previous run's results
+        print(f"plclab: {e}", file=sys.stderr)
+        if e.report.results:
+            print(f"wrote {write_partial_results(e.report, args.out)} (the verdicts so far; results.csv, junit.xml, "
+                  f"report.html and traces/ were left as they were)", file=sys.stderr)
+        return 128 + e.signum
     for path in report.ignored:
         print(f"ignored {path}: not a {report.suffix} file or a folder")
     counts = {s: sum(r.status == s for r in report.results) for s in ("PASS", "FAIL", "ERROR")}
@@ -432,6 +440,11 @@ def build_parser() -> argparse.ArgumentParser:
                    help="results.csv, junit.xml, report.html and traces/<student>/ (default out/grade-class)")
     c.add_argument("--time-limit", type=_seconds, default=300.0, metavar="T",
                    help="per submission; past it the student's row says 'not graded' (default 300 s)")
+    c.add_argument("--memory-limit", type=int, default=1024, metavar="MIB",
+                   help="address space each submission's grading may take beyond the grader's own; past it "
+                        "the student FAILs 'memory limit of N MiB exceeded' (default 1024; 0: no limit)")
+    c.add_argument("--scheduler", metavar="ADDRESS",
+                   help="grade on a Dask distributed cluster (e.g. tcp://host:8786) instead of this machine")
     c.set_defaults(func=_cmd_grade_class)
 
     c = sub.add_parser("serve", help="real time: soft PLC + plant + Modbus face until Ctrl-C")
