@@ -582,7 +582,7 @@ def _run_on_cluster(address: str, stand: str, task: str, submissions: list[Submi
     try:
         from dask.distributed import Client, as_completed
     except ImportError:                             # pragma: no cover - dask is a dependency
-        raise PlcLabError("grade-class: --scheduler needs dask.distributed (pip install "plclab[cluster]")") from None
+        raise PlcLabError("grade-class: --scheduler needs dask.distributed (pip install 'plclab[cluster]')") from None
     try:
         client = Client(address, timeout="5s", set_as_default=False)
     except (OSError, TimeoutError, ValueError) as e:
