@@ -67,3 +67,17 @@ def test_check_and_grade_refuse_non_regular_or_large_files_in_one_line(command, 
     line = f"{path}:1:1: error: {reason}"
     assert line in (run.stderr + run.stdout).splitlines(), (run.stdout, run.stderr)
     assert "Traceback" not in run.stderr
+
+
+@pytest.mark.parametrize("command", [["cnc"], ["grade", "thermo", "scada1", "--traffic"]])
+def test_a_part_program_and_a_traffic_log_that_are_a_fifo_are_refused_in_one_line(command, tmp_path):
+    """The other files a user names: a G-code part program and a recorded SCADA traffic log
+    (a student's hand-in) go through the same check; a FIFO used to hang the command."""
+    fifo = tmp_path / "part.nc"
+    os.mkfifo(fifo)
+    run = subprocess.run([sys.executable, "-m", "plclab.cli", *command, str(fifo)],
+                         env={**os.environ, "PYTHONPATH": str(HARNESS)}, capture_output=True, text=True,
+                         timeout=60, cwd=tmp_path)
+    assert run.returncode != 0 and "Traceback" not in run.stderr
+    out = run.stdout + run.stderr
+    assert f"{fifo}" in out and "not a regular file (a FIFO); refused without reading it" in out, out

@@ -28,6 +28,7 @@ from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Optional
 
+from plclab import fileio
 from plclab.errors import PlcLabError
 
 SUPPORTED = ("G00 G01 G02 G03 (I/J or R) G17 G20 G21 G40 G41 G42 D G90 G91 F X Y Z N M02 M30; "
@@ -77,6 +78,9 @@ class Program:
     notes: list[str] = field(default_factory=list)
 
 
+MAX_PART_BYTES = 8 * 1024 * 1024     # a part program is text of a few thousand blocks
+
+
 class GcodeError(PlcLabError):
     """A bad part program: `file:line:col: error: ...`."""
 
@@ -84,10 +88,12 @@ class GcodeError(PlcLabError):
 def parse_file(path: str | Path, tools: Optional[dict[int, float]] = None,
                step_mm: float = DEFAULT_STEP_MM) -> Program:
     p = Path(path)
-    try:
-        text = p.read_text(encoding="utf-8")
-    except (OSError, UnicodeDecodeError) as e:
+    try:                 # a regular file of reasonable size, checked before reading
+        text = fileio.read_input(p, MAX_PART_BYTES).decode("utf-8")
+    except fileio.InputError as e:
         raise PlcLabError(f"{p}: cannot read the part program ({e})") from None
+    except UnicodeDecodeError as e:
+        raise PlcLabError(f"{p}: cannot read the part program (not UTF-8 text: {e.reason})") from None
     return parse(text, str(p), tools, step_mm)
 
 
