@@ -12,7 +12,7 @@ from __future__ import annotations
 
 from dataclasses import dataclass
 from pathlib import Path
-from typing import Optional
+from typing import Callable, Optional
 
 from plclab import plcopen
 from plclab.errors import PlcLabError
@@ -30,20 +30,36 @@ class BuildOutput:
     st_text: str
     xml_bytes: Optional[bytes]
     schema: Optional[Path]       # the XSD the XML was validated against; None: no schema here
+    notes: tuple[str, ...] = ()  # cnc --part: the part program's notes and warnings
 
 
-def build_outputs(stand: str, variant: str, xml: bool = True, xml_name: Optional[str] = None) -> BuildOutput:
-    """Make and check the bundle (and the XML project) of `variant` of `stand`."""
+def build_outputs(stand: str, variant: str, xml: bool = True, xml_name: Optional[str] = None,
+                  part: Optional[str] = None, method: str = "evalfn",
+                  tools: Optional[dict[int, float]] = None) -> BuildOutput:
+    """Make and check the bundle (and the XML project) of `variant` of `stand`. The cnc
+    stand's bundle is made for OpenPLC (plclab.cnc.openplc: its fine cycle, and with `part`
+    a G-code part program in its frame table, run with `method`, tool table `tools`)."""
     s = get_stand(stand)
     s.variant(variant)                       # an unknown variant is one clear error
+    if part is not None and stand != "cnc":
+        raise PlcLabError(f"build: --part is for the cnc stand (a G-code part program), not {stand}")
     name = f"{stand}_{variant}"
     check_sources(sources(s, variant))
     text = bundle(s, variant)
+    if stand == "cnc":
+        from plclab.cnc.gcode import parse_file
+        from plclab.cnc.openplc import STEP_MM, openplc_bundle
+
+        program = parse_file(part, tools, STEP_MM) if part is not None else None
+        notes = tuple(program.notes) if program is not None else ()
+        text = openplc_bundle(text, program.frames if program is not None else None, method, part=part or "")
+    else:
+        notes = ()
     checked = check_sources([(f"{name}.st", text)])
     if not xml:
-        return BuildOutput(name, text, None, None)
+        return BuildOutput(name, text, None, None, notes)
     data, schema = xml_project(text, name, xml_name or f"{name}.xml", checked)
-    return BuildOutput(name, text, data, schema)
+    return BuildOutput(name, text, data, schema, notes)
 
 
 def xml_project(text: str, name: str, where: str,
@@ -66,10 +82,17 @@ def xml_project(text: str, name: str, where: str,
     return data, schema
 
 
-def write_build(stand: str, variant: str, st_path: str | None, xml_path: str | None) -> list[Path]:
+def write_build(stand: str, variant: str, st_path: str | None, xml_path: str | None,
+                part: Optional[str] = None, method: str = "evalfn",
+                tools: Optional[dict[int, float]] = None,
+                report: Callable[[str], None] = lambda line: None) -> list[Path]:
     """Write `<stand>_<variant>.st` (or `st_path`) and, if `xml_path` is given, the PLCopen XML
-    project; returns the paths written. Raises PlcLabError / CompileError, writing nothing."""
-    out = build_outputs(stand, variant, xml=xml_path is not None, xml_name=xml_path)
+    project; returns the paths written. Raises PlcLabError / CompileError, writing nothing.
+    `report` gets the part program's notes and warnings (cnc --part)."""
+    out = build_outputs(stand, variant, xml=xml_path is not None, xml_name=xml_path, part=part, method=method,
+                        tools=tools)
+    for line in out.notes:
+        report(line)
     targets = [(Path(st_path) if st_path else Path.cwd() / f"{out.name}.st", out.st_text.encode("utf-8"))]
     if xml_path is not None:
         targets.append((Path(xml_path), out.xml_bytes))

@@ -192,8 +192,12 @@ def _cmd_plant(args: argparse.Namespace) -> int:
 
     psm = _host_port(args.psm, "--psm")
     console = None if args.console == "none" else _host_port(args.console, "--console")
+    params = {}
+    if args.stand == "cnc":                  # as the PSM script: in step with `plclab build cnc`
+        from plclab.cnc.openplc import plant_params
+        params = plant_params()
     return run_plant(args.stand, psm, console, traceback=bool(os.environ.get("PLCLAB_DEBUG")),
-                     out=lambda line: print(line, flush=True))
+                     out=lambda line: print(line, flush=True), params=params)
 
 
 def _cmd_psm_script(args: argparse.Namespace) -> int:
@@ -207,7 +211,22 @@ def _cmd_console(args: argparse.Namespace) -> int:
     from plclab.modbus.console import CONSOLE_PORT, run_console
 
     where = _host_port(args.where, "the console face") if args.where else ("127.0.0.1", CONSOLE_PORT)
-    for line in run_console(args.stand, where, sets=args.set or (), presses=args.press or ()):
+    tape = None
+    if args.part:
+        from plclab.cnc.gcode import GcodeError
+        from plclab.cnc.openplc import part_tape
+
+        if args.stand != "cnc":
+            raise PlcLabError(f"console: --part is for the cnc stand (a G-code part program), not {args.stand}")
+        try:
+            method, frames, notes = part_tape(args.part, args.method, dict(args.tool or []))
+        except GcodeError as e:          # already `file:line:col: error: ...`; nothing sent
+            print(e, file=sys.stderr)
+            return 1
+        for note in notes:
+            print(note, file=sys.stderr)
+        tape = (method, frames)
+    for line in run_console(args.stand, where, sets=args.set or (), presses=args.press or (), tape=tape):
         print(line)
     return 0
 
@@ -227,7 +246,15 @@ def _cmd_build(args: argparse.Namespace) -> int:
         from plclab.stands import get_stand
         print(get_stand(args.stand).outline(args.variant), end="")
         return 0
-    for path in write_build(args.stand, args.variant, args.output, args.xml):
+    from plclab.cnc.gcode import GcodeError
+
+    try:
+        paths = write_build(args.stand, args.variant, args.output, args.xml, part=args.part, method=args.method,
+                            tools=dict(args.tool or []), report=lambda line: print(line, file=sys.stderr))
+    except GcodeError as e:              # already `file:line:col: error: ...`; nothing written
+        print(e, file=sys.stderr)
+        return 1
+    for path in paths:
         print(f"wrote {path}")
     return 0
 
@@ -288,13 +315,21 @@ def _cmd_grade_scada(args: argparse.Namespace) -> int:
 
 
 def _cmd_grade_class(args: argparse.Namespace) -> int:
-    from plclab.grader.classroom import grade_class, write_class_outputs
+    from plclab.grader.classroom import ClassInterrupted, grade_class, write_class_outputs, write_partial_results
 
     def progress(result, done: int, total: int) -> None:
         print(f"[{done:>{len(str(total))}}/{total}] {result.student}: {result.summary()}", flush=True)
 
-    report = grade_class(args.stand, args.task, args.folder, args.out, jobs=args.jobs,
-                         time_limit_s=args.time_limit, on_result=progress)
+    try:
+        report = grade_class(args.stand, args.task, args.folder, args.out, jobs=args.jobs,
+                             time_limit_s=args.time_limit, on_result=progress,
+                             memory_limit_mib=args.memory_limit or None, scheduler=args.scheduler)
+    except ClassInterrupted as e:       # the verdicts so far apart from a previous run's results
+        print(f"plclab: {e}", file=sys.stderr)
+        if e.report.results:
+            print(f"wrote {write_partial_results(e.report, args.out)} (the verdicts so far; results.csv, junit.xml, "
+                  f"report.html and traces/ were left as they were)", file=sys.stderr)
+        return 128 + e.signum
     for path in report.ignored:
         print(f"ignored {path}: not a {report.suffix} file or a folder")
     counts = {s: sum(r.status == s for r in report.results) for s in ("PASS", "FAIL", "ERROR")}
@@ -311,6 +346,8 @@ def _cmd_run(args: argparse.Namespace) -> int:
     r = run_scenario(args.stand, args.variant, args.scenario, args.csv, args.vcd, args.plot,
                      program=args.program)
     print("\n".join(r.timeline))
+    if r.absent_note:
+        print(r.absent_note)
     for f in r.files:
         print(f"wrote {f}")
     if r.session.fault is not None:
@@ -364,6 +401,10 @@ def build_parser() -> argparse.ArgumentParser:
     c.add_argument("--xml", metavar="FILE.xml", help="also write the PLCopen XML project")
     c.add_argument("--outline", action="store_true",
                    help="write nothing; print a task reference's changes to the starting program as a diff")
+    c.add_argument("--part", metavar="PART.nc", help="cnc: a G-code part program in the frame table (OpenPLC)")
+    c.add_argument("--method", choices=("evalfn", "dda", "integration"), default="evalfn",
+                   help="cnc --part: the interpolator (default evalfn)")
+    c.add_argument("--tool", type=_tool, action="append", metavar="DN=R", help="cnc --part: the tool-radius table")
     c.set_defaults(func=_cmd_build)
 
     c = sub.add_parser("handout", help="the student's starting program, I/O map and task sheet (no solution)")
@@ -407,6 +448,11 @@ def build_parser() -> argparse.ArgumentParser:
                    help="results.csv, junit.xml, report.html and traces/<student>/ (default out/grade-class)")
     c.add_argument("--time-limit", type=_seconds, default=300.0, metavar="T",
                    help="per submission; past it the student's row says 'not graded' (default 300 s)")
+    c.add_argument("--memory-limit", type=int, default=1024, metavar="MIB",
+                   help="address space each submission's grading may take beyond the grader's own; past it "
+                        "the student FAILs 'memory limit of N MiB exceeded' (default 1024; 0: no limit)")
+    c.add_argument("--scheduler", metavar="ADDRESS",
+                   help="grade on a Dask distributed cluster (e.g. tcp://host:8786) instead of this machine")
     c.set_defaults(func=_cmd_grade_class)
 
     c = sub.add_parser("serve", help="real time: soft PLC + plant + Modbus face until Ctrl-C")
@@ -465,6 +511,10 @@ def build_parser() -> argparse.ArgumentParser:
     c.add_argument("--set", nargs="+", metavar="NAME=V", help="set switches, e.g. SA5=1 SA6=0")
     c.add_argument("--press", nargs="+", metavar="NAME[=SECONDS]",
                    help="press and release, e.g. SB1 (0.3 s) or SA1_FWD=1.5")
+    c.add_argument("--part", metavar="PART.nc", help="cnc: load a G-code part program through the tape reader")
+    c.add_argument("--method", choices=("evalfn", "dda", "integration"), default="evalfn",
+                   help="cnc --part: the interpolator (default evalfn)")
+    c.add_argument("--tool", type=_tool, action="append", metavar="DN=R", help="cnc --part: the tool-radius table")
     c.set_defaults(func=_cmd_console)
 
     c = sub.add_parser("cnc", help="run a G-code part program on the CNC stand; contour error per frame")

@@ -28,6 +28,12 @@ How to use it:
 - a process killed between creating its temporary file and the rename leaves that temporary
   behind: `remove_stale_temporaries(path)` removes the ones whose process is gone (call it
   at start-up of whatever owns the file, e.g. the retain store).
+
+Inputs a user names (a student's ST file, a traffic log) are untrusted too: `read_input(path,
+limit)` reads one only if it is a regular file of at most `limit` bytes, and says so before
+reading anything else: a FIFO would block forever, `/dev/zero` never ends, a 3 GB file would
+be read whole. A symbolic link the user typed is followed (they named it); callers that walk
+a folder of other people's files (grade-class) pass `follow_symlinks=False`.
 """
 from __future__ import annotations
 
@@ -51,12 +57,17 @@ class OutputError(PlcLabError):
     """An output that cannot or must not be written; str() is the one line shown."""
 
 
+class InputError(PlcLabError):
+    """An input that cannot or must not be read; str() is the reason (the caller adds the file)."""
+
+
 _KINDS = ((stat.S_ISLNK, "a symbolic link"), (stat.S_ISDIR, "a directory"),
           (stat.S_ISCHR, "a character device"), (stat.S_ISBLK, "a block device"),
           (stat.S_ISFIFO, "a FIFO"), (stat.S_ISSOCK, "a socket"))
 
 
 def _kind(mode: int) -> str:
+    """What a non-regular file is, as the one-line errors name it ("a FIFO")."""
     return next((name for test, name in _KINDS if test(mode)), "not a regular file")
 
 
@@ -112,6 +123,36 @@ def check_output(path: PathLike, parents: bool = True) -> Path:
             raise OutputError(f"{p}: cannot write: '{parent}' is a file, not a directory")
         break
     return p
+
+
+PROBE_BYTES = 256 * 1024     # check_writable: a folder that cannot take this much is full
+
+
+def check_writable(directory: PathLike) -> Path:
+    """Before a long computation whose results go into `directory`: create it if missing (only
+    directories, as the writers would) and write, sync and remove a temporary file of
+    PROBE_BYTES there, so a read-only or full folder is refused (one line) now, not after the
+    work. Nothing but our own temporary file is created or removed."""
+    d = Path(directory)
+    check_output(d / ".probe")                 # no file where a directory of the path must be
+    tmp = temporary_name(d / ".probe")
+    fd = -1
+    try:
+        d.mkdir(parents=True, exist_ok=True)
+        fd = os.open(tmp, os.O_WRONLY | os.O_CREAT | os.O_EXCL | getattr(os, "O_CLOEXEC", 0), 0o600)
+        data = bytes(PROBE_BYTES)
+        written = 0
+        while written < len(data):
+            written += os.write(fd, data[written:])
+        os.fsync(fd)
+    except OSError as exc:
+        raise OutputError(f"{d}: cannot write: {_reason(exc)}") from None
+    finally:
+        if fd >= 0:
+            os.close(fd)
+            with contextlib.suppress(OSError):
+                os.unlink(tmp)
+    return d
 
 
 def temporary_name(path: PathLike) -> Path:
@@ -238,3 +279,61 @@ def remove_stale_temporaries(path: PathLike) -> list[Path]:
             os.unlink(tmp)
             removed.append(tmp)
     return removed
+
+
+# ---------------------------------------------------------------------------- inputs
+def read_input(path: PathLike, limit: int, follow_symlinks: bool = True) -> bytes:
+    """The bytes of the user's input file `path`, read only if it is a regular file of at most
+    `limit` bytes. Raises InputError whose str() is the reason alone ("no such file", "not a
+    regular file (a FIFO)", "file too large (N bytes; the limit is M)"), for the caller to
+    put after the file's name in its own format (`FILE:1:1: error: REASON` for ST).
+
+    The kind is checked with stat() before opening (a device is never opened), the open is
+    non-blocking (a FIFO swapped in meanwhile cannot hang it) and fstat() confirms what was
+    opened; at most `limit` + 1 bytes are ever read (a file that grows, a /proc file whose
+    size says 0)."""
+    name = os.fspath(path)
+    try:
+        st = os.stat(name) if follow_symlinks else os.lstat(name)
+        if not stat.S_ISREG(st.st_mode):
+            raise InputError(_not_regular(st.st_mode))
+        if st.st_size > limit:
+            raise InputError(_too_large(st.st_size, limit))
+        flags = os.O_RDONLY | getattr(os, "O_NONBLOCK", 0) | getattr(os, "O_CLOEXEC", 0)
+        if not follow_symlinks:
+            flags |= getattr(os, "O_NOFOLLOW", 0)
+        fd = os.open(name, flags)
+    except InputError:
+        raise
+    except FileNotFoundError:
+        raise InputError("no such file") from None
+    except OSError as exc:
+        if exc.errno == errno.ELOOP:
+            raise InputError(_not_regular(stat.S_IFLNK)) from None
+        raise InputError(f"cannot read file: {exc.strerror or exc}") from None
+    try:
+        st = os.fstat(fd)
+        if not stat.S_ISREG(st.st_mode):
+            raise InputError(_not_regular(st.st_mode))
+        chunks, size = [], 0
+        while size <= limit:
+            chunk = os.read(fd, min(1 << 20, limit + 1 - size))
+            if not chunk:
+                break
+            chunks.append(chunk)
+            size += len(chunk)
+        if size > limit:
+            raise InputError(_too_large(max(size, st.st_size), limit, more=size > st.st_size))
+        return b"".join(chunks)
+    except OSError as exc:
+        raise InputError(f"cannot read file: {exc.strerror or exc}") from None
+    finally:
+        os.close(fd)
+
+
+def _not_regular(mode: int) -> str:
+    return f"not a regular file ({_kind(mode)}); refused without reading it"
+
+
+def _too_large(size: int, limit: int, more: bool = False) -> str:
+    return f"file too large ({'more than ' if more else ''}{size} bytes; the limit is {limit})"

@@ -1,9 +1,10 @@
 """`plclab run`: one scenario of a stand in virtual time, its timeline and its trace files.
 
 The program is a shipped variant or a student's own ST files (`--program`): a scenario drives
-either through the stand's console and I/O labels. A scenario that also reads one of the
-stand's observables (the frame pointer...) says so in one line when the student's program
-has no such variable; everything else of the scenario works on any program.
+either through the stand's console and I/O labels and decides from the I/O and the plant, so
+it runs on a program of any structure. The stand's observables (the frame pointer...) are
+shown when the program has them; the run names those it lacks, and the timeline and the trace
+files show them as "absent".
 """
 from __future__ import annotations
 
@@ -25,6 +26,15 @@ class RunResult:
     timeline: list[str]
     failure: Optional[str]
     files: list[Path]
+
+    @property
+    def absent_note(self) -> Optional[str]:
+        """One line naming the observables the program does not have (None: it has them all)."""
+        s = self.session
+        if not s.absent:
+            return None
+        names = ", ".join(f"{n} ({s.observables.get(n, n)})" for n in s.absent)
+        return f"not in this program, shown as \"absent\" in the timeline and traces: {names}"
 
 
 def run_scenario(stand: str, variant: Optional[str] = None, scenario: Optional[str] = None,

@@ -11,8 +11,12 @@ Modelled on cocotb and pytest (docs/contributing.md):
 Names are the console and wiring labels of the stand's GVL (`SB1`, `SQ2`, `L3`, `HL1`); times
 are plant seconds. A session records a trace of every located I/O point (with the labels as
 aliases) plus chosen internal variables, and a log of the console actions for the timeline.
-A stand's observables (named values of the program's inside, `plclab.stands.base`) are read
-with `s.value("FramePtr")` and recorded under their names, not their ST paths.
+A stand's observables (named values of the program's inside, `plclab.stands.base`) are
+recorded under their names, not their ST paths, and shown only: a scenario decides from the
+stand's I/O and the plant, so it runs on a student's program of any structure. An observable
+the program does not have is recorded as the constant string ABSENT ("absent"), so a
+timeline, a CSV, a VCD or a plot says so instead of inventing a value; `s.has(name)` and
+`s.observed(name)` (None when absent) are how a timeline asks.
 """
 from __future__ import annotations
 
@@ -29,6 +33,9 @@ from plclab.runtime.plc import PLC
 from plclab.runtime.retain import RetainStore
 from plclab.runtime.sim import Simulation
 from plclab.trace import Trace
+
+
+ABSENT = "absent"       # the trace value of an observable the running program does not have
 
 
 class ScenarioFailure(AssertionError):
@@ -145,7 +152,9 @@ class Session:
         self.plc = PLC(_compiled(self.checked), tick_ns=self.tick_ns, retain=store)
         self.plc.now_ns = self.plc.ticks = 0
         paths = [self.observables.get(n, n) for n in self.watch]
+        self.absent = []                      # observables this program lacks (recorded as ABSENT)
         if not self.strict_watch:             # a student's program need not have the shipped FBs
+            self.absent = [n for n, p in zip(self.watch, paths) if not self._has(p)]
             paths = [p for p in paths if self._has(p)]
         # every labelled I/O point is traced, also one the program does not declare: a
         # student may drop an unused global, the trace still shows the console
@@ -197,6 +206,9 @@ class Session:
             for label, address in self.labels.items():
                 if address in self.trace and label not in self.trace:
                     self.trace.alias(label, address)
+            for name in self.absent:
+                if name not in self.trace:
+                    self.trace.declare(name, "str", ABSENT, self._offset_ns)
             self._copied = {}
         # only what was recorded since the last copy (a change at the same instant may have
         # replaced the last entry, so that one is taken again)
@@ -224,6 +236,14 @@ class Session:
                                       "the program does not have")
             return self.plc.read(path)
         return self.plc.read(name)
+
+    def has(self, name: str) -> bool:
+        """Whether the running program has observable `name` (or the ST path `name`)."""
+        return self._has(self.observables.get(name, name))
+
+    def observed(self, name: str) -> Any:
+        """Observable `name` now, for showing it: None when the program does not have it."""
+        return self.value(name) if self.has(name) else None
 
     def _has(self, path: str) -> bool:
         """Whether the running program has the variable `path`."""

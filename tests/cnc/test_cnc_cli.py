@@ -29,7 +29,7 @@ def test_cnc_bad_part_program_is_one_line_and_nothing_runs(tmp_path, capsys):
     err = capsys.readouterr().err
     assert rc == 1
     assert err.strip() == f"{part}:2:11: error: unknown word 'W3' (supported: G00 G01 G02 G03 (I/J or R) " \
-                          f"G17 G20 G21 G40 G41 G42 D G90 G91 F X Y Z N; S M T O ignored)"
+                          f"G17 G20 G21 G40 G41 G42 D G90 G91 F X Y Z N M02 M30; S T O and other M words ignored)"
     assert not csv.exists()
 
 
@@ -48,3 +48,16 @@ def test_cnc_tool_table_from_the_command_line(tmp_path, capsys):
     assert "equidistant at 0.2500 / 0.2500 mm, tool radius 0.25 mm  ok" in out
     assert main(["cnc", str(part)]) == 1
     assert capsys.readouterr().err.strip().startswith(f"{part}:2:5: error: D2 is not in the tool table")
+
+
+def test_cnc_arc_end_tolerance_is_the_step_given(tmp_path, capsys):
+    """`--step` is the arc end's tolerance: 5 um off the circle is refused at a 1 um step,
+    before anything runs."""
+    part = tmp_path / "arc.nc"
+    part.write_text("G01 X10 Y0 F100\nG03 X0 Y10.005 I-10 J0\n", encoding="utf-8")
+    csv = tmp_path / "p.csv"
+    assert main(["cnc", str(part), "--step", "0.001", "--csv", str(csv)]) == 1
+    err = capsys.readouterr().err
+    assert err.startswith(f"{part}:2:5: error: the end point is not on the arc's circle") and \
+        "tolerance one step, 0.001 mm" in err and err.count("\n") == 1
+    assert not csv.exists()

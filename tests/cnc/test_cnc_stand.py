@@ -109,3 +109,16 @@ def test_tool_radius_correction_runs_on_the_equidistant(method, side):
     # the tool centre keeps the tool radius from the wall: inside (G41) or outside (G42)
     wall = [p for p in run.points if p[1] == 3]          # frame 3: along X at Y 0 programmed
     assert all(abs(p[3] * 0.01 - (0.3 if side == "G41" else -0.3)) <= 0.011 for p in wall)
+
+
+@pytest.mark.parametrize("method", ["evalfn", "dda"])
+def test_run_part_records_every_move_from_the_first_step(method):
+    """A 270-step line is 270 recorded moves, the first one step from the start (the moves
+    made while SB1 was held used to be missing: 266 rows)."""
+    s = cnc.session()
+    run = cnc.run_part(s, parse("G01 X2.7 F300\n").frames, method)
+    assert run.finished and s.plant.axes["X"].steps == 270
+    assert len(run.points) == 270
+    assert [p[2] for p in run.points] == list(range(1, 271))
+    assert all(p[1] == 1 for p in run.points)                     # all of frame 1
+    assert not s.plant.console_bits["SB1"]                        # the press was released

@@ -3,7 +3,11 @@ survive a grading process that is killed, hangs or hits a grader bug, and still 
 other students with the real `grade()`.
 
 A submission chooses its misbehaviour with its first line, `(* classroom test: crash *)`,
-`... hang *)` or `... bug *)`; any other submission is graded for real. Lives in a module of
+`... hang *)`, `... bug *)`, `... slow *)` (a temporary folder of its own, its process id
+written into the folder named by $CLASSROOM_TEST_PIDS, then a long sleep: a slow student) or
+`... memory *)` (2 GiB asked at once: no RSS without a limit, a MemoryError under one) or
+`... memory_in_scenario *)` (graded for real, but writing a scenario's traces raises
+MemoryError: from inside the engine's scenario loop); any other submission is graded for real. Lives in a module of
 its own (not the test file) so a grading process started with spawn/forkserver can import it.
 """
 from __future__ import annotations
@@ -11,6 +15,7 @@ from __future__ import annotations
 import os
 import re
 import signal
+import tempfile
 import time
 from pathlib import Path
 from typing import Optional, Sequence
@@ -30,4 +35,20 @@ def grade_or_misbehave(stand: str, task: str, files: Sequence[str], out_dir: Opt
         time.sleep(3600)
     if what == "bug":
         return {}["no such key"]        # a grader bug: KeyError deep inside the grading
+    if what == "slow":
+        with tempfile.TemporaryDirectory(prefix="plclab-grade-") as tmp:
+            (Path(tmp) / "retain.json").write_text("{}", encoding="utf-8")
+            pids = os.environ.get("CLASSROOM_TEST_PIDS")
+            if pids:
+                (Path(pids) / str(os.getpid())).write_text(tmp, encoding="utf-8")
+            time.sleep(3600)
+    if what == "memory":
+        held = bytes(2 * 1024 ** 3)     # calloc: untouched pages, so no RSS when there is no limit
+        del held
+    if what == "memory_in_scenario":    # patched in this grading process only
+        from plclab.grader import engine
+
+        def exhausted(*_args):
+            raise MemoryError()
+        engine._write_traces = exhausted
     return grade(stand, task, files, out_dir)

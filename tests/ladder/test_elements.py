@@ -535,3 +535,15 @@ def test_a_continuation_without_its_connector_is_refused_even_unused(tmp_path):
         load_files([path])
     assert str(e.value) == (f"{path}: main (LD), rung 2, continuation NOWHERE (localId {lost.local_id}): "
                             f"no connector named 'NOWHERE' for this continuation")
+
+
+def test_a_fifo_named_plc_xml_is_refused_not_waited_on(tmp_path, capsys):
+    import os
+
+    from plclab.cli import main as cli
+
+    path = tmp_path / "plc.xml"
+    os.mkfifo(path)
+    assert cli(["check", str(path)]) == 1
+    err = capsys.readouterr().err.strip()
+    assert err.startswith(f"{path}:") and "not a regular file" in err and "\n" not in err

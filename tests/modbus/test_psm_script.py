@@ -155,3 +155,72 @@ def test_psm_script_cli_prints_the_script_for_openplc_s_fixed_port():
     assert set(STANDS) == {"mp9c", "tur10", "thermo", "cnc"}
     with pytest.raises(PlcLabError, match="unknown stand 'kuka'"):
         psm_script("kuka")
+
+
+def test_cnc_emergency_stop_on_the_console_face_is_pressed_only_while_the_operator_presses_it(tmp_path):
+    """SB3 is normally closed: released at power-up (the PLC reads %IX0.3 = 1, the face's coil
+    says 0 = not pressed); `plclab console cnc --press SB3` presses and releases it; --set
+    SB3=1 keeps it pressed (the PLC reads 0) until SB3=0."""
+    from plclab.modbus.console import run_console
+
+    proc, psm_port, console_port = start_script(tmp_path, "cnc")
+    where = ("127.0.0.1", console_port)
+    try:
+        openplc = OpenPlcPsm(psm_port)
+        sb3 = 3                                               # %IX0.3 and coil 3
+        bits, _ = poll(openplc, [0] * 400, [0] * 50)
+        assert bits[sb3] == 1                                 # released: the contact conducts
+        lines = run_console("cnc", where)
+        assert lines[0] == "switches: SB1=0 SB2=0 SA1=0 SB3=0"      # nothing pressed
+        lines = run_console("cnc", where, presses=["SB3=0.05"])
+        assert lines[0] == "switches: SB1=0 SB2=0 SA1=0 SB3=0"
+        assert poll(openplc, [0] * 400, [0] * 50)[0][sb3] == 1      # released again after the press
+        run_console("cnc", where, sets=["SB3=1"])
+        assert poll(openplc, [0] * 400, [0] * 50)[0][sb3] == 0      # held pressed: the contact is open
+        assert run_console("cnc", where)[0] == "switches: SB1=0 SB2=0 SA1=0 SB3=1"
+        run_console("cnc", where, sets=["SB3=0"])
+        assert poll(openplc, [0] * 400, [0] * 50)[0][sb3] == 1
+        stop_script(proc, openplc)
+    finally:
+        if proc.poll() is None:
+            proc.kill()
+            proc.wait(TIMEOUT)
+
+
+def test_cnc_part_program_through_the_console_face_reaches_the_plc_frame_by_frame(tmp_path):
+    """`plclab console cnc --part`: the tape registers of the face load the plant's tape
+    reader; polled as OpenPLC polls, it shows frame k on %IW4..%IW15 until the PLC
+    acknowledges k on %QW4, then k + 1; the `tape` readout counts what the PLC stored."""
+    from plclab.modbus.console import run_console
+    from plclab.modbus.rawclient import RawModbusError
+
+    frames = [(1, 200, 0, 0, 0, 0, 500, 0, 0), (1, 200, 100, 0, 0, 0, 500, 0, 0),
+              (3, 100, 200, 0, -100, 0, 500, 0, 0), (1, -5, -7, 0, 0, 0, 500, 0, 0)]
+    proc, psm_port, console_port = start_script(tmp_path, "cnc")
+    where = ("127.0.0.1", console_port)
+    try:
+        openplc = OpenPlcPsm(psm_port)
+        lines = run_console("cnc", where, tape=(1, frames), tape_wait=0.0)
+        assert lines[0].startswith("tape: the PLC has stored 0 of 4 frames so far")
+        shown = []
+        for _scan in range(8):                                # the PLC: store what is shown, acknowledge it
+            openplc.read_dig_inp()
+            words = openplc.read_ana_inp()
+            if words[4]:
+                shown.append((words[4], words[5], words[6], tuple(w - 0x10000 if w & 0x8000 else w
+                                                                  for w in words[7:16])))
+            openplc.write_dig_out([0] * 400)
+            openplc.write_ana_out([0] * 4 + [words[4]] + [0] * 45)
+        assert shown == [(k, 4, 1, frame) for k, frame in enumerate(frames, start=1)]
+        assert run_console("cnc", where)[2].endswith(" missed=0 tape=4")
+        with RawModbusClient("127.0.0.1", console_port, unit=0, timeout=TIMEOUT) as console:
+            for count in (0, 201):                            # a tape of no frames, or too many
+                with pytest.raises(RawModbusError) as e:
+                    console.write_register(0, count)
+                assert e.value.code == 3
+            assert console.read_holding_registers(0, 2) == [4, 1]       # the last good tape's count, method
+        stop_script(proc, openplc)
+    finally:
+        if proc.poll() is None:
+            proc.kill()
+            proc.wait(TIMEOUT)

@@ -42,7 +42,6 @@ def one_line(capsys) -> str:
     ("%IW0,40000", "in.csv:3: error: value 40000 is out of range for INT %IW0 (-32768..32767)"),
     ("%IW1,-1", "in.csv:3: error: value -1 is out of range for WORD %IW1 (0..65535)"),
     ("main.n,99999999999999999999", "in.csv:3: error: value 99999999999999999999 is out of range for DINT main.n"),
-    ("%IW5,70000", "in.csv:3: error: value 70000 is out of range for %IW5 (a 16-bit image cell)"),
     ("main.n," + "9" * 5000, "in.csv:3: error: value '99999999999999"),
     ("%IX0.0,2", "in.csv:3: error: bad value '2' for BOOL %IX0.0: expected 0 or 1"),
     ("main.mode,FAST", "in.csv:3: error: bad value 'FAST' for"),
@@ -84,3 +83,38 @@ def test_a_file_that_is_not_utf8_text_is_one_line(st, tmp_path, capsys, data, me
 def test_an_input_script_that_is_a_directory_is_one_line(st, tmp_path, capsys):
     assert sim(st, tmp_path) == 1
     assert "is a directory" in one_line(capsys)
+
+
+@pytest.mark.parametrize("row, message", [
+    # a typo in an address: the program never reads %IW7, the row would change nothing
+    ("%IW7,5", "in.csv:3: error: %IW7 is not used by the program (it declares %IW0, %IW1)"),
+    ("%IX0.1,1", "in.csv:3: error: %IX0.1 is not used by the program (it declares %IX0.0)"),
+    ("%MW3,1", "in.csv:3: error: %MW3 is not used by the program (it declares no %MW address)"),
+    ("%QX2.0,1", "in.csv:3: error: %QX2.0 is not used by the program (it declares no %QX address)"),
+    # a name the program does not have: named, with its line
+    ("main.levle,1", "in.csv:3: error: unknown variable 'main.levle'"),
+    ("nothing,1", "in.csv:3: error: unknown variable 'nothing'"),
+])
+def test_a_row_setting_what_the_program_does_not_have_is_an_error_naming_the_line(st, tmp_path, capsys,
+                                                                                  row, message):
+    inputs = tmp_path / "in.csv"
+    inputs.write_text(f"time_s,name,value\n0,%IX0.0,0\n0.05,{row}\n")
+    assert sim(st, inputs) == 1
+    assert one_line(capsys) == f"plclab: error: {inputs}:{message[len('in.csv:'):]}"
+
+
+def test_an_address_spelled_otherwise_but_used_is_accepted(st, tmp_path):
+    """%I0.0 is %IX0.0 (the short spelling): the program uses it, the row is applied."""
+    inputs = tmp_path / "in.csv"
+    inputs.write_text("time_s,name,value\n0,%I0.0,1\n0,%IW0,7\n")
+    out = tmp_path / "out.csv"
+    assert sim(st, inputs, "--csv", str(out)) == 0
+    trace = read_csv(out)
+    assert trace.changes("%IX0.0") == [(0, True)] and trace.changes("%QW0") == [(0, 7)]
+
+
+def test_a_watched_name_the_program_lacks_is_one_line_naming_the_option(st, tmp_path, capsys):
+    inputs = tmp_path / "in.csv"
+    inputs.write_text("time_s,name,value\n0,%IX0.0,0\n")
+    assert sim(st, inputs, "--watch", "main.nothing") == 1
+    assert one_line(capsys) == "plclab: error: --watch main.nothing: unknown variable 'main.nothing'"

@@ -64,7 +64,10 @@ END_CONFIGURATION
 """)]
     s = spec.session(program=program)
     s.run(0.05)
-    assert "FramePtr" not in s.trace and s.value("HL1") is True
+    assert s.value("HL1") is True
+    # shown as absent, never invented; a scenario does not read it (it would be told so)
+    assert s.trace.changes("FramePtr") == [(0, "absent")] and "FramePtr" in s.absent
+    assert not s.has("FramePtr") and s.observed("FramePtr") is None
     with pytest.raises(AssertionError, match="reads FramePtr .*Main.Robot.Sequencer.Ptr.*does not have"):
         s.value("FramePtr")
 

@@ -1,9 +1,17 @@
 """The G-code front end: a part program (ISO 6983 subset, textbook 4.1.3) -> frames.
 
 Supported: G00 G01 G02 G03 (arcs by I/J or R), G17, G20/G21, G40/G41/G42 with D (the
-tool-radius table), G90/G91, F, X/Y/Z, N (block numbers), comments in parentheses or after
-';', '%' lines; S, M, T and O words are ignored with a note. Anything else is one
-`file:line:col: error: ...` line and nothing runs.
+tool-radius table), G90/G91, F, X/Y/Z, N (block numbers), M02/M30 (program end), comments in
+parentheses or after ';', '%' lines; S, T, O and the other M words are ignored with a note.
+Anything else is one `file:line:col: error: ...` line and nothing runs.
+
+Read strictly, with the modal groups a CNC user knows (LinuxCNC's G-code overview): a code
+the stand does not know is refused by its exact name (`G91.1` is not `G91`); two codes of one
+modal group in a block are an error (`G00 G01`); a word that means nothing for its block is an
+error (R or I/J on G00/G01, I/J with R); comments do not nest; the program ends at M02/M30
+(blocks after it are not run, with a warning, as LinuxCNC ignores them); arcs are in the XY
+plane (a G02/G03 moving Z, a helix, is refused); an arc's end may miss its circle by one step
+of the drives (`--step`), the frames' own rounding.
 
 The frames keep the programmed contour; the tool-radius correction itself is made by the PLC
 when it prepares the frames (FB_CncToolRadius, textbook 4.2.2.1). This front end refuses what
@@ -20,11 +28,21 @@ from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Optional
 
+from plclab import fileio
 from plclab.errors import PlcLabError
 
-SUPPORTED = "G00 G01 G02 G03 (I/J or R) G17 G20 G21 G40 G41 G42 D G90 G91 F X Y Z N; S M T O ignored"
+SUPPORTED = ("G00 G01 G02 G03 (I/J or R) G17 G20 G21 G40 G41 G42 D G90 G91 F X Y Z N M02 M30; "
+             "S T O and other M words ignored")
 TANGENT_RAD = 1e-3               # arcs' joints with corrected neighbours must be this tangent
-ARC_TOLERANCE_MM = 0.01          # the end of an arc may miss its circle by this much
+DEFAULT_STEP_MM = 0.01           # the drives' step when none is given (plclab cnc --step)
+# The modal groups of the codes the stand knows (LinuxCNC's numbering): two of one group in a
+# block are an error.
+MODAL_GROUPS = {0: 1, 1: 1, 2: 1, 3: 1, 17: 2, 90: 3, 91: 3, 20: 6, 21: 6, 40: 7, 41: 7, 42: 7}
+M_GROUPS = {0: 4, 1: 4, 2: 4, 30: 4, 60: 4, 3: 7, 4: 7, 5: 7, 7: 8, 8: 8, 9: 8}   # M words (ignored but 2, 30)
+GROUP_NAMES = {("G", 1): "motion", ("G", 2): "plane selection", ("G", 3): "distance mode", ("G", 6): "units",
+               ("G", 7): "cutter radius compensation", ("M", 4): "stopping", ("M", 7): "spindle",
+               ("M", 8): "coolant"}
+PROGRAM_END = (2, 30)            # M02, M30: the program ends at this block
 RAPID_MM_MIN = 600.0             # G00: the stand's largest feed (one step per fine cycle)
 WORD = re.compile(r"\s*([A-Za-z])\s*([-+]?(?:\d+\.?\d*|\.\d+))")
 
@@ -60,33 +78,60 @@ class Program:
     notes: list[str] = field(default_factory=list)
 
 
+MAX_PART_BYTES = 8 * 1024 * 1024     # a part program is text of a few thousand blocks
+
+
 class GcodeError(PlcLabError):
     """A bad part program: `file:line:col: error: ...`."""
 
 
-def parse_file(path: str | Path, tools: Optional[dict[int, float]] = None) -> Program:
+def parse_file(path: str | Path, tools: Optional[dict[int, float]] = None,
+               step_mm: float = DEFAULT_STEP_MM) -> Program:
     p = Path(path)
-    try:
-        text = p.read_text(encoding="utf-8")
-    except (OSError, UnicodeDecodeError) as e:
+    try:                 # a regular file of reasonable size, checked before reading
+        text = fileio.read_input(p, MAX_PART_BYTES).decode("utf-8")
+    except fileio.InputError as e:
         raise PlcLabError(f"{p}: cannot read the part program ({e})") from None
-    return parse(text, str(p), tools)
+    except UnicodeDecodeError as e:
+        raise PlcLabError(f"{p}: cannot read the part program (not UTF-8 text: {e.reason})") from None
+    return parse(text, str(p), tools, step_mm)
 
 
-def parse(text: str, filename: str = "<part>", tools: Optional[dict[int, float]] = None) -> Program:
-    """The frames of a part program; `tools` is the D table (number -> tool radius, mm)."""
+def _code(letter: str, text: str) -> str:
+    """A G or M word for a message: a whole number as the stand lists it (G1 -> G01), a
+    decimal one exactly as written (G91.1, G1.5: it is not the whole one)."""
+    value = float(text)
+    return f"{letter}{int(value):02d}" if value == int(value) else f"{letter}{text.lstrip('+')}"
+
+
+def parse(text: str, filename: str = "<part>", tools: Optional[dict[int, float]] = None,
+          step_mm: float = DEFAULT_STEP_MM) -> Program:
+    """The frames of a part program; `tools` is the D table (number -> tool radius, mm);
+    `step_mm` the drives' step (an arc's end may miss its circle by one step)."""
     tools = dict(tools or {})
     prog = Program()
     pos = [0.0, 0.0, 0.0]
     motion, absolute, scale, feed = 0, True, 1.0, 0.0
     comp, radius = 0, 0.0
     ignored: set[str] = set()
+    ended = 0                          # the line of M02/M30: the program ends there
     for lineno, raw in enumerate(text.splitlines(), start=1):
+        if ended:                      # not read any more (LinuxCNC ignores it): said once if not empty
+            try:
+                rest = _strip_comments(raw, filename, lineno).strip()
+            except GcodeError:
+                rest = raw.strip()
+            if rest and rest != "%":
+                prog.notes.append(f"{filename}:{lineno}: warning: blocks after the program end (line {ended}) "
+                                  f"are not run")
+                break
+            continue
         line = _strip_comments(raw, filename, lineno)
         if not line.strip() or line.strip() == "%":
             continue
         words: dict[str, tuple[float, int]] = {}
         gcodes: list[tuple[int, int]] = []
+        groups: dict[tuple[str, int], str] = {}         # (G or M, modal group) -> code in this block
         col = 0
         while col < len(line):
             if line[col].isspace():
@@ -99,13 +144,31 @@ def parse(text: str, filename: str = "<part>", tools: Optional[dict[int, float]]
             letter, value = m.group(1).upper(), float(m.group(2))
             wcol = col + len(m.group(0)) - len(m.group(0).lstrip()) + 1
             col = m.end()
-            if letter == "G":
-                gcodes.append((round(value), wcol))
+            if letter in "GM":
+                code = _code(letter, m.group(2))
+                known = value == int(value) and (int(value) in MODAL_GROUPS if letter == "G" else True)
+                if not known:
+                    raise GcodeError(f"{filename}:{lineno}:{wcol}: error: {code} is not supported by the stand "
+                                     f"(supported: {SUPPORTED})")
+                number = (MODAL_GROUPS if letter == "G" else M_GROUPS).get(int(value))
+                if number is not None:
+                    group = (letter, number)
+                    if group in groups:
+                        raise GcodeError(f"{filename}:{lineno}:{wcol}: error: {groups[group]} and {code} in one "
+                                         f"block: both of modal group {number} ({GROUP_NAMES[group]}), one "
+                                         f"of each group per block")
+                    groups[group] = code
+                if letter == "G":
+                    gcodes.append((int(value), wcol))
+                elif int(value) in PROGRAM_END:
+                    ended = lineno
+                else:
+                    ignored.add(letter)
             elif letter in "XYZIJRF":
                 if letter in words:
                     raise GcodeError(f"{filename}:{lineno}:{wcol}: error: '{letter}' twice in one block")
                 words[letter] = (value, wcol)
-            elif letter in "SMTO":
+            elif letter in "STO":
                 ignored.add(letter)
             elif letter == "N":
                 pass
@@ -125,14 +188,9 @@ def parse(text: str, filename: str = "<part>", tools: Optional[dict[int, float]]
                 scale = 25.4
             elif g == 21:
                 scale = 1.0
-            elif g == 17:
-                pass
             elif g in (40, 41, 42):
                 comp = g - 40
                 comp_col = gcol
-            else:
-                raise GcodeError(f"{filename}:{lineno}:{gcol}: error: unknown word 'G{g:02d}' "
-                                 f"(supported: {SUPPORTED})")
         if "D" in words:
             d, dcol = words["D"]
             if d == 0:
@@ -148,6 +206,7 @@ def parse(text: str, filename: str = "<part>", tools: Optional[dict[int, float]]
             feed = words["F"][0] * scale
             if feed <= 0:
                 raise GcodeError(f"{filename}:{lineno}:{words['F'][1]}: error: feed F must be > 0")
+        _check_meaning(words, motion, filename, lineno)
         if not any(a in words for a in "XYZ"):
             if any(a in words for a in "IJR"):
                 c = min(words[a][1] for a in "IJR" if a in words)
@@ -167,7 +226,11 @@ def parse(text: str, filename: str = "<part>", tools: Optional[dict[int, float]]
             frame = Frame(motion, start, tuple(end), feed=RAPID_MM_MIN if motion == 0 else feed, line=lineno,
                           comp=comp, tool_radius=r)
         else:
-            i, j = _centre(words, start, end, motion, scale, filename, lineno, first_col)
+            if "Z" in words and abs(end[2] - start[2]) > 1e-9:
+                raise GcodeError(f"{filename}:{lineno}:{words['Z'][1]}: error: G0{motion} with Z: a helix is not "
+                                 f"supported by the stand (arcs are in the XY plane, G17; move Z in a G00/G01 "
+                                 f"block)")
+            i, j = _centre(words, start, end, motion, scale, filename, lineno, first_col, step_mm)
             frame = Frame(motion, start, tuple(end), i, j, feed, lineno, comp, r)
         _check_correction(prog.frames[-1] if prog.frames else None, frame, filename,
                           min(c for letter, (_v, c) in words.items() if letter in "XYZ"))
@@ -176,6 +239,21 @@ def parse(text: str, filename: str = "<part>", tools: Optional[dict[int, float]]
     for letter in sorted(ignored):
         prog.notes.append(f"{filename}: note: {letter} words ignored (the stand has no spindle, coolant or tool changer)")
     return prog
+
+
+def _check_meaning(words: dict[str, tuple[float, int]], motion: int, filename: str, lineno: int) -> None:
+    """A word that means nothing for its block is an error, not silently dropped (LinuxCNC):
+    I/J/R belong to arcs, and an arc takes either its centre (I/J) or its radius (R)."""
+    if motion in (0, 1):
+        for letter in "IJR":
+            if letter in words:
+                what = "an arc's radius" if letter == "R" else "an arc's centre"
+                raise GcodeError(f"{filename}:{lineno}:{words[letter][1]}: error: {letter} ({what}) means nothing "
+                                 f"for G0{motion}: arcs only (G02/G03)")
+    elif "R" in words and ("I" in words or "J" in words):
+        c = words["I" if "I" in words else "J"][1]
+        raise GcodeError(f"{filename}:{lineno}:{c}: error: G0{motion} with both R and I/J: give the radius (R) "
+                         f"or the centre (I/J), not both")
 
 
 def tangent(f: Frame, at_end: bool) -> tuple[float, float]:
@@ -220,27 +298,33 @@ def _check_correction(prev: Optional[Frame], f: Frame, filename: str, col: int) 
 
 
 def _strip_comments(line: str, filename: str, lineno: int) -> str:
-    out, depth = [], 0
-    for ch in line:
-        if ch == ";" and depth == 0:
+    """The line with its comments blanked out (columns kept). Comments do not nest (LinuxCNC,
+    ISO 6983): a '(' inside a comment is an error, not a deeper level."""
+    out, opened = [], -1                 # opened: the column of the open comment's '('
+    for col, ch in enumerate(line):
+        if opened < 0 and ch == ";":
             break
         if ch == "(":
-            depth += 1
+            if opened >= 0:
+                raise GcodeError(f"{filename}:{lineno}:{col + 1}: error: '(' inside a comment (opened at column "
+                                 f"{opened + 1}): comments do not nest")
+            opened = col
         elif ch == ")":
-            if depth == 0:
-                raise GcodeError(f"{filename}:{lineno}:{len(''.join(out)) + 1}: error: ')' without '('")
-            depth -= 1
-        elif depth == 0:
+            if opened < 0:
+                raise GcodeError(f"{filename}:{lineno}:{col + 1}: error: ')' without '('")
+            opened = -1
+        elif opened < 0:
             out.append(ch)
             continue
         out.append(" ")
-    if depth:
-        raise GcodeError(f"{filename}:{lineno}:{line.index('(') + 1}: error: comment not closed")
+    if opened >= 0:
+        raise GcodeError(f"{filename}:{lineno}:{opened + 1}: error: comment not closed")
     return "".join(out)
 
 
-def _centre(words, start, end, motion, scale, filename, lineno, col) -> tuple[float, float]:
-    """The arc's centre relative to its start, from I/J or R; checked against the end."""
+def _centre(words, start, end, motion, scale, filename, lineno, col, step_mm) -> tuple[float, float]:
+    """The arc's centre relative to its start, from I/J or R; checked against the end: the end
+    may miss the circle by one step of the drives (the frames are rounded to steps anyway)."""
     sx, sy, ex, ey = start[0], start[1], end[0], end[1]
     if "R" in words:
         r = words["R"][0] * scale
@@ -264,7 +348,8 @@ def _centre(words, start, end, motion, scale, filename, lineno, col) -> tuple[fl
     r0, r1 = math.hypot(i, j), math.hypot(ex - sx - i, ey - sy - j)
     if r0 == 0:
         raise GcodeError(f"{filename}:{lineno}:{col}: error: the arc's centre is its start point")
-    if abs(r1 - r0) > ARC_TOLERANCE_MM:
+    if abs(r1 - r0) > step_mm + 1e-9:
         raise GcodeError(f"{filename}:{lineno}:{col}: error: the end point is not on the arc's circle "
-                         f"(radius {r0:.4f} mm at the start, {r1:.4f} mm at the end; tolerance {ARC_TOLERANCE_MM} mm)")
+                         f"(radius {r0:.4f} mm at the start, {r1:.4f} mm at the end; tolerance one step, "
+                         f"{step_mm:g} mm)")
     return i, j

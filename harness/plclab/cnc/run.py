@@ -58,7 +58,7 @@ def run_cnc(part: str, method: str = "evalfn", step_mm: float = 0.01, feed: Opti
         raise PlcLabError(f"--method evalfn runs {cnc.STUDENT_BLOCK}, the students' Task 4 block, and this "
                           f"installed package ships only its stub: run yours with --program "
                           f"{cnc.STUDENT_BLOCK}.st (or use --method dda or integration)")
-    gcode = parse_file(part, tools)
+    gcode = parse_file(part, tools, step_mm)
     frames = gcode.frames
     if feed is not None:
         frames = [f if f.kind == 0 else replace(f, feed=feed) for f in frames]

@@ -4,14 +4,16 @@
 """
 from __future__ import annotations
 
+import os
 from pathlib import Path
 from typing import Iterable
 
+from plclab import fileio
 from plclab.errors import CompileError, Diagnostic
 from plclab.frontend import ast as A
 from plclab.frontend.checked import CheckedUnit
 from plclab.frontend.checker import check_unit
-from plclab.frontend.parser import parse_source
+from plclab.frontend.parser import MAX_SOURCE_BYTES, parse_source
 
 __all__ = ["CheckedUnit", "check_sources", "load_files", "read_source", "read_sources"]
 
@@ -19,14 +21,11 @@ __all__ = ["CheckedUnit", "check_sources", "load_files", "read_source", "read_so
 def read_source(path: str | Path) -> tuple[str, list[Diagnostic]]:
     """The text of an ST file, or a diagnostic saying why it cannot be read."""
     name = str(path)
-    try:
-        data = Path(path).read_bytes()
-    except FileNotFoundError:
-        return "", [Diagnostic(name, 1, 1, "no such file")]
-    except IsADirectoryError:
-        return "", [Diagnostic(name, 1, 1, "is a directory, not an ST file")]
-    except OSError as e:
-        return "", [Diagnostic(name, 1, 1, f"cannot read file: {e.strerror}")]
+    try:                 # a regular file within the parser's size limit, checked before reading
+        data = fileio.read_input(path, MAX_SOURCE_BYTES)
+    except fileio.InputError as e:
+        why = "is a directory, not an ST file" if os.path.isdir(path) else str(e)
+        return "", [Diagnostic(name, 1, 1, why)]
     return data.decode("utf-8", errors="replace").replace("\ufffd", "\x00" if b"\x00" in data else "\ufffd"), []
 
 
@@ -125,9 +124,6 @@ def _read_project(path: str | Path, st_texts: list[tuple[str, str]]) -> tuple[st
     data, errs = _read_bytes(path)
     if errs:
         return "", errs
-    if len(data) > MAX_PROJECT_BYTES:
-        return "", [Diagnostic(name, 1, 1, f"too large for a project (more than {MAX_PROJECT_BYTES // 2**20} MiB; "
-                                           f"a lab program's plc.xml is a few hundred kB)")]
     try:
         return source_from_xml(name, data, st_texts), []
     except CompileError as e:
@@ -140,16 +136,12 @@ def _read_project(path: str | Path, st_texts: list[tuple[str, str]]) -> tuple[st
 
 
 def _read_bytes(path: str | Path) -> tuple[bytes, list[Diagnostic]]:
-    name = str(path)
+    """A plc.xml's bytes: a regular file within the project size limit, checked before reading."""
     try:
-        with open(path, "rb") as f:
-            return f.read(MAX_PROJECT_BYTES + 1), []      # never more than the bound into memory
-    except FileNotFoundError:
-        return b"", [Diagnostic(name, 1, 1, "no such file")]
-    except IsADirectoryError:
-        return b"", [Diagnostic(name, 1, 1, "is a directory, not a plc.xml project")]
-    except OSError as e:
-        return b"", [Diagnostic(name, 1, 1, f"cannot read file: {e.strerror}")]
+        return fileio.read_input(path, MAX_PROJECT_BYTES), []
+    except fileio.InputError as e:
+        why = "is a directory, not a plc.xml project" if os.path.isdir(path) else str(e)
+        return b"", [Diagnostic(str(path), 1, 1, why)]
 
 
 def load_files(paths: Iterable[str | Path]) -> CheckedUnit:

@@ -328,8 +328,8 @@ def basics_flow(op: Op[Any], ids: tuple[str, str, str], record: Callable[[], flo
                 c.check(bounce, off is None, "HL1 stays 1 after a 30 ms SB1 press (nothing recorded)",
                         "HL1 went 0: the bounce recorded a frame", off)
             else:                    # a dark HL1 cannot show what the bounce did
-                c.fail(bounce, "", f"not checked: HL1 is 0 at power-up (see {lamp}), so it cannot show whether "
-                       "the 30 ms press recorded a frame", t)
+                c.not_checked(bounce, f"HL1 is 0 at power-up (see {lamp}), so it cannot show whether "
+                              "the 30 ms press recorded a frame", t)
         released = record()
         went_off = op.s.trace.first(lambda st: not st.HL1, after=released - 0.2, until=released + 2 * op.tol,
                                     default=None)
@@ -614,7 +614,7 @@ def _stops_after_last(op: Op[F], frames: Sequence[F], done: float) -> None:
     with c.requirement("T3.5"):
         if not op.quiet_after("T3.5", done, PAUSE_LONG + REFUSED, f"no frame starts after frame {n} (the last) "
                               f"and its pause, {name} being 0", "execution went on to frame 1"):
-            c.fail("T3.6", "", "not checked: execution did not stop after the last frame (see T3.5)", None)
+            c.not_checked("T3.6", "execution did not stop after the last frame (see T3.5)", None)
             return
     with c.requirement("T3.6"):
         if not op.quiet("T3.6", op.press(), REFUSED, f"{op.mode}after the stop, an SB1 press with {name} = 0 "

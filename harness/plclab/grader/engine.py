@@ -125,6 +125,9 @@ def _rows(req: RequirementSet, checks: Checks) -> list[Row]:
         if failure is not None:
             f, scenario = failure
             rows.append(Row(r.id, r.text, False, f.expected, f.observed, f.time, scenario))
+        elif r.id in checks.unchecked:               # an earlier failure made the check impossible
+            f, scenario = checks.unchecked[r.id]
+            rows.append(Row(r.id, r.text, False, f.expected, f.observed, f.time, scenario, unchecked=True))
         elif r.id in checks.passed and not unchecked:
             rows.append(Row(r.id, r.text, True, scenario=r.scenario if r.scenario != EVERY else ""))
         else:
@@ -135,8 +138,11 @@ def _rows(req: RequirementSet, checks: Checks) -> list[Row]:
 
 def _not_checked(r: Requirement, checks: Checks, scenario: str, partly: bool) -> Row:
     """The row of a requirement not checked to the end in `scenario` (`partly`: it was in
-    another of its scenarios): a grader bug there, the scenario stopped, or it ended first."""
+    another of its scenarios): a grader bug there, the scenario stopped, or it ended first.
+    After a failure in that scenario the row is NOT CHECKED (that failure is the verdict);
+    with no failure to explain the stop, the stop itself is this row's FAIL."""
     where = f" in scenario {scenario}" if partly else ""
+    after_failure = any(sc == scenario for _f, sc in checks.failures.values())
     if scenario in checks.internal or (scenario == EVERY and checks.internal):
         scenario = scenario if scenario != EVERY else next(iter(checks.internal))
         error, time = checks.internal[scenario]
@@ -145,11 +151,11 @@ def _not_checked(r: Requirement, checks: Checks, scenario: str, partly: bool) ->
     if scenario in checks.stopped:
         reason, time = checks.stopped[scenario]
         return Row(r.id, r.text, False, "", f"not checked{where}: the scenario stopped first: {reason}",
-                   time, scenario)
+                   time, scenario, unchecked=after_failure)
     earlier = [rid for rid, (_f, sc) in checks.failures.items() if sc == scenario]
     why = (f"the scenario could not go on after {earlier[0]} failed" if earlier
            else "the scenario ended before this check")
-    return Row(r.id, r.text, False, "", f"not checked{where}: {why}", None, scenario)
+    return Row(r.id, r.text, False, "", f"not checked{where}: {why}", None, scenario, unchecked=bool(earlier))
 
 
 def requirement_table(stand: str, task: str) -> list[tuple[str, str]]:

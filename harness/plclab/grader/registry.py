@@ -15,7 +15,11 @@ How an instructor adds a requirement (one file, `plclab.grader.<stand>`, no engi
    is the requirement's failure, with what was expected, what was seen and when) and
    `c.fail(...)` records a failure outright. Leaving the block normally -- also by `return`
    -- passes the requirement unless a failure was recorded; an exception (ScenarioFailure:
-   the stand could not go on) leaves it "not checked", which fails. No forgotten `ok()`.
+   the stand could not go on) leaves it "not checked". No forgotten `ok()`. A check that
+   cannot be made because of an earlier failure says so: `c.not_checked(rid, why, time)`.
+   A requirement not checked after another one failed in its scenario is reported NOT
+   CHECKED (not a pass, and not a second mistake); not checked with no failure to explain it,
+   it is a FAIL naming why the scenario stopped.
 
 3. List it in the task's requirement set with its scenario:
 
@@ -64,7 +68,7 @@ class Checks:
     `check` for each observation (a False one is a `fail`); leaving the block normally
     completes the requirement (`ok`). The first failure is the requirement's verdict; a
     requirement neither failed nor completed was not checked to the end (its scenario stopped
-    first), which is a failure too.
+    first): never a pass (see engine._rows for NOT CHECKED).
     """
 
     def __init__(self, requirements: Sequence[Requirement]):
@@ -74,6 +78,7 @@ class Checks:
         self.scenario = ""
         self.stopped: dict[str, tuple[str, Optional[float]]] = {}   # scenario -> (reason, time)
         self.internal: dict[str, tuple[str, Optional[float]]] = {}  # scenario -> (grader error, time)
+        self.unchecked: dict[str, tuple[Failure, str]] = {}          # requirement -> (why, scenario)
 
     def _known(self, rid: str) -> None:
         if rid not in self.requirements:
@@ -116,6 +121,14 @@ class Checks:
         if not condition:
             self.fail(rid, expected, observed, time)
         return bool(condition)
+
+    def not_checked(self, rid: str, why: str, time: Optional[float]) -> None:
+        """`rid` cannot be checked because of an earlier failure (`why` names it): reported
+        NOT CHECKED, never a pass. A failure of `rid` itself, recorded before or after, wins."""
+        self._known(rid)
+        if rid not in self.unchecked:
+            at = None if time is None else round(time, 6)
+            self.unchecked[rid] = (Failure("", f"not checked: {why}", at), self.scenario)
 
     def failed(self, rid: str) -> bool:
         return rid in self.failures

@@ -14,7 +14,19 @@ from typing import Optional
 
 WIDTH = 100          # the table fits a terminal of this width
 ID_WIDTH = 6
-RESULT_WIDTH = 6       # "result"
+NOT_CHECKED = "NOT CHECKED"
+RESULT_WIDTH = len(NOT_CHECKED)   # the widest result
+
+
+MAX_QUOTE = 2000     # a message quotes at most this many characters of what it shows
+
+
+def clip(text: str, limit: int = MAX_QUOTE) -> str:
+    """`text` cut to `limit` characters, saying how much was left out: a message never
+    repeats a student's 1 MB identifier whole."""
+    if len(text) <= limit:
+        return text
+    return f"{text[:limit]}... ({len(text) - limit} more characters not shown)"
 
 
 @dataclass(frozen=True)
@@ -29,10 +41,15 @@ class Row:
     time: Optional[float] = None     # plant time of the observation (s)
     scenario: str = ""               # which scenario (trace) shows it
     internal: bool = False           # not checked because the grader failed: not the student's fault
+    unchecked: bool = False          # not checked because an earlier failure stopped its scenario
 
     @property
     def result(self) -> str:
-        return "PASS" if self.passed else "ERROR" if self.internal else "FAIL"
+        """PASS; FAIL (the program's mistake); NOT CHECKED (an earlier failure stopped the
+        scenario before this check: not a pass, not a second mistake); ERROR (the grader failed)."""
+        if self.passed:
+            return "PASS"
+        return "ERROR" if self.internal else NOT_CHECKED if self.unchecked else "FAIL"
 
 
 @dataclass
@@ -76,7 +93,7 @@ class GradeReport:
         out = [self.title, f"{self.noun}: " + " ".join(self.files)]
         if self.errors:
             out.append(self.unreadable)
-            out.extend(self.errors)
+            out.extend(clip(e) for e in self.errors)
             out.append("FAIL")
             return "\n".join(out) + "\n"
         text_width = WIDTH - ID_WIDTH - RESULT_WIDTH - 4
@@ -90,7 +107,7 @@ class GradeReport:
             out.extend(indent + line for line in lines[1:])
             if not r.passed:
                 detail_width = WIDTH - len(indent) - 10
-                for label, value in (("expected", r.expected), ("observed", r.observed)):
+                for label, value in (("expected", clip(r.expected)), ("observed", clip(r.observed))):
                     if value:
                         wrapped = textwrap.wrap(value, detail_width) or [""]
                         out.append(f"{indent}{label}: {wrapped[0]}")
@@ -108,6 +125,10 @@ class GradeReport:
         n_pass = sum(r.passed for r in self.rows)
         verdict = "PASS" if self.passed else "FAIL"
         out.append(f"{n_pass} of {len(self.rows)} requirements passed: {verdict}")
+        n_unchecked = sum(r.result == NOT_CHECKED for r in self.rows)
+        if n_unchecked:
+            out.append(f"{n_unchecked} requirement(s) NOT CHECKED: an earlier failure stopped their scenario; "
+                       "fix the failures above and grade again")
         if self.grader_failed:
             n = sum(r.internal for r in self.rows)
             out.append(f"the grader itself failed on {n} requirement(s) (ERROR): not a mistake of your "

@@ -5,10 +5,15 @@ own Modbus server cannot write %IX, so a switch or SB1 can only be operated thro
 This face serves a PlantHost (plclab.plants.host) with the stand's FACE table
 (plclab.plants.<stand>.FACE, documented in docs/openplc.md):
 
-  coils             0..  the console switches, in FACE.switches order (read and write)
+  coils             0..  the console switches, in FACE.switches order (read and write):
+                         what the operator did, 1 = on / pressed; for a normally closed
+                         button (the CNC stand's emergency stop SB3) the PLC then reads 0
   discrete inputs   0..  the lamps (PLC outputs) in FACE.lamps order, then PLANT_FAULT
   input registers   0..  the plant readouts in FACE.readouts order (raw 16-bit)
-  holding registers none (exception 01)
+  holding registers none (exception 01), but for a stand with a tape reader (FACE.tape: the
+                         CNC stand): 0 the frame count, 1 the method, 2.. the frames'
+                         values (FACE.tape registers); writing register 0 puts the tape
+                         written so far on the reader (`plclab console cnc --part`)
 
 It is served by the PSM script inside OpenPLC, by `plclab plant --psm` and by `plclab serve`
 (default 127.0.0.1:2606). `ConsoleClient` is the project's client (`plclab console`); any
@@ -23,8 +28,9 @@ from typing import Any, Callable, Iterable
 from plclab.errors import PlcLabError
 
 from .maps import RegisterMap
-from .protocol import (READ_COILS, READ_DISCRETE_INPUTS, READ_INPUT_REGISTERS, WRITE_MULTIPLE_COILS,
-                       WRITE_SINGLE_COIL, ExceptionCode, ModbusException, Table)
+from .protocol import (MAX_WRITE_REGISTERS, READ_COILS, READ_DISCRETE_INPUTS, READ_HOLDING_REGISTERS,
+                       READ_INPUT_REGISTERS, WRITE_MULTIPLE_COILS, WRITE_MULTIPLE_REGISTERS, WRITE_SINGLE_COIL,
+                       WRITE_SINGLE_REGISTER, ExceptionCode, ModbusException, Table)
 from .rawclient import RawModbusClient, RawModbusError
 from .server import DEFAULT_HOST, ModbusTcpServer, ServerError
 
@@ -38,11 +44,15 @@ class ConsoleMap(RegisterMap):
 
     functions = frozenset({READ_COILS, READ_DISCRETE_INPUTS, READ_INPUT_REGISTERS,
                            WRITE_SINGLE_COIL, WRITE_MULTIPLE_COILS})
+    tape_functions = frozenset({READ_HOLDING_REGISTERS, WRITE_SINGLE_REGISTER, WRITE_MULTIPLE_REGISTERS})
 
     def __init__(self, host: Any):
         self.host = host
         self.switches = tuple(host.face.switches)
         self.coils = [0] * len(self.switches)
+        self.tape = [0] * getattr(host.face, "tape", 0)     # the tape being written (holding registers)
+        if self.tape:
+            self.functions = self.functions | self.tape_functions
 
     def read(self, table: Table, start: int, count: int) -> list[int]:
         if table is Table.COILS:
@@ -51,18 +61,43 @@ class ConsoleMap(RegisterMap):
             values = self.host.lamps()
         elif table is Table.INPUT_REGISTERS:
             values = self.host.readouts()
+        elif table is Table.HOLDING_REGISTERS and self.tape:
+            values = self.tape
         else:
             raise ModbusException(ExceptionCode.ILLEGAL_FUNCTION, f"the console face has no {table.value}")
         _check(table, start, count, len(values))
         return values[start:start + count]
 
     def write(self, table: Table, start: int, values: tuple[int, ...]) -> None:
+        if table is Table.HOLDING_REGISTERS and self.tape:
+            self._write_tape(start, values)
+            return
         if table is not Table.COILS:
             raise ModbusException(ExceptionCode.ILLEGAL_FUNCTION, f"writing {table.value}")
         _check(table, start, len(values), len(self.switches))
         for i, value in enumerate(values, start):
             self.coils[i] = 1 if value else 0
-            self.host.set_switch(self.switches[i], self.coils[i])
+            name = self.switches[i]        # the contact: a pressed normally closed button opens
+            self.host.set_switch(name, self.coils[i] ^ (name in self.host.normally_closed))
+
+    def _write_tape(self, start: int, values: tuple[int, ...]) -> None:
+        """Tape registers; writing register 0 (the frame count) loads the tape onto the
+        reader, refused whole (exception 03) if the plant refuses it."""
+        _check(Table.HOLDING_REGISTERS, start, len(values), len(self.tape))
+        tape = list(self.tape)
+        tape[start:start + len(values)] = [v & 0xFFFF for v in values]
+        if start == 0:
+            count, method, n = tape[0], tape[1], self.host.face.tape_fields
+            most = (len(tape) - 2) // n
+            if not 1 <= count <= most:
+                raise ModbusException(ExceptionCode.ILLEGAL_DATA_VALUE,
+                                      f"tape: frame count {count} outside 1..{most}")
+            words = [v - 0x10000 if v & 0x8000 else v for v in tape[2:2 + n * count]]
+            try:
+                self.host.load_tape(method, [tuple(words[k:k + n]) for k in range(0, len(words), n)])
+            except ValueError as exc:
+                raise ModbusException(ExceptionCode.ILLEGAL_DATA_VALUE, f"tape: {exc}") from None
+        self.tape = tape
 
 
 def _check(table: Table, start: int, count: int, size: int) -> None:
@@ -133,6 +168,15 @@ class ConsoleClient:
         self.sleep(seconds)
         self.client.write_coil(address, False)
 
+    def load_tape(self, method: int, frames: list[tuple[int, ...]]) -> None:
+        """Write a part program's frames to the face's tape registers, then the count, which
+        puts it on the reader (the PLC stores the frames while idle)."""
+        words = [v & 0xFFFF for frame in frames for v in frame]
+        self.client.write_register(1, method)
+        for k in range(0, len(words), MAX_WRITE_REGISTERS):
+            self.client.write_registers(2 + k, words[k:k + MAX_WRITE_REGISTERS])
+        self.client.write_register(0, len(frames))
+
     def state(self) -> tuple[list[int], list[int], list[int]]:
         """(coils, lamps, readouts) as the face serves them now."""
         face = self.face
@@ -166,10 +210,15 @@ def _press(text: str) -> tuple[str, float]:
 
 
 def run_console(stand: str, where: tuple[str, int], sets: Iterable[str] = (),
-                presses: Iterable[str] = ()) -> list[str]:
-    """`plclab console`: set switches (NAME=V), then press buttons (NAME[=SECONDS]) one after
-    the other, then read the face; the lines to print. Bad names fail before anything is sent."""
+                presses: Iterable[str] = (), tape: tuple[int, list[tuple[int, ...]]] | None = None,
+                tape_wait: float = 10.0) -> list[str]:
+    """`plclab console`: put a part program on the tape reader (`tape`: method, frames) and
+    wait up to `tape_wait` s for the PLC to store it, set switches (NAME=V), then press
+    buttons (NAME[=SECONDS]) one after the other, then read the face; the lines to print.
+    Bad names fail before anything is sent."""
     face = importlib.import_module(f"plclab.plants.{stand}").FACE
+    if tape is not None and not face.tape:
+        raise ConsoleError(f"the {stand} stand has no tape reader (--part is for the cnc stand)")
     with ConsoleClient(face, where[0], where[1]) as client:
         writes = []
         for text in sets:
@@ -178,11 +227,34 @@ def run_console(stand: str, where: tuple[str, int], sets: Iterable[str] = (),
                 raise ConsoleError(f"--set {text}: expected NAME=VALUE, e.g. SA5=1")
             writes.append((client.coil(name), parse_value(value, f"--set {text}")))
         holds = [(client.coil(name), name, seconds) for name, seconds in map(_press, presses)]
+        lines = []
         try:
+            if tape is not None:
+                lines.append(_send_tape(client, face, *tape, tape_wait))
             for address, value in writes:
                 client.client.write_coil(address, bool(value))
             for _address, name, seconds in holds:
                 client.press(name, seconds)
-            return console_lines(face, *client.state())
+            return lines + console_lines(face, *client.state())
         except (OSError, RawModbusError) as exc:
             raise ConsoleError(f"console face at {where[0]}:{where[1]}: {exc}") from None
+
+
+def _send_tape(client: ConsoleClient, face: Any, method: int, frames: list[tuple[int, ...]], wait: float) -> str:
+    """Load the tape and wait for the PLC to store it all (the `tape` readout); one line."""
+    try:
+        client.load_tape(method, frames)
+    except RawModbusError as exc:
+        raise ConsoleError(f"the stand refused the part program: {exc}") from None
+    where = [name for name, _unit in face.readouts].index("tape")
+    deadline = time.monotonic() + wait
+    stored = 0
+    while True:
+        stored = client.client.read_input_registers(where, 1)[0]
+        if stored == len(frames) or time.monotonic() >= deadline:
+            break
+        client.sleep(0.05)
+    if stored == len(frames):
+        return f"tape: {len(frames)} frames stored by the PLC; SB1 runs them"
+    return (f"tape: the PLC has stored {stored} of {len(frames)} frames so far (it stores them while no "
+            f"program runs; the tape readout shows the progress)")

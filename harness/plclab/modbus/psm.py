@@ -391,9 +391,11 @@ class PlantService:
 
 def run_plant(stand: str, psm: tuple[str, int] = (DEFAULT_HOST, PSM_PORT),
               console: tuple[str, int] | None = (DEFAULT_HOST, CONSOLE_PORT), *,
-              traceback: bool = False, out: Callable[[str], None] = print) -> int:
-    """Run `stand`'s plant as a PSM server with its console face until OpenPLC's stop request
-    (the PSM script's and `plclab plant --psm`'s main loop); Ctrl-C also stops it."""
+              traceback: bool = False, out: Callable[[str], None] = print,
+              params: dict[str, Any] | None = None) -> int:
+    """Run `stand`'s plant (made with `params`) as a PSM server with its console face until
+    OpenPLC's stop request (the PSM script's and `plclab plant --psm`'s main loop); Ctrl-C
+    also stops it."""
     import sys
 
     from plclab.plants import make_plant
@@ -403,7 +405,7 @@ def run_plant(stand: str, psm: tuple[str, int] = (DEFAULT_HOST, PSM_PORT),
         sys.stderr.write(text + "\n")
         sys.stderr.flush()
 
-    host = PlantHost(make_plant(stand), report=report, traceback=traceback)
+    host = PlantHost(make_plant(stand, **(params or {})), report=report, traceback=traceback)
     service = PlantService(host, psm, console, report=report).start()
     out(f"{stand} plant: {service.where()}; stops on 127 in holding register 50")
     try:
@@ -457,6 +459,7 @@ STAND = {stand!r}
 PSM = ({psm_host!r}, {psm_port})            # OpenPLC's PSM client connects to 127.0.0.1:2605
 CONSOLE = ({console_host!r}, {console_port})
 
+PLANT = {plant!r}                        # the plant's parameters (cnc: as the OpenPLC bundle needs)
 PACKAGES = {packages!r}
 EMBEDDED = {{
 {embedded}
@@ -485,7 +488,8 @@ if __name__ == "__main__":
     sys.meta_path.insert(0, EmbeddedModules())
     from plclab.modbus.psm import run_plant
 
-    sys.exit(run_plant(STAND, PSM, CONSOLE, traceback=True, out=lambda line: print(line, flush=True)))
+    sys.exit(run_plant(STAND, PSM, CONSOLE, traceback=True, out=lambda line: print(line, flush=True),
+                       params=PLANT))
 '''
 
 
@@ -518,7 +522,13 @@ def psm_script(stand: str, *, psm: tuple[str, int] = (DEFAULT_HOST, PSM_PORT),
               ("input registers", [f"{name} ({unit})" for name, unit in face.readouts]))
     face_lines = [textwrap.fill(f"{table} 0..: " + ", ".join(names), 92, initial_indent="#   ",
                                 subsequent_indent="#       ") for table, names in tables]
+    if face.tape:
+        face_lines.append(f"#   holding registers 0..{face.tape - 1}: the tape reader (plclab console {stand} --part)")
+    plant: dict[str, Any] = {}
+    if stand == "cnc":                       # in step with `plclab build cnc`'s fine cycle
+        from plclab.cnc.openplc import plant_params
+        plant = plant_params()
     return _SCRIPT.format(
-        stand=stand, psm_host=psm[0], psm_port=psm[1], console_host=console[0], console_port=console[1],
+        plant=plant, stand=stand, psm_host=psm[0], psm_port=psm[1], console_host=console[0], console_port=console[1],
         face="\n".join(face_lines), packages=packages, embedded="\n".join(lines),
         modules=textwrap.fill(", ".join(sorted(modules)), 92, initial_indent="#   ", subsequent_indent="#   "))

@@ -23,6 +23,7 @@ from dataclasses import dataclass
 from pathlib import Path
 from typing import Callable, Optional
 
+from plclab import fileio
 from plclab.errors import PlcLabError
 
 from .protocol import ALL_FUNCTIONS, ExceptionCode, ModbusException, Request, Table, decode_request
@@ -184,11 +185,16 @@ def parse_traffic(text: str, name: str = "<traffic>") -> Traffic:
     return Traffic(exchanges, duration)
 
 
+MAX_TRAFFIC_BYTES = 64 * 1024 * 1024     # a day's session of a busy client is well below
+
+
 def read_traffic(path: str | Path) -> Traffic:
+    """A recorded traffic log; a FIFO, a device or an oversized file is refused before reading
+    (the log is a student's hand-in)."""
     try:
-        data = Path(path).read_bytes()
-    except OSError as e:
-        raise PlcLabError(f"{path}: cannot read the traffic log: {e.strerror}") from None
+        data = fileio.read_input(path, MAX_TRAFFIC_BYTES)
+    except fileio.InputError as e:
+        raise PlcLabError(f"{path}: cannot read the traffic log: {e}") from None
     return parse_traffic(data.decode("utf-8", errors="replace"), str(path))
 
 

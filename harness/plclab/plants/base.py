@@ -43,6 +43,8 @@ class ConsoleFace:
     switches: tuple[str, ...]                  # console input names, in coil order
     lamps: tuple[tuple[str, str], ...]         # (lamp label, PLC output location)
     readouts: tuple[tuple[str, str], ...]      # (readout name, unit)
+    tape: int = 0                              # holding registers of a tape reader (0: none), load_tape()
+    tape_fields: int = 0                       # values per frame on the tape
 
 
 class PlantModel:

@@ -31,6 +31,15 @@ Position counters. The table reports each axis's position in steps as a 16-bit c
 %IW (it wraps), what a linear scale's counter card would give; the plant's own positions in
 mm (`position_mm`) are what the harness plots and checks.
 
+Tape reader. Inside OpenPLC nothing but located I/O reaches the PLC, so the part program's
+frames come in the way a punched-tape reader gave them to a CNC: `load_tape` (the console
+face's holding registers, `plclab console cnc --part`) puts a prepared frame table on the
+reader; once the PLC's acknowledgement TAPE_ACK (%QW4) is 0, the reader presents frame 1 on
+%IW4 (its number), %IW5 (the frame count), %IW6 (the method) and %IW7..%IW15 (kind, X, Y, Z,
+I, J, feed, comp, radius: the frame table's values, steps, 16-bit signed); each time the PLC
+acknowledges the frame shown (TAPE_ACK = its number) the next one follows; after the last,
+the reader shows 0. The PLC stores the frames while idle (PRG_CncStand).
+
 Standard library only (see the package docstring).
 """
 from __future__ import annotations
@@ -63,12 +72,19 @@ LIMIT_LABELS = {("X", -1): "SQ1", ("X", 1): "SQ2", ("Y", -1): "SQ3", ("Y", 1): "
 PROBE = "IX1.2"           # B1: the touch probe made contact
 OVERRIDE = "IW0"          # RP1 feed override potentiometer, percent 0..150
 COUNTER = {"X": "IW1", "Y": "IW2", "Z": "IW3"}
+TAPE_FRAME, TAPE_COUNT, TAPE_METHOD = "IW4", "IW5", "IW6"   # tape reader: frame shown, count, method
+TAPE_WORDS = tuple(f"IW{7 + k}" for k in range(9))          # kind, X, Y, Z, I, J, feed, comp, radius
+TAPE_ACK = "QW4"          # the PLC: the number of the frame it stored (0: ready for a tape)
+TAPE_FIELDS = len(TAPE_WORDS)
+TAPE_FRAMES = 200         # the frame table's size (GVL_CNC)
 _LAMP_ITEMS = tuple(LAMPS.items())
 # The console face (docs/openplc.md): coils SB1, SB2, SA1, SB3 (1 = released); lamps HL1, HL2;
 # the table's positions and the missed steps.
 FACE = ConsoleFace(switches=tuple(CONSOLE), lamps=tuple(LAMPS.items()),
                    readouts=tuple((f"{a}", "table position, steps (16-bit, signed)") for a in AXES)
-                   + (("missed", "steps missed by all drives (16-bit)"),))
+                   + (("missed", "steps missed by all drives (16-bit)"),
+                      ("tape", "frames of the last tape the PLC has stored")),
+                   tape=2 + TAPE_FIELDS * TAPE_FRAMES, tape_fields=TAPE_FIELDS)
 
 
 @dataclass
@@ -90,8 +106,9 @@ class CncTable(PlantModel):
     """The X-Y-Z table, its drives, limit switches and console."""
 
     outputs = ([STEP[a] for a in AXES] + [DIR[a] for a in AXES] + [ENABLE] + list(LAMPS.values())
-               + [PULSES[a] for a in AXES] + [PULSE_CYCLE])
-    inputs = list(CONSOLE.values()) + list(LIMITS.values()) + [PROBE, OVERRIDE] + list(COUNTER.values())
+               + [PULSES[a] for a in AXES] + [PULSE_CYCLE, TAPE_ACK])
+    inputs = (list(CONSOLE.values()) + list(LIMITS.values()) + [PROBE, OVERRIDE] + list(COUNTER.values())
+              + [TAPE_FRAME, TAPE_COUNT, TAPE_METHOD] + list(TAPE_WORDS))
     FACE = FACE
     CONSOLE = CONSOLE             # set_switch / press / release: plants.base.PlantModel
     NORMALLY_CLOSED = frozenset({"SB3"})
@@ -126,6 +143,11 @@ class CncTable(PlantModel):
         self.override = 100
         self.lamps = {name: 0 for name in LAMPS}
         self.enabled = False
+        self.tape: Optional[list[tuple[int, ...]]] = None   # frames on the reader
+        self.tape_method = 0
+        self.tape_at = 0            # the frame shown (1..), 0: waiting for TAPE_ACK = 0
+        self.tape_stored = 0        # frames of the last tape the PLC acknowledged
+        self._tape_shown = False    # the reader's inputs need reporting (a tape, or just finished)
 
     # --- the plant contract -------------------------------------------------------------
 
@@ -137,6 +159,8 @@ class CncTable(PlantModel):
         get = outputs.get
         self.lamps = {name: 1 if get(loc, 0) else 0 for name, loc in _LAMP_ITEMS}
         self.enabled = bool(get(ENABLE, 0)) and bool(self.console_bits["SB3"])
+        if self.tape is not None:
+            self._read_tape(signed16(get(TAPE_ACK, 0)))
         cycle = get(PULSE_CYCLE, 0)
         if cycle != self.cycle_seen:
             self.cycle_seen = cycle
@@ -222,6 +246,52 @@ class CncTable(PlantModel):
         """Record the time of every pulse each drive receives (for the tests' timing checks)."""
         self.pulse_log = {a: [] for a in AXES}
 
+    # --- the tape reader -----------------------------------------------------------------
+
+    def load_tape(self, method: int, frames: list[tuple[int, ...]]) -> None:
+        """Put a part program on the tape reader: the method (0 evaluation function, 1 DDA,
+        2 digital integration) and per frame the frame table's nine values (see the module
+        docstring), 16-bit signed. Replaces a tape still being read."""
+        if not 1 <= len(frames) <= TAPE_FRAMES:
+            raise PlantError(f"a tape holds 1..{TAPE_FRAMES} frames (got {len(frames)})")
+        if method not in (0, 1, 2):
+            raise PlantError(f"tape method {method}: 0 evaluation function, 1 DDA, 2 digital integration")
+        for k, frame in enumerate(frames, start=1):
+            if len(frame) != TAPE_FIELDS or not all(-0x8000 <= int(v) <= 0x7FFF for v in frame):
+                raise PlantError(f"tape frame {k}: {TAPE_FIELDS} values of -32768..32767 expected")
+            if frame[0] not in (0, 1, 2, 3) or frame[7] not in (0, 1, 2):
+                raise PlantError(f"tape frame {k}: kind {frame[0]} (0..3) or correction {frame[7]} (0..2)")
+        self.tape = [tuple(int(v) for v in frame) for frame in frames]
+        self.tape_method = int(method)
+        self.tape_at = 0
+        self.tape_stored = 0
+        self._tape_shown = True
+
+    def _read_tape(self, ack: int) -> None:
+        """The PLC's acknowledgement of the last scan moves the tape on."""
+        assert self.tape is not None
+        if self.tape_at == 0:
+            if ack == 0:                 # the PLC is ready: show frame 1
+                self.tape_at = 1
+        elif ack == self.tape_at:
+            self.tape_stored = ack
+            self.tape_at += 1
+            if self.tape_at > len(self.tape):
+                self.tape = None         # read to its end: the reader shows 0 once more
+                self.tape_at = 0
+
+    def _tape_inputs(self, out: dict[str, int]) -> None:
+        tape, at = self.tape, self.tape_at
+        if tape is None or at == 0:
+            out[TAPE_FRAME] = 0
+            self._tape_shown = tape is not None
+            return
+        out[TAPE_FRAME] = at
+        out[TAPE_COUNT] = len(tape)
+        out[TAPE_METHOD] = self.tape_method
+        for loc, value in zip(TAPE_WORDS, tape[at - 1]):
+            out[loc] = value & 0xFFFF
+
     # --- console and set-up ----------------------------------------------------------------
 
     def set_backlash(self, steps: int) -> None:
@@ -263,7 +333,8 @@ class CncTable(PlantModel):
 
     def readouts(self) -> list[int]:
         """The console face's readouts: the positions (steps) and the missed steps."""
-        return [unsigned16(self.axes[a].steps) for a in AXES] + [unsigned16(sum(self.missed().values()))]
+        return ([unsigned16(self.axes[a].steps) for a in AXES] + [unsigned16(sum(self.missed().values()))]
+                + [self.tape_stored])
 
     def position_mm(self, axis: str) -> float:
         return self.axes[axis].steps * self.step_mm
@@ -287,6 +358,8 @@ class CncTable(PlantModel):
             out[counter_loc] = steps & 0xFFFF             # unsigned16
         out[PROBE] = 1 if self.holes and self.probe_contact() else 0
         out[OVERRIDE] = self.override
+        if self._tape_shown:                   # reported while a tape is read, and once after it
+            self._tape_inputs(out)
         return out
 
 

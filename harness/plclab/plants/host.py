@@ -43,6 +43,9 @@ class PlantHost:
                  report: Callable[[str], None] = _to_stderr, traceback: bool = False):
         self.plant = plant
         self.face = plant.FACE
+        # push buttons whose contact opens when pressed (an emergency stop): the console face
+        # shows what the operator did (1 = pressed), the plant gives the PLC the contact's level
+        self.normally_closed = frozenset(getattr(plant, "NORMALLY_CLOSED", ()))
         self.outputs = list(plant.outputs)
         self.period = plant.period
         self.clock = clock
@@ -103,6 +106,14 @@ class PlantHost:
                     self.plant.set_switch(name, 1 if value else 0)
                 except Exception as exc:  # noqa: BLE001 - the face only sends FACE names
                     self._freeze(exc)
+
+    def load_tape(self, method: int, frames: list[tuple[int, ...]]) -> None:
+        """Put a part program on the plant's tape reader (FACE.tape); a bad tape raises the
+        plant's PlantError (a ValueError), a failed plant a ValueError too: nothing is loaded."""
+        with self._lock:
+            if self.fault is not None:
+                raise ValueError(f"the plant has failed ({self.fault})")
+            self.plant.load_tape(method, frames)
 
     def lamps(self) -> list[int]:
         """The FACE lamps (PLC outputs of the last exchange), then the plant fault lamp."""

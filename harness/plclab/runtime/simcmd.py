@@ -17,7 +17,7 @@ from plclab.frontend.literals import LiteralError, parse_time
 from plclab.iec import types as T
 from plclab.runtime.faults import FaultRecord
 from plclab.runtime.image import image_slot
-from plclab.runtime.plc import PLC, image_bits
+from plclab.runtime.plc import PLC
 from plclab.runtime.compiler import compile_unit
 from plclab.runtime.sim import InputEvent, Simulation
 from plclab.trace import Trace, TraceFormatError, plot_trace, write_csv, write_vcd
@@ -58,24 +58,30 @@ def read_input_script(path: str, plc: PLC) -> list[InputEvent]:
 
 
 def input_type(plc: PLC, name: str) -> Any:
-    """The type a scripted value for `name` must have: the variable's, the type of the
-    variable located at an address, or for an address no variable uses, its image cell
-    (`_RawCell`: any value of the cell's width, signed or not)."""
+    """The type a scripted value for `name` must have: the variable's, or the type of the
+    variable located at an address. An address no variable of the program is located at is
+    refused: the program never reads it, so a row setting it is a typo (`%IW7` for `%IW1`)
+    that would otherwise go unnoticed."""
     if name.strip().startswith("%"):
         area, index = image_slot(name)
         for b in plc.bindings:
             if b.area == area and b.index == index:
                 return b.ty
-        return T.BOOL if area[1] == "X" else _RawCell(image_bits(area))
+        raise PlcLabError(f"{name.strip()} is not used by the program ({_declared(plc, area)})")
     ty = plc.resolve_typed(name)[2]
     if not isinstance(T.base_of(ty), (T.ElementaryType, T.StringType, T.EnumType)):
         raise PlcLabError(f"{name} is not an elementary variable; set one of its elements or fields")
     return ty
 
 
-@dataclass(frozen=True)
-class _RawCell:
-    bits: int
+def _declared(plc: PLC, area: str, shown: int = 8) -> str:
+    """What the program locates in image area `area`, for the message of an unused address."""
+    addresses = sorted({b.address for b in plc.bindings if b.area == area},
+                       key=lambda a: image_slot(a))
+    if not addresses:
+        return f"it declares no %{area} address"
+    more = f" and {len(addresses) - shown} more" if len(addresses) > shown else ""
+    return f"it declares {', '.join(addresses[:shown])}{more}"
 
 
 _INT_TEXT = re.compile(r"[+-]?\d{1,40}")
@@ -86,9 +92,6 @@ def typed_value(text: str, ty: Any, name: str) -> Any:
     """`text` as a value of `ty`, or PlcLabError saying why not (never a wrapped value)."""
     t = text.strip()
     shown = quoted(t)
-    if isinstance(ty, _RawCell):
-        low, high, what = -(1 << (ty.bits - 1)), (1 << ty.bits) - 1, f"a {ty.bits}-bit image cell"
-        return _integer(t, shown, low, high, f"{name} ({what})")
     b = T.base_of(ty)
     if b is T.BOOL:
         if t.lower() in ("0", "1", "true", "false"):
@@ -141,8 +144,12 @@ def run_sim(files: Sequence[str], duration_s: float, inputs: Optional[str] = Non
     checked = load_files(files)
     plc = PLC(compile_unit(checked), tick_ns=round(tick_s * 1e9) if tick_s else None)
     events = read_input_script(inputs, plc) if inputs else []
-    extra = [e.name for e in events if e.name.startswith("%")]
-    sim = Simulation(plc, watch=watch, extra_addresses=extra)
+    for name in watch:                       # a watched name the program lacks: say which option
+        try:
+            plc.resolve(name)
+        except PlcLabError as e:
+            raise PlcLabError(f"--watch {name}: {e}") from None
+    sim = Simulation(plc, watch=watch)
     try:
         sim.schedule(events)
     except PlcLabError as e:

@@ -85,33 +85,49 @@ def _setup(s: Session) -> None:
 DRIVES = ("step", "pulse")     # step/direction bits on %QX, or pulse counts per cycle on %QW
 
 
-def load_frames(s: Session, frames: list[Frame], method: str = "evalfn", diagonal: bool = False,
-                drive: str = "step") -> None:
-    """Write the frame table into the PLC (GVL_CNC), in steps of the drives, and the drive
-    interface the program uses (GVL_CNC.PulseDrive)."""
+FRAME_ARRAYS = ("FrameKind", "FrameX", "FrameY", "FrameZ", "FrameI", "FrameJ", "FrameFeed", "FrameComp",
+                "FrameRadius")
+
+
+def frame_table(frames: list[Frame], step_mm: float, method: str = "evalfn", diagonal: bool = False,
+                drive: str = "step") -> dict[str, object]:
+    """The PLC's frame table (GVL_CNC) for `frames`, in steps of `step_mm`: each of FRAME_ARRAYS
+    as the list of its first len(frames) elements, and FrameCount, Method, Diagonal and
+    PulseDrive. One source for load_frames (the harness writes it) and for the OpenPLC bundle
+    (plclab.cnc.openplc: its initial values)."""
     if len(frames) > MAX_FRAMES:
         raise ScenarioFailure(f"{len(frames)} frames: the frame table holds {MAX_FRAMES}")
     if method not in METHODS:
         raise ScenarioFailure(f"unknown method {method!r} (one of {', '.join(METHODS)})")
     if drive not in DRIVES:
         raise ScenarioFailure(f"unknown drive {drive!r} (one of {', '.join(DRIVES)})")
-    h = s.plant.step_mm
-    write = s.plc.write
-    for k, f in enumerate(frames, start=1):
-        write(f"FrameKind[{k}]", f.kind)
+    h = step_mm
+    table: dict[str, list[int]] = {name: [] for name in FRAME_ARRAYS}
+    for f in frames:
+        table["FrameKind"].append(f.kind)
         for axis, v in zip("XYZ", f.end):
-            write(f"Frame{axis}[{k}]", round(v / h))
-        if f.is_arc:
-            cx, cy = f.centre
-            write(f"FrameI[{k}]", round(cx / h) - round(f.start[0] / h))
-            write(f"FrameJ[{k}]", round(cy / h) - round(f.start[1] / h))
-        write(f"FrameFeed[{k}]", round(f.feed / 60.0 / h))
-        write(f"FrameComp[{k}]", f.comp)
-        write(f"FrameRadius[{k}]", round(f.tool_radius / h))
-    write("FrameCount", len(frames))
-    write("Method", METHODS[method])
-    write("Diagonal", bool(diagonal))
-    write("PulseDrive", drive == "pulse")
+            table[f"Frame{axis}"].append(round(v / h))
+        cx, cy = f.centre
+        table["FrameI"].append(round(cx / h) - round(f.start[0] / h) if f.is_arc else 0)
+        table["FrameJ"].append(round(cy / h) - round(f.start[1] / h) if f.is_arc else 0)
+        table["FrameFeed"].append(round(f.feed / 60.0 / h))
+        table["FrameComp"].append(f.comp)
+        table["FrameRadius"].append(round(f.tool_radius / h))
+    return {**table, "FrameCount": len(frames), "Method": METHODS[method], "Diagonal": bool(diagonal),
+            "PulseDrive": drive == "pulse"}
+
+
+def load_frames(s: Session, frames: list[Frame], method: str = "evalfn", diagonal: bool = False,
+                drive: str = "step") -> None:
+    """Write the frame table into the PLC (GVL_CNC), in steps of the drives, and the drive
+    interface the program uses (GVL_CNC.PulseDrive)."""
+    write = s.plc.write
+    for name, value in frame_table(frames, s.plant.step_mm, method, diagonal, drive).items():
+        if isinstance(value, list):
+            for k, v in enumerate(value, start=1):
+                write(f"{name}[{k}]", v)
+        else:
+            write(name, value)
     s.log(f"{len(frames)} frames loaded ({method})")
 
 
@@ -133,15 +149,20 @@ class PartRun:
     drive: str = "step"
 
 
+SB1_HOLD_S = 0.005          # run_part's press of SB1
+
+
 def run_part(s: Session, frames: list[Frame], method: str = "evalfn", diagonal: bool = False,
              timeout: float = 600.0, drive: str = "step") -> PartRun:
     """Load the frames, press SB1 and run until the program ends (or `timeout` s) and the
-    pulse generator has spread its last counts."""
+    pulse generator has spread its last counts. Every move is recorded, from the first scan
+    that sees SB1 (the press is held SB1_HOLD_S while the recording runs)."""
     load_frames(s, frames, method, diagonal, drive)
     run = PartRun(frames, s.plant.step_mm, start=s.now, frames_start=s.now, method=method, drive=drive,
                   origin=tuple(s.plant.axes[a].steps for a in "XYZ"))
-    s.console.press("SB1", hold=0.005)
-    record_until(s, run, "ProgramEnd", timeout)
+    s.plant.press("SB1")                 # held 5 ms, recorded from the first scan that sees it
+    s.log("SB1 pressed (0.005 s)")
+    record_until(s, run, "ProgramEnd", timeout, release=("SB1", s.now + SB1_HOLD_S))
     before = [p for p in run.points if p[1] == 0]          # a measuring cycle's moves
     if before:
         run.frames_start, run.origin = before[-1][0], before[-1][2:]
@@ -165,9 +186,11 @@ def executed_frames(s: Session, frames: list[Frame], origin: tuple[int, ...] = (
     return out
 
 
-def record_until(s: Session, run: PartRun, flag: str, timeout: float) -> None:
+def record_until(s: Session, run: PartRun, flag: str, timeout: float,
+                 release: Optional[tuple[str, float]] = None) -> None:
     """Scan fine cycle by fine cycle until the global `flag` is TRUE, recording each move of
-    the table with the frame it belongs to."""
+    the table with the frame it belongs to; `release` (button, time s): release that push
+    button once the time is reached (a press held while recording)."""
     axes = [s.plant.axes[a] for a in "XYZ"]
     ax, ay, az = axes
     frame_at, frame_key = s.plc.resolve("Frame")          # resolved once: read every cycle
@@ -181,6 +204,9 @@ def record_until(s: Session, run: PartRun, flag: str, timeout: float) -> None:
     pending = s.plant.pulses_pending
     scans, ending = round(timeout / s.tick) + 1, False
     while True:
+        if release is not None and s.now >= release[1] - 1e-9:
+            s.plant.release(release[0])
+            release = None
         step(1)                             # the plant took the previous scan's steps first
         pos = (ax.steps, ay.steps, az.steps)
         if pos != last:
@@ -211,7 +237,7 @@ Y20
 X0
 Y0
 """
-CIRCLE = """(full circle R10 around (10, 0), then a half circle back by R)
+CIRCLE = """(full circle R10 around X10 Y0, then a half circle back by R)
 G21 G90 G17 F300
 G01 X20 Y0
 G03 X20 Y0 I-10 J0

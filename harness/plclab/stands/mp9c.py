@@ -3,13 +3,19 @@
 Scenarios are written like the lab instructions (docs/contributing.md) and check what they claim: a
 scenario that does not see what the manual says raises ScenarioFailure with the time and
 the reason. None may ever show a valve conflict (both coils of one valve energized).
+
+A scenario decides from the console, the valves, the switches and HL1 only, as an observer at
+the stand would: a frame is its valve pattern (the valve byte goes to the valves while it
+plays), a recorded frame shows as HL1 off, the frame timeout as HL1 blinking. So every
+scenario runs on a student's program of any structure; the observables (frame pointer,
+frame count) are only shown, "absent" when the program has no such variable.
 """
 from __future__ import annotations
 
 from typing import Callable, Optional
 
 from plclab.plants.mp9c import FACE
-from plclab.scenario import ScenarioFailure, Session
+from plclab.scenario import ABSENT, ScenarioFailure, Session
 from plclab.stands import Stand, Task, Variant, gvl_labels
 from plclab.stands.base import Fault, FaultParam, StandSpec
 
@@ -100,10 +106,10 @@ def timeline(s: Session) -> list[str]:
         valves, sensors = bits(tr, VALVES, t), bits(tr, SENSORS, t)
         hl1 = "on" if tr.value_at("HL1", t) else "-"
         auto = bool(tr.value_at("SA1", t))
-        frame = str(tr.value_at(FRAME_PTR, t)) if auto and FRAME_PTR in tr else "-"
+        frame = str(tr.value_at(FRAME_PTR, t)) if auto and FRAME_PTR in tr else "-"   # ABSENT if the program lacks it
         text = "; ".join(acts.get(round(t, 6), []))
         if not text and last is not None and auto and valves != last[0]:
-            text = f"frame {frame} starts"
+            text = "a frame starts" if frame == ABSENT else f"frame {frame} starts"
         key = (valves, sensors, frame, hl1)
         if not text and key == last:
             continue
@@ -146,31 +152,43 @@ def move(s: Session, what: str, timeout: float = 5.0, **switches: int) -> float:
     return t
 
 
-def record(s: Session, pause_select: Optional[int] = None) -> None:
-    """A short SB1 press records a frame (optionally choosing the pause with I0.7 first)."""
+def valves(s: Session) -> tuple[bool, ...]:
+    """The valve pattern now (L1..L7): what a frame recorded now plays back."""
+    return tuple(bool(s.io[v]) for v in VALVES)
+
+
+def pattern_text(p: tuple[bool, ...]) -> str:
+    return "".join("1" if b else "0" for b in p)
+
+
+def record(s: Session, pause_select: Optional[int] = None) -> tuple[bool, ...]:
+    """A short SB1 press records a frame (optionally choosing the pause with I0.7 first):
+    HL1 is off afterwards (the program is not empty). Returns the frame's valve pattern;
+    that the press recorded exactly one frame shows when the frames are played back."""
     if pause_select is not None:
         s.console.set(I07=pause_select)
-    before = s.value(FRAME_COUNT)
+    frame = valves(s)
     s.console.press("SB1", hold=0.2)
     s.run(0.05)
-    after = s.value(FRAME_COUNT)
-    if after != before + 1:
-        raise ScenarioFailure(f"t={s.now:.2f} s: a short SB1 press did not record a frame "
-                              f"(frames {before} -> {after})")
+    if s.io.HL1:
+        raise ScenarioFailure(f"t={s.now:.2f} s: HL1 still on after a short SB1 press: no frame recorded")
+    return frame
 
 
-def teach_pick_and_place(s: Session, pause_select: int = 0) -> None:
-    """Manual mode: four frames of a pick-and-place (Task 1 needs all four mechanisms)."""
+def teach_pick_and_place(s: Session, pause_select: int = 0) -> list[tuple[bool, ...]]:
+    """Manual mode: four frames of a pick-and-place (Task 1 needs all four mechanisms);
+    returns their valve patterns."""
     s.console.set(SA1=0, SA6=0, I07=pause_select)
     s.run(0.1)
     move(s, "arm down at the pick position", SA5=1)
-    record(s)
+    frames = [record(s)]
     move(s, "gripper clamped, arm up", SA2=1, SA5=0)
-    record(s)
+    frames.append(record(s))
     move(s, "rotated right, forward, down", SA3=1, SA4=1, SA5=1)
-    record(s)
+    frames.append(record(s))
     move(s, "released, up, backward, left", SA2=0, SA5=0, SA4=0, SA3=0)
-    record(s)
+    frames.append(record(s))
+    return frames
 
 
 def start_automatic(s: Session, step: bool = False, enable: int = 1) -> None:
@@ -189,22 +207,37 @@ def teach_down_up(s: Session) -> None:
     record(s)
 
 
+def expect_nothing_starts(s: Session, what: str) -> None:
+    """Automatic mode, SB1 pressed: for 2 s no valve moves and HL1 stays on (empty program)."""
+    start_automatic(s)
+    s.run(2.0)
+    if s.trace.next_change(VALVES, after=s.now - 2.3, default=None) is not None:
+        raise ScenarioFailure(f"t={s.now:.2f} s: a valve moved {what}")
+    if not s.io.HL1:
+        raise ScenarioFailure(f"t={s.now:.2f} s: HL1 off {what}")
+
+
 # --------------------------------------------------------------------------- scenarios
+
+def wait_frame(s: Session, frame: tuple[bool, ...], timeout: float, what: str) -> float:
+    """Wait until the valves show `frame`'s pattern (the frame started)."""
+    return s.wait_until(lambda io: valves(s) == frame, timeout, f"{what} (valves {pattern_text(frame)})")
+
 
 def demo(s: Session) -> None:
     """Teach a 4-frame pick-and-place in manual mode (0.5 s pauses), run it continuously for
-    3 cycles, stop it with SB1."""
-    teach_pick_and_place(s, pause_select=0)
+    3 cycles, stop it with SB1: no frame starts after the stop."""
+    frames = teach_pick_and_place(s, pause_select=0)
     start_automatic(s)
-    cycles = 0
-    while cycles < 3:
-        s.wait_until(lambda io: s.value(FRAME_PTR) == 4, 30, "frame 4")
-        s.wait_until(lambda io: s.value(FRAME_PTR) == 1, 30, "back to frame 1")
-        cycles += 1
+    for _cycle in range(3):
+        wait_frame(s, frames[3], 30, "frame 4")
+        wait_frame(s, frames[0], 30, "back to frame 1")
+    stop = s.now
     s.console.press("SB1", hold=0.2)
     s.run(3.0)
-    if s.value(RUNNING):
-        raise ScenarioFailure(f"t={s.now:.2f} s: SB1 did not stop continuous execution")
+    moved = s.trace.next_change(VALVES, after=stop + 0.3, default=None)
+    if moved is not None:
+        raise ScenarioFailure(f"t={moved:.2f} s: a frame started after SB1 stopped continuous execution")
 
 
 def step_mode(s: Session) -> None:
@@ -232,18 +265,35 @@ def long_press_reset(s: Session) -> None:
     s.run(0.5)
     s.console.release("SB1")
     s.run(0.5)
-    if s.value(FRAME_COUNT) != 0:
-        raise ScenarioFailure(f"t={s.now:.2f} s: program not empty after the reset")
+    if not s.io.HL1:
+        raise ScenarioFailure(f"t={s.now:.2f} s: HL1 off after the reset: the release recorded a frame")
+    expect_nothing_starts(s, "after the reset emptied the program")
 
 
 def bounce(s: Session) -> None:
-    """With contact bounce on the console, each short press still records exactly one frame."""
+    """With contact bounce on the console, each short press still records exactly one frame:
+    three frames (arm down, up, down) recorded, then played in step mode, each press must
+    start the next of the three (a doubled or lost frame shows as a wrong valve pattern)."""
     s.inject("bounce", duration=0.02)
-    s.console.set(SA1=0)
+    s.console.set(SA1=0, I07=0)
     s.run(0.1)
-    for _ in range(3):
-        record(s)
+    frames = []
+    for down in (1, 0, 1):
+        move(s, "arm down" if down else "arm up", SA5=down)
+        frames.append(record(s))
         s.run(0.2)
+    start_automatic(s, step=True)
+    for k in range(len(frames) + 2):
+        frame = frames[k % len(frames)]
+        s.wait_until(lambda io: io.SQ2 == bool(frame[2]) and io.SQ1 == bool(frame[1]), 3,
+                     f"frame {k % len(frames) + 1} (arm {'down' if frame[2] else 'up'}) after step press {k + 1}")
+        if valves(s) != frame:
+            raise ScenarioFailure(f"t={s.now:.2f} s: step press {k + 1}: valves {pattern_text(valves(s))}, "
+                                  f"frame {k % len(frames) + 1} is {pattern_text(frame)}")
+        s.run(1.5)                      # its pause (1.0 s at most) is over
+        if valves(s) != frame:
+            raise ScenarioFailure(f"t={s.now:.2f} s: step mode went on without a press")
+        s.console.press("SB1", hold=0.2)
 
 
 def retain(s: Session) -> None:
@@ -251,10 +301,12 @@ def retain(s: Session) -> None:
     teach_down_up(s)
     s.restart_plc(off_time=1.0)
     s.run(0.2)
-    if s.value(FRAME_COUNT) != 2:
-        raise ScenarioFailure(f"t={s.now:.2f} s: {s.value(FRAME_COUNT)} frames after the restart, expected 2")
+    if s.io.HL1:
+        raise ScenarioFailure(f"t={s.now:.2f} s: HL1 on after the restart: the recorded frames were lost")
     start_automatic(s)
-    s.wait_until(lambda io: io.SQ2, 3, "frame 1 played after the restart")
+    s.wait_until(lambda io: io.SQ2, 3, "frame 1 (arm down) played after the restart")
+    s.wait_until(lambda io: io.SQ1, 5, "frame 2 (arm up) played after the restart")
+    s.wait_until(lambda io: io.SQ2, 5, "frame 1 again after frame 2")
 
 
 def jammed(s: Session) -> None:
@@ -264,7 +316,7 @@ def jammed(s: Session) -> None:
     s.inject("jammed", mechanism="lift")
     start_automatic(s)
     started = s.now
-    s.wait_until(lambda io: s.value(FAULT), 12, "the frame timeout")
+    s.wait_until(lambda io: io.HL1, 12, "the frame timeout (HL1 blinking)")
     if abs(s.now - started - 10.0) > 0.5:
         raise ScenarioFailure(f"t={s.now:.2f} s: timeout after {s.now - started:.2f} s, expected about 10 s")
     s.run(2.0)
@@ -280,12 +332,7 @@ def jammed(s: Session) -> None:
 
 def empty_program(s: Session) -> None:
     """Automatic mode with an empty program: SB1 starts nothing, HL1 stays on."""
-    start_automatic(s)
-    s.run(2.0)
-    if s.trace.next_change(VALVES, after=0.05, default=None) is not None:
-        raise ScenarioFailure(f"t={s.now:.2f} s: a valve moved with an empty program")
-    if not s.io.HL1:
-        raise ScenarioFailure(f"t={s.now:.2f} s: HL1 off with an empty program")
+    expect_nothing_starts(s, "with an empty program")
 
 
 def lift_cycle(s: Session) -> None:

@@ -3,6 +3,12 @@
 The regulators run as their own PROGRAM in a 10 ms TASK (the S7-200's timer interrupt); the
 main program runs in a 20 ms task. No scenario of any variant may show an overvoltage, a bus
 contention or a collision (check_never).
+
+A scenario decides from the console, the drive references, the indicator and the plant (where
+the links are), as an observer at the stand would: a frame is the links' positions when it was
+recorded, a recorded frame shows as HL1 off, the frame timeout as the references dropping to 0.
+So every scenario runs on a student's program of any structure; the observables (frame
+pointer, targets, the PLC's position buffer) are only shown, "absent" when the program lacks them.
 """
 from __future__ import annotations
 
@@ -111,14 +117,51 @@ def jog(s: Session, axis: int, direction: int, seconds: float, low: bool = False
     s.run(0.4)      # the link stops (50 ms lag) and the sensors are read again
 
 
-def record(s: Session, pause_select: Optional[int] = None) -> None:
+Pose = tuple[float, ...]         # the links' positions (plant, codes), axes 1..5
+REACHED = 40.0                   # codes: a link this close to its frame's position is there
+                                 # (the regulators stop within 16, the sensor reads whole codes)
+
+
+def pose(s: Session) -> Pose:
+    """Where the links are now (the plant), axes 1..5."""
+    snap = s.plant.snapshot()
+    return tuple(snap[f"pos{k}"] for k in AXES)
+
+
+def at_pose(s: Session, frame: Pose, axes: tuple[int, ...] = AXES) -> bool:
+    now = pose(s)
+    return all(abs(now[k - 1] - frame[k - 1]) <= REACHED for k in axes)
+
+
+def record(s: Session, pause_select: Optional[int] = None) -> Pose:
+    """A short SB1 press records a frame: HL1 is off afterwards (the program is not empty).
+    Returns where the links are (the frame); that exactly one frame was recorded shows when
+    the frames are played back."""
     if pause_select is not None:
         s.console.set(I15=pause_select)
-    before = s.value(FRAME_COUNT)
+    frame = pose(s)
     s.console.press("SB1", hold=0.2)
     s.run(0.1)
-    if s.value(FRAME_COUNT) != before + 1:
-        raise ScenarioFailure(f"t={s.now:.2f} s: a short SB1 press did not record a frame")
+    if s.io.HL1:
+        raise ScenarioFailure(f"t={s.now:.2f} s: the indicator still on after a short SB1 press: "
+                              "no frame recorded")
+    return frame
+
+
+def driven(s: Session, since: float) -> tuple[int, ...]:
+    """The axes whose drive reference was not 0 at some time since `since`: the links the
+    program positions in automatic mode (the starting program regulates drive 1 only)."""
+    after = round(since * 1e9)
+    return tuple(k for k in AXES if any(v and t >= after for t, v in s.trace.changes(DRIVES[k - 1])))
+
+
+def wait_pose(s: Session, frame: Pose, timeout: float, what: str, since: float) -> float:
+    """Wait until the links the program drives (since `since`) are at `frame` (within
+    REACHED codes)."""
+    def there(io) -> bool:
+        axes = driven(s, since)
+        return bool(axes) and at_pose(s, frame, axes)
+    return s.wait_until(there, timeout, f"{what} (links at {', '.join(f'{v:.0f}' for v in frame)})")
 
 
 def start_automatic(s: Session, enable: int = 1) -> None:
@@ -130,10 +173,11 @@ def start_automatic(s: Session, enable: int = 1) -> None:
 def frame_results(s: Session, axes: tuple[int, ...] = AXES) -> list[str]:
     """Positioning result of each played frame, from the PLC's own sensor readings: time to
     reach, final error per axis when the pause starts, and overshoot (how far a link went past
-    its target on the way)."""
+    its target on the way). Shown only: a program without those variables has none."""
     tr = s.trace
-    if IN_FRAME not in tr:
-        return []
+    needed = [IN_FRAME, FRAME_PTR, REG_AXES] + POSITIONS + TARGETS
+    if not all(s.has(n) for n in needed):
+        return [f"(absent: the program has no {', '.join(n for n in needed if not s.has(n))})"]
     rows = [f"{'frame':>5} {'start s':>8} {'reached after s':>16}  final error / overshoot per axis (codes)"]
     spans = tr.pulses(IN_FRAME)
     regulated = axes[:max(1, min(len(axes), s.value(REG_AXES)))]
@@ -158,30 +202,32 @@ def frame_results(s: Session, axes: tuple[int, ...] = AXES) -> list[str]:
 
 # --------------------------------------------------------------------------- scenarios
 
-def teach_four_frames(s: Session, axes: tuple[int, ...] = AXES) -> None:
-    """Manual mode: four frames, moving several links at once between them."""
+def teach_four_frames(s: Session, axes: tuple[int, ...] = AXES) -> list[Pose]:
+    """Manual mode: four frames, moving several links at once between them; returns them."""
     s.console.set(SA7=0, I15=0)
     s.run(0.2)
-    record(s)
+    frames = [record(s)]
     for k in axes:
         jog(s, k, +1, 0.6 if k % 2 else 0.4)
-    record(s)
+    frames.append(record(s))
     for k in axes[::2]:
         jog(s, k, -1, 0.9, low=True)
-    record(s)
+    frames.append(record(s))
     for k in axes[1::2]:
         jog(s, k, -1, 0.5)
-    record(s)
+    frames.append(record(s))
+    return frames
 
 
 def demo(s: Session) -> None:
-    """Jog, teach 4 frames moving several links, play them back continuously for 2 cycles,
-    stop with SB1."""
-    teach_four_frames(s)
+    """Jog, teach 4 frames moving several links, play them back continuously for 2 cycles
+    (the links reach frame 4, then frame 1 again), stop with SB1: references 0."""
+    frames = teach_four_frames(s)
+    started = s.now
     start_automatic(s)
     for _cycle in range(2):
-        s.wait_until(lambda io: s.value(FRAME_PTR) == 4, 60, "frame 4")
-        s.wait_until(lambda io: s.value(FRAME_PTR) == 1, 60, "back to frame 1")
+        wait_pose(s, frames[3], 60, "frame 4", started)
+        wait_pose(s, frames[0], 60, "back to frame 1", started)
     s.console.press("SB1", hold=0.2)
     s.run(1.0)
     if any(s.value(d) for d in DRIVES):
@@ -216,23 +262,29 @@ def reset(s: Session) -> None:
     s.wait_until(lambda io: io.HL1, 4, "reset indicator after holding SB1")
     s.console.release("SB1")
     s.run(0.3)
-    if s.value(FRAME_COUNT) != 0:
-        raise ScenarioFailure(f"t={s.now:.2f} s: program not empty after the reset")
+    if not s.io.HL1:
+        raise ScenarioFailure(f"t={s.now:.2f} s: the indicator off after the reset: the release recorded a frame")
+    start_automatic(s)                      # an empty program does not start
+    s.run(2.0)
+    if s.trace.next_change(DRIVES, after=s.now - 2.3, default=None) is not None:
+        raise ScenarioFailure(f"t={s.now:.2f} s: a drive moved after the reset emptied the program")
 
 
 def retain(s: Session) -> None:
     """Recorded frames survive a PLC restart and still play."""
     s.console.set(SA7=0)
     s.run(0.2)
-    record(s)
+    first = record(s)
     jog(s, 1, +1, 0.5)
-    record(s)
+    second = record(s)
     s.restart_plc(off_time=1.0)             # a power cycle: the controller off for a second
     s.run(0.2)
-    if s.value(FRAME_COUNT) != 2:
-        raise ScenarioFailure(f"t={s.now:.2f} s: {s.value(FRAME_COUNT)} frames after the restart")
+    if s.io.HL1:
+        raise ScenarioFailure(f"t={s.now:.2f} s: the indicator on after the restart: the frames were lost")
+    started = s.now
     start_automatic(s)
-    s.wait_until(lambda io: s.value(FRAME_PTR) == 2, 20, "frame 2 after the restart")
+    wait_pose(s, first, 20, "frame 1 after the restart", started)
+    wait_pose(s, second, 20, "frame 2 after the restart", started)
 
 
 def dead_sensor(s: Session) -> None:
@@ -241,15 +293,22 @@ def dead_sensor(s: Session) -> None:
     s.console.set(SA7=0)
     s.run(0.2)
     record(s)
-    target = s.value(POSITIONS[0])          # what frame 1 recorded: the link is at rest
+    target = s.plant.snapshot()["code1"]    # what frame 1 recorded: the link is at rest
     jog(s, 1, +1, 0.8)
     record(s)
     s.inject("dead_sensor", axis=1, value=target + 30)
     start_automatic(s)
-    s.wait_until(lambda io: s.value(FAULT), 45, "the frame timeout")
-    s.run(0.5)
-    if any(s.value(d) for d in DRIVES):
-        raise ScenarioFailure(f"t={s.now:.2f} s: references not 0 after the frame timeout")
+    started = s.now
+    s.wait_until(lambda io: io.DRIVE1 != 0, 2, "drive 1 moving towards frame 1")
+    stopped = s.wait_until(lambda io: not any(io[d] for d in DRIVES), 45, "the frame timeout (references 0)")
+    if abs(stopped - started - 20.0) > 1.0:
+        raise ScenarioFailure(f"t={stopped:.2f} s: references 0 after {stopped - started:.2f} s, "
+                              f"expected the 20 s frame timeout")
+    s.run(2.0)
+    if s.trace.next_change(DRIVES, after=stopped + s.tick, default=None) is not None:
+        raise ScenarioFailure(f"t={s.now:.2f} s: a drive moved again after the frame timeout")
+    if len(s.trace.edges("HL1", "rising", after=stopped)) < 1:
+        raise ScenarioFailure(f"t={s.now:.2f} s: the indicator does not blink after the frame timeout")
 
 
 SCENARIOS: dict[str, Callable[[Session], None]] = {
@@ -270,10 +329,10 @@ def timeline(s: Session) -> list[str]:
     rows = [f"{'time s':>8}  {'console / event':<30} " + " ".join(f"{'drive' + str(k):>6}" for k in AXES) + "  frame"]
     for t in sorted(times):
         refs = " ".join(f"{signed16(tr.value_at(d, t)):>6}" for d in DRIVES)
-        frame = tr.value_at(FRAME_PTR, t) if FRAME_PTR in tr else ""
+        frame = tr.value_at(FRAME_PTR, t) if FRAME_PTR in tr else ""      # ABSENT if the program lacks it
         rows.append(f"{t:8.2f}  {'; '.join(acts.get(round(t, 6), []))[:30]:<30} {refs}  {frame}")
     results = frame_results(s)
-    if len(results) > 1:
+    if len(results) > 1 or (results and results[0].startswith("(absent")):
         rows += ["", "positioning result of each played frame:"] + results
     return rows
 
