@@ -18,14 +18,15 @@ expressions. The rules, as that generator applies them:
   a trigger. The same modifiers apply to block pins.
 * Function blocks are called once, when first needed (or at their place in the order);
   functions likewise, their result into `<TYPE><localId>` / `_TMP_<TYPE><localId>_<PIN>`.
-  An out-variable fed by a block whose EN is wired is assigned inside `IF <ENO> THEN`.
+  An out-variable fed by a block whose EN is wired is assigned inside `IF <ENO> THEN` (a
+  coil fed by it is not guarded).
 * Connectors compute their expression once; continuations use it.
 * Jumps, labels and returns: the generator writes no code for them (the drawing would do
   something else than it shows), so they are refused here with one clear line.
 
 Every piece of generated text remembers the element it came from (`Place`), so a diagnostic
 in generated ST names the POU, the rung / network and the element instead of a line of text
-the student never wrote. `locate(source, line, col)` is that mapping.
+the student never wrote (`places.locate` / `places.drawing_location`).
 """
 from __future__ import annotations
 
