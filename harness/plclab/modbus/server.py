@@ -360,7 +360,8 @@ class _Connection(asyncio.Protocol):
     def data_received(self, data: bytes) -> None:
         self.buffer += data
         server = self.server
-        while len(self.buffer) >= MBAP_SIZE and not server._stop_requested and self.throttled is None:
+        while len(self.buffer) >= MBAP_SIZE and not server._stop_requested and self.throttled is None \
+                and not (self.transport is not None and self.transport.is_closing()):   # a client gone: answer no more
             transaction, protocol, length, unit = MBAP.unpack_from(self.buffer)
             if protocol != 0 or not 2 <= length <= MAX_LENGTH_FIELD:
                 server.stats["bad_frames"] += 1
