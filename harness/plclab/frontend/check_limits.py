@@ -52,6 +52,7 @@ BOOKKEEPING_BYTES = 64   # each STRUCT value and FB instance: what the soft PLC 
 _ELEMENTARY_BYTES = {"bool": 1, "string": STRING_BYTES}
 _ANNOTATIONS = frozenset({"ty", "sym", "pou", "param", "call", "fb_type", "operand_ty", "arg_types",
                           "global_decl", "bound_params", "lo_value", "hi_value"})
+_FIELDS: dict[type, tuple[str, ...]] = {}   # AST class -> the fields that may hold nodes
 _LOOPS = (A.For, A.While, A.Repeat)
 _COMPOUND = (A.If, A.Case, *_LOOPS)
 
@@ -102,11 +103,12 @@ def std_fb_bytes(sig: FBSig, memo: dict[Any, int]) -> int:
 def _children(node: Any) -> Iterator[A.Node]:
     """The AST nodes directly under `node` (its fields, through lists and tuples), without the
     checker's annotations."""
-    for f in dataclasses.fields(node):
-        if f.name in _ANNOTATIONS:
-            continue
-        value = getattr(node, f.name)
-        todo = [value]
+    names = _FIELDS.get(type(node))
+    if names is None:
+        names = _FIELDS[type(node)] = tuple(f.name for f in dataclasses.fields(node)
+                                            if f.name not in _ANNOTATIONS and f.name not in ("line", "col", "file"))
+    for name in names:
+        todo = [getattr(node, name)]
         while todo:
             v = todo.pop()
             if isinstance(v, A.Node):
