@@ -16,8 +16,8 @@ import pytest
 
 from plclab.errors import CompileError
 from plclab.frontend import check_sources
-from plclab.frontend.check_limits import (MAX_DATA_BYTES, MAX_EXPRESSION_DEPTH, MAX_LOOP_NESTING, MAX_POU_NESTING,
-                                          MAX_STATEMENT_NESTING)
+from plclab.frontend.check_limits import (MAX_BRANCH_DEPTH, MAX_DATA_BYTES, MAX_EXPRESSION_DEPTH, MAX_LOOP_NESTING,
+                                          MAX_POU_NESTING, MAX_STATEMENT_NESTING)
 
 LINE = re.compile(r"^t\.st:\d+:\d+: error: \S.*$")
 CONFIG = ("CONFIGURATION C RESOURCE R ON PLC TASK t(INTERVAL := T#10ms, PRIORITY := 0); "
@@ -213,3 +213,18 @@ def test_expressions_nested_beyond_the_limit_are_refused(expr):
     found = errors(program("", body=f"x := {expr(MAX_EXPRESSION_DEPTH + 1)};"))
     assert len(found) == 1 and f"expression nested more than {MAX_EXPRESSION_DEPTH} levels deep" in found[0], found
     assert len(errors(program("", body=f"x := {expr(5000)};"))) == 1      # one clean line, no RecursionError
+
+
+def test_an_if_of_thousands_of_elsifs_is_refused_at_the_branch_that_crosses_the_limit():
+    """Python compiles an ELSIF chain as nested IFs: 3000 of them passed `check` and stopped
+    `sim` with exit 70 (RecursionError during compilation)."""
+    body = "IF x = 0 THEN x := 1;\n" + "ELSIF x = 1 THEN x := 2;\n" * 10_000 + "END_IF;"
+    found = errors(program("", body=body))
+    assert found == [f"t.st:{5 + MAX_BRANCH_DEPTH}:18: error: too many ELSIF or CASE branches before this statement: "
+                     f"counting each branch of each IF and CASE around it, it is {MAX_BRANCH_DEPTH + 1} branches deep "
+                     f"(at most {MAX_BRANCH_DEPTH}); split the IF or CASE (e.g. a CASE per range of values) or move "
+                     f"its branches into functions"]
+    case = "CASE x OF\n" + "".join(f"{k}: x := {k};\n" for k in range(MAX_BRANCH_DEPTH)) + "END_CASE;"
+    assert errors(program("", body=case)) == []
+    case = "CASE x OF\n" + "".join(f"{k}: x := {k};\n" for k in range(MAX_BRANCH_DEPTH + 1)) + "END_CASE;"
+    assert len(errors(program("", body=case))) == 1

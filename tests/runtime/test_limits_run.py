@@ -7,7 +7,7 @@ from __future__ import annotations
 
 import pytest
 
-from plclab.frontend.check_limits import (MAX_EXPRESSION_DEPTH, MAX_LOOP_NESTING, MAX_POU_NESTING,
+from plclab.frontend.check_limits import (MAX_BRANCH_DEPTH, MAX_EXPRESSION_DEPTH, MAX_LOOP_NESTING, MAX_POU_NESTING,
                                           MAX_STATEMENT_NESTING)
 from st_helpers import once, val
 
@@ -67,3 +67,36 @@ def test_function_calls_nested_to_the_limit_run():
         f"FUNCTION G{i} : DINT\nVAR_INPUT n : DINT; END_VAR\nG{i} := G{i - 1}(n + 1);\nEND_FUNCTION\n"
         for i in range(1, n))
     assert val(once("VAR y : DINT; END_VAR", f"y := G{n - 1}(0);", extra=fns), "y") == n - 1
+
+
+def test_every_limit_at_once_runs():
+    """Loops, an IF of as many ELSIFs as the branch depth leaves, IFs nested to the statement
+    limit in its last branch, the deepest expression inside: what Python's compiler sees is
+    deepest here, and it still compiles (an IF of 3000 ELSIFs alone used to stop it)."""
+    loops, nested = MAX_LOOP_NESTING, MAX_STATEMENT_NESTING - MAX_LOOP_NESTING - 1
+    elsifs = MAX_BRANCH_DEPTH - loops - nested - 1
+    inner = "IF x >= 0 THEN\n" * nested + "y := " + "(y + " * (MAX_EXPRESSION_DEPTH - 1) + "1" + \
+        ")" * (MAX_EXPRESSION_DEPTH - 1) + ";\n" + "END_IF;\n" * nested
+    chain = "IF x < 0 THEN y := -1;\n" + "ELSIF x < -1 THEN y := -2;\n" * (elsifs - 1) + "ELSE\n" + inner + "END_IF;\n"
+    body = "FOR i := 1 TO 1 DO\n" * loops + chain + "END_FOR;\n" * loops
+    assert val(once("VAR x : DINT; y : DINT; i : DINT; END_VAR", body), "y") == 1
+
+
+def test_a_case_of_as_many_branches_as_allowed_runs():
+    body = "CASE x OF\n" + "".join(f"{k}: y := {k};\n" for k in range(MAX_BRANCH_DEPTH)) + "END_CASE;\n"
+    assert val(once("VAR x : DINT := 999; y : DINT; END_VAR", body), "y") == 999
+
+
+def test_behind_the_limits_python_refusing_the_code_is_a_diagnostic_not_an_internal_error(monkeypatch):
+    """Were a limit too generous, Python's parser or compiler refusing the generated code
+    (RecursionError, MemoryError, SyntaxError) is one `file:line:col: error:` at the ST line."""
+    from plclab.errors import CompileError
+    from plclab.frontend import check_limits
+
+    monkeypatch.setattr(check_limits, "MAX_BRANCH_DEPTH", 10**6)
+    body = "IF x = 0 THEN x := 1;\n" + "ELSIF x = 1 THEN x := 2;\n" * 5000 + "END_IF;\n"
+    with pytest.raises(CompileError) as info:
+        once("VAR x : DINT; END_VAR", body)
+    [line] = [str(d) for d in info.value.diagnostics]
+    assert line.startswith("t.st:") and ": error: this code nests too deeply for PLC Lab's compiler (Python refused " \
+        "it: " in line, line

@@ -15,8 +15,8 @@ statement that crosses it, with the figures named (docs/reliability.md lists the
   ("POU ... contains a self-reference and/or belongs in a circular referencing loop",
   matiec's stage3/remove_forward_dependencies.cc).
 - MAX_POU_NESTING: the longest chain of FB instances and function calls.
-- MAX_STATEMENT_NESTING, MAX_LOOP_NESTING and MAX_EXPRESSION_DEPTH: nested IF/CASE/loops, nested
-  loops, nested operators and calls in one statement (the compiled Python must stay within Python's own limits).
+- MAX_STATEMENT_NESTING, MAX_LOOP_NESTING, MAX_BRANCH_DEPTH and MAX_EXPRESSION_DEPTH: nested
+  IF/CASE/loops, nested loops, ELSIF/CASE branches, nested operators and calls in one statement (the compiled Python must stay within Python's own limits).
 
 Every walk here is iterative: the limits are checked before anything recurses over the tree.
 """
@@ -41,7 +41,11 @@ MAX_STATEMENT_NESTING = 40
 MAX_LOOP_NESTING = 8
 """FOR/WHILE/REPEAT inside each other at most this deep (among the statements above): each loop
 is two of the 20 nested blocks Python allows in one function."""
-MAX_EXPRESSION_DEPTH = 64
+MAX_BRANCH_DEPTH = 1000
+"""ELSIF and CASE branches before a statement, added up over the IFs and CASEs around it (and
+one per loop): Python compiles an ELSIF chain as IFs nested in each other, and its compiler stops
+near 3000 levels (an IF of 3000 ELSIFs passed `check` and then stopped `sim` with exit 70)."""
+MAX_EXPRESSION_DEPTH = 40
 """Operators and calls nested inside each other at most this deep in one expression
 (`a + b + c` is 2 deep: the first `+` is an operand of the second)."""
 
@@ -117,15 +121,31 @@ def _children(node: Any) -> Iterator[A.Node]:
                 todo.extend(v)
 
 
+def _branch_positions(node: A.Node) -> dict[int, int]:
+    """id(child) -> the position of its branch (1: THEN or the first CASE branch, 2: the first
+    ELSIF or the second branch, ...; ELSE after the last) for the statements of an IF and the
+    branches of a CASE: Python compiles an ELSIF chain as IFs nested in each other's else."""
+    if isinstance(node, A.If):
+        parts: list = [body for _cond, body in node.branches]
+    elif isinstance(node, A.Case):
+        parts = [[branch] for branch in node.branches]
+    else:
+        return {}
+    parts.append(node.else_body or [])
+    return {id(child): i for i, part in enumerate(parts, start=1) for child in part}
+
+
 def nesting_violation(stmt: A.Stmt) -> Optional[tuple[A.Node, str]]:
     """Where `stmt` nests statements or expressions beyond the limits, and the message; None
     when it does not. Iterative, so a statement nested 100,000 deep is measured, not a crash.
     A compound statement's depth counts the compound statements around it and itself; an
     expression's depth counts the expressions around it and itself (a call's arguments are one
-    deeper than the call)."""
-    todo: list[tuple[A.Node, int, int, int]] = [(stmt, 1, 1, 0)]   # node, statement, loop, expression depth
+    deeper than the call); a statement's branch depth adds up the positions of the IF/CASE
+    branches it is in (MAX_BRANCH_DEPTH)."""
+    # node, statement depth, loop depth, branch depth, expression depth
+    todo: list[tuple[A.Node, int, int, int, int]] = [(stmt, 1, 1, 0, 0)]
     while todo:
-        node, sdepth, ldepth, edepth = todo.pop()
+        node, sdepth, ldepth, bdepth, edepth = todo.pop()
         if isinstance(node, _COMPOUND) and sdepth > MAX_STATEMENT_NESTING:
             return node, (f"statements nested more than {MAX_STATEMENT_NESTING} levels deep (IF, CASE, FOR, "
                           f"WHILE, REPEAT inside each other); move the inner part into a function or "
@@ -133,17 +153,25 @@ def nesting_violation(stmt: A.Stmt) -> Optional[tuple[A.Node, str]]:
         if isinstance(node, _LOOPS) and ldepth > MAX_LOOP_NESTING:
             return node, (f"loops nested more than {MAX_LOOP_NESTING} levels deep (FOR, WHILE, REPEAT inside each "
                           f"other); move the inner loops into a function or function block")
+        if isinstance(node, A.Stmt) and bdepth > MAX_BRANCH_DEPTH:
+            return node, (f"too many ELSIF or CASE branches before this statement: counting each branch of each "
+                          f"IF and CASE around it, it is {bdepth} branches deep (at most {MAX_BRANCH_DEPTH}); "
+                          f"split the IF or CASE (e.g. a CASE per range of values) or move its branches into "
+                          f"functions")
         if isinstance(node, A.Expr) and edepth > MAX_EXPRESSION_DEPTH:
             return node, (f"expression nested more than {MAX_EXPRESSION_DEPTH} levels deep (operators and calls "
                           f"inside each other); compute parts of it into variables first")
         inner = sdepth + 1 if isinstance(node, _COMPOUND) else sdepth
         inner_loop = ldepth + 1 if isinstance(node, _LOOPS) else ldepth
+        positions = _branch_positions(node)
+        branch = bdepth + 1 if isinstance(node, _LOOPS) else bdepth
         in_expr = isinstance(node, (A.Expr, A.Arg))
         for child in _children(node):
+            below = branch + positions.get(id(child), 0)
             if isinstance(child, A.Expr):
-                todo.append((child, inner, inner_loop, edepth + 1 if in_expr else 1))
+                todo.append((child, inner, inner_loop, below, edepth + 1 if in_expr else 1))
             else:
-                todo.append((child, inner, inner_loop, edepth if in_expr else 0))
+                todo.append((child, inner, inner_loop, below, edepth if in_expr else 0))
     return None
 
 
