@@ -228,3 +228,11 @@ def test_an_if_of_thousands_of_elsifs_is_refused_at_the_branch_that_crosses_the_
     assert errors(program("", body=case)) == []
     case = "CASE x OF\n" + "".join(f"{k}: x := {k};\n" for k in range(MAX_BRANCH_DEPTH + 1)) + "END_CASE;"
     assert len(errors(program("", body=case))) == 1
+
+
+def test_initial_values_of_types_count_too():
+    """A TYPE's initial value is made when it is declared: many large ones are refused."""
+    types = "TYPE\n" + "".join(f"  A{i} : ARRAY[1..300000] OF LREAL := [300000(1.0)];\n" for i in range(10)) + "END_TYPE\n"
+    found = errors(program("", types=types))
+    assert found[0] == ("t.st:3:8: error: the initial value of A1 takes 2.289 MiB; with what is declared before it the "
+                        "program declares 4.578 MiB, more than the 4 MiB a program may declare")

@@ -147,6 +147,8 @@ class DeclarationChecks(CheckerBase):
                               elem, tuple(dims))
             if self._type_too_large(ref, arr, f"{arr.name} ({size} elements of {mib(type_bytes(elem, self.size_memo))})"):
                 return None
+            if init is not None and self._value_too_large(ref, arr, f"the initial value of {arr.name}"):
+                return None
             if init is not None:
                 arr = T.ArrayType(arr.name, elem, tuple(dims), self._init_value(init, arr))
             return arr
@@ -211,6 +213,8 @@ class DeclarationChecks(CheckerBase):
                 if isinstance(ft, T.FBType):
                     self.error(f.type_ref, "a STRUCT field cannot be a function block instance")
                     continue
+                if f.init is not None and self._value_too_large(f, ft, f"the initial value of field '{f.name}'"):
+                    continue
                 fv = self._init_value(f.init, ft) if f.init is not None else None
                 f.ty = ft
                 fields[f.key] = (ft, fv)
@@ -259,6 +263,18 @@ class DeclarationChecks(CheckerBase):
                          f"program may declare in all")
         self.memory_refused = True
         return True
+
+    def _value_too_large(self, node: Any, t: T.Type, what: str) -> bool:
+        """Count a value the checker makes for a type's own initial value (a variable's is
+        counted with the variable); refuse the one that takes the program past MAX_DATA_BYTES."""
+        n = type_bytes(t, self.size_memo)
+        if self.declared_bytes + n > MAX_DATA_BYTES:
+            self.error(node, f"{what} takes {mib(n)}; with what is declared before it the program declares "
+                             f"{mib(self.declared_bytes + n)}, more than the {mib(MAX_DATA_BYTES)} a program may declare")
+            self.memory_refused = True
+            return True
+        self.declared_bytes += n
+        return False
 
     def _declaration_too_large(self, d: A.VarDecl, t: T.Type) -> bool:
         """Count a variable's data (FB instances are counted later, per instance); refuse the one
