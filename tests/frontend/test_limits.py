@@ -236,3 +236,13 @@ def test_initial_values_of_types_count_too():
     found = errors(program("", types=types))
     assert found[0] == ("t.st:3:8: error: the initial value of A1 takes 2.289 MiB; with what is declared before it the "
                         "program declares 4.578 MiB, more than the 4 MiB a program may declare")
+
+
+def test_function_blocks_referring_to_each_other_through_in_out_are_a_loop_too():
+    """matiec orders POUs so that each comes after those it names: a VAR_IN_OUT of the other's
+    type closes a loop as well."""
+    pous = ("FUNCTION_BLOCK FB_A\nVAR_IN_OUT b : FB_B; END_VAR\nVAR n : INT; END_VAR\nn := n + 1;\nEND_FUNCTION_BLOCK\n"
+            "FUNCTION_BLOCK FB_B\nVAR a : FB_A; n : INT; END_VAR\nn := n + 1;\nEND_FUNCTION_BLOCK\n")
+    assert errors(program("  f : FB_B;\n", body="f();", pous=pous)) == [
+        "t.st:7:5: error: function blocks refer to each other in a loop: FB_A -> FB_B -> FB_A (recursion is not "
+        "allowed: OpenPLC's compiler refuses a POU that refers to itself)"]

@@ -16,7 +16,8 @@ statement that crosses it, with the figures named (docs/reliability.md lists the
   matiec's stage3/remove_forward_dependencies.cc).
 - MAX_POU_NESTING: the longest chain of FB instances and function calls.
 - MAX_STATEMENT_NESTING, MAX_LOOP_NESTING, MAX_BRANCH_DEPTH and MAX_EXPRESSION_DEPTH: nested
-  IF/CASE/loops, nested loops, ELSIF/CASE branches, nested operators and calls in one statement (the compiled Python must stay within Python's own limits).
+  IF/CASE/loops, nested loops, ELSIF/CASE branches, nested operators and calls in one statement
+  (the compiled Python must stay within Python's own limits).
 
 Every walk here is iterative: the limits are checked before anything recurses over the tree.
 """
@@ -199,13 +200,13 @@ class LimitChecks(CheckerBase):
             self._check_instance_sizes(pous, edges, config)
 
     def _pou_edges(self, pous: list[A.PouDecl]) -> dict[str, list[tuple[A.PouDecl, A.Node]]]:
-        """POU -> the user POUs it refers to (an FB variable's type, a called function), each with
-        the declaration or call that refers to it."""
+        """POU -> the user POUs it refers to (the type of an FB variable, also a VAR_IN_OUT or
+        VAR_EXTERNAL one, as matiec counts references; a called function), each with the
+        declaration or call that refers to it."""
         edges: dict[str, list[tuple[A.PouDecl, A.Node]]] = {p.key: [] for p in pous}
         for pou in pous:
             for d in pou.decls:
-                if isinstance(d.ty, T.FBType) and isinstance(d.ty.pou, A.PouDecl) and d.ty.pou.key in edges \
-                        and d.section not in ("VAR_IN_OUT", "VAR_EXTERNAL"):
+                if isinstance(d.ty, T.FBType) and isinstance(d.ty.pou, A.PouDecl) and d.ty.pou.key in edges:
                     edges[pou.key].append((d.ty.pou, d))
         for caller, call in self.user_calls:
             if caller is not None and caller.key in edges and call.pou is not None and call.pou.key in edges:
@@ -245,7 +246,10 @@ class LimitChecks(CheckerBase):
                         names = " -> ".join(by_key[k].name for k, _n in loop)
                         closing = loop[-1][1]
                         kinds = {by_key[k].kind for k, _n in loop}
-                        what = ("function blocks contain each other" if kinds == {"FUNCTION_BLOCK"} else
+                        contain = all(isinstance(n, A.VarDecl) and n.section not in ("VAR_IN_OUT", "VAR_EXTERNAL")
+                                      for _k, n in loop[1:])
+                        what = ("function blocks contain each other" if kinds == {"FUNCTION_BLOCK"} and contain else
+                                "function blocks refer to each other" if kinds == {"FUNCTION_BLOCK"} else
                                 "functions call each other" if kinds == {"FUNCTION"} else "POUs refer to each other")
                         self.error(closing, f"{what} in a loop: {names} (recursion is not allowed: "
                                             f"OpenPLC's compiler refuses a POU that refers to itself)")
