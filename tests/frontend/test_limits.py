@@ -246,3 +246,11 @@ def test_function_blocks_referring_to_each_other_through_in_out_are_a_loop_too()
     assert errors(program("  f : FB_B;\n", body="f();", pous=pous)) == [
         "t.st:7:5: error: function blocks refer to each other in a loop: FB_A -> FB_B -> FB_A (recursion is not "
         "allowed: OpenPLC's compiler refuses a POU that refers to itself)"]
+
+
+def test_a_function_block_naming_its_own_type_as_external_is_refused():
+    pous = "FUNCTION_BLOCK Me\nVAR_EXTERNAL g : Me; END_VAR\nVAR n : INT; END_VAR\nn := n + 1;\nEND_FUNCTION_BLOCK\n"
+    text = pous + "PROGRAM Prog\nVAR x : DINT; END_VAR\nx := x;\nEND_PROGRAM\n" + CONFIG.replace(
+        "RESOURCE R", "VAR_GLOBAL g : Me; END_VAR RESOURCE R")
+    assert "t.st:2:14: error: function block 'Me' names its own type in a VAR_EXTERNAL (OpenPLC's compiler refuses a " \
+        "POU that refers to itself)" in errors(text)

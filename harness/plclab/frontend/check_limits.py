@@ -241,10 +241,13 @@ class LimitChecks(CheckerBase):
                     loop = path[keys.index(target.key):] + [(target.key, node)]
                     members = frozenset(k for k, _n in loop)
                     found = True
+                    closing = loop[-1][1]
+                    if len(loop) == 2 and isinstance(closing, A.VarDecl) and closing.section == "VAR_EXTERNAL":
+                        self.error(closing, f"function block '{by_key[target.key].name}' names its own type in a "
+                                            f"VAR_EXTERNAL (OpenPLC's compiler refuses a POU that refers to itself)")
                     if len(loop) > 2 and members not in reported:
                         reported.add(members)
                         names = " -> ".join(by_key[k].name for k, _n in loop)
-                        closing = loop[-1][1]
                         kinds = {by_key[k].kind for k, _n in loop}
                         contain = all(isinstance(n, A.VarDecl) and n.section not in ("VAR_IN_OUT", "VAR_EXTERNAL")
                                       for _k, n in loop[1:])
