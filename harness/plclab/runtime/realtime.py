@@ -90,7 +90,11 @@ class RealTimeRunner:
 
     def run_for(self, seconds: float) -> None:
         """Run in the calling thread for `seconds` of wall time (tests, benchmarks)."""
-        self._loop(until=self._clock() + seconds)
+        self._claim_the_interpreter()
+        try:
+            self._loop(until=self._clock() + seconds)
+        finally:
+            self._release_the_interpreter()
 
     def _loop(self, until: Optional[float] = None) -> None:
         try:
