@@ -2,7 +2,8 @@
 
 Goals (issues 2, 3, 4): parse + check of a 5,000-line program under 0.5 s; a 10 ms-tick
 program of about 300 statements at least 500 times faster than real time in virtual time;
-Modbus requests per second and latency for 1 and 10 clients, and scan jitter under that load.
+Modbus requests per second and latency for 1 and 10 clients, and scan jitter under that load;
+`plclab serve mp9c` flooded by 10 client processes: ticks missed (goal 0, issue #25).
 Also reported: each stand's memory (loaded, and trace growth per simulated hour), and the
 virtual lab's page update rate, lag and server CPU per page (plclab.lab.bench).
 """
@@ -110,6 +111,73 @@ def bench_realtime(seconds: float = 10.0, clients: int = 10) -> dict:
             "max_lateness_ms": runner.stats.max_lateness_s * 1e3, "modbus_requests": sum(counts)}
 
 
+FLOOD_CLIENT = r"""
+import socket, struct, sys, time
+port, seconds, batch = int(sys.argv[1]), float(sys.argv[2]), int(sys.argv[3])
+s = socket.create_connection(("127.0.0.1", port), timeout=10)
+s.setsockopt(socket.IPPROTO_TCP, socket.TCP_NODELAY, 1)
+request = b"".join(struct.pack(">HHHBBHH", i, 0, 6, 1, 3, 0, 10) for i in range(batch))
+reply = batch * (9 + 20)
+end = time.monotonic() + seconds
+while time.monotonic() < end:
+    s.sendall(request)
+    got = 0
+    while got < reply:
+        data = s.recv(65536)
+        if not data:
+            sys.exit(1)
+        got += len(data)
+"""
+"""A Modbus client process that reads 10 holding registers as fast as the face answers,
+`batch` requests per write: a flood from outside the PLC's process, as SCADA clients are."""
+
+
+def bench_serve_load(seconds: float = 10.0, clients: int = 10, batch: int = 20) -> dict:
+    """`plclab serve mp9c` (its 10 ms task, its plant, its Modbus face with the face's admission
+    control) while `clients` client processes flood the face: the scan's own tick accounting
+    over `seconds`, measured once every client is connected and answered (starting the client
+    processes is a burst of CPU of its own). Issue #25: the scan first."""
+    import dataclasses
+    import subprocess
+    import sys
+
+    from plclab import config
+    from plclab.plants import make_plant
+    from plclab.serve import FACE_MAX_REQUESTS_PER_S, ServeOptions, Service
+    from plclab.stands import get_stand, sources
+
+    conf = config.defaults()
+    stand = conf.stand("mp9c")
+    opts = ServeOptions(sources(get_stand("mp9c"), stand.variant), stand, dataclasses.replace(conf.modbus, port=0),
+                        make_plant("mp9c"), stand.profile, None, None)
+    svc = Service(opts, report=lambda line: None)
+    svc.start()
+    flood: list[subprocess.Popen] = []
+    try:
+        flood = [subprocess.Popen([sys.executable, "-c", FLOOD_CLIENT, str(svc.server.port), str(seconds + 60),
+                                   str(batch)]) for _ in range(clients)]
+        give_up = time.monotonic() + 30
+        while (svc.server.active_clients < clients or svc.server.stats["requests"] < 20 * batch * clients) \
+                and time.monotonic() < give_up:
+            time.sleep(0.05)
+        time.sleep(0.5)
+        connected = svc.server.active_clients
+        before, served_before = dataclasses.replace(svc.runner.stats), svc.server.stats["requests"]
+        time.sleep(seconds)
+        after, served = svc.runner.stats, svc.server.stats["requests"] - served_before
+        still = sum(p.poll() is None for p in flood)
+    finally:
+        for p in flood:
+            p.kill()
+            p.wait()
+        svc.stop()
+    return {"seconds": seconds, "tick_ms": svc.plc.tick_ns / 1e6, "clients": connected, "clients_at_end": still,
+            "expected_scans": round(seconds * 1e9 / svc.plc.tick_ns), "scans": after.ticks - before.ticks,
+            "overruns": after.overruns - before.overruns, "missed_ticks": after.skipped_ticks - before.skipped_ticks,
+            "requests_per_s": served / seconds, "face_limit_per_s": FACE_MAX_REQUESTS_PER_S,
+            "fault": svc.plc.fault}
+
+
 def run_bench(report: Callable[[str], None] = print, quick: bool = False,
               programs: Optional[list[Path]] = None) -> dict:
     results: dict = {}
@@ -170,4 +238,10 @@ def run_bench(report: Callable[[str], None] = print, quick: bool = False,
     report(f"real time: {rt['tick_ms']:g} ms task for {rt['seconds']:g} s under {rt['modbus_requests']} Modbus "
            f"requests: {rt['scans']} scans, {rt['overruns']} overruns, start jitter p50 "
            f"{rt['jitter_p50_ms']:.2f} ms, p99 {rt['jitter_p99_ms']:.2f} ms, max {rt['max_lateness_ms']:.2f} ms")
+    sl = bench_serve_load(3.0 if quick else 10.0)
+    results["serve_load"] = sl
+    report(f"serve mp9c under Modbus load: {sl['clients']} client processes flooding the face, "
+           f"{sl['requests_per_s']:.0f} requests/s answered (face limit {sl['face_limit_per_s']}/s): "
+           f"{sl['scans']} of {sl['expected_scans']} scans of the {sl['tick_ms']:g} ms task in {sl['seconds']:g} s, "
+           f"{sl['overruns']} overruns, {sl['missed_ticks']} ticks missed (goal 0)")
     return results

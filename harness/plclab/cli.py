@@ -50,10 +50,12 @@ def _seconds(text: str) -> float:
 
 
 def _cmd_sim(args: argparse.Namespace) -> int:
+    from plclab.limits import memory_limited
     from plclab.runtime.simcmd import run_sim
 
-    result = run_sim(args.files, duration_s=args.duration, inputs=args.inputs, csv=args.csv, vcd=args.vcd,
-                     plot=args.plot, watch=args.watch, tick_s=args.tick)
+    with memory_limited():               # the program is untrusted: bounded (docs/reliability.md)
+        result = run_sim(args.files, duration_s=args.duration, inputs=args.inputs, csv=args.csv, vcd=args.vcd,
+                         plot=args.plot, watch=args.watch, tick_s=args.tick)
     print(result.summary)
     if result.fault is not None and result.fault.internal:
         return 70                    # the harness's own bug (the summary asks for a report)
@@ -283,7 +285,9 @@ def _cmd_grade(args: argparse.Namespace) -> int:
                           "(plclab grade thermo scada1|scada2)")
     if not args.files:
         raise PlcLabError("grade: give the program's ST files (plclab grade STAND TASK FILE.st...)")
-    report = grade(args.stand, args.task, args.files, out_dir=args.out)
+    from plclab.limits import memory_limited
+    with memory_limited():               # the student's program is untrusted: bounded (docs/reliability.md)
+        report = grade(args.stand, args.task, args.files, out_dir=args.out)
     print(report.text(), end="")
     return report.exit_code
 
@@ -341,10 +345,12 @@ def _cmd_grade_class(args: argparse.Namespace) -> int:
 
 
 def _cmd_run(args: argparse.Namespace) -> int:
+    from plclab.limits import memory_limited
     from plclab.runner import run_scenario
 
-    r = run_scenario(args.stand, args.variant, args.scenario, args.csv, args.vcd, args.plot,
-                     program=args.program)
+    with memory_limited(None if not args.program else -1):   # your program is bounded like a student's
+        r = run_scenario(args.stand, args.variant, args.scenario, args.csv, args.vcd, args.plot,
+                         program=args.program)
     print("\n".join(r.timeline))
     if r.absent_note:
         print(r.absent_note)
@@ -554,6 +560,11 @@ def main(argv: Optional[Sequence[str]] = None) -> int:
     except KeyboardInterrupt:
         print("plclab: interrupted", file=sys.stderr)
         return 130
+    except MemoryError:               # past plclab.limits' process limit: the run's own failure
+        from plclab.limits import out_of_memory_message
+        print(out_of_memory_message("plclab grade: FAIL" if args.command == "grade" else f"plclab {args.command}"),
+              file=sys.stderr)
+        return 1
     except Exception as e:  # a bug of ours: one line for the user, the traceback on request
         if os.environ.get("PLCLAB_DEBUG"):
             raise

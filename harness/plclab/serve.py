@@ -26,6 +26,14 @@ from plclab.runtime.realtime import RealTimeRunner
 from plclab.runtime.retain import RetainStore
 
 
+FACE_MAX_REQUESTS_PER_S = 5000
+"""Admission control of the Modbus face: the scan first. Python runs one thread at a time, and
+a face answering 35,000 requests/s took the interpreter (and a core) from the 10 ms scan, which
+lost ticks; capped, the face's share stays small and a flood of requests waits (clients see
+latency, the scan keeps its period). 5000/s is far beyond a SCADA client's polling (OpenPLC on
+a Raspberry Pi answers a few thousand)."""
+
+
 @dataclass
 class ServeOptions:
     sources: Sequence[tuple[str, str]]   # (file name, ST text) of the program: one compilation unit
@@ -83,7 +91,7 @@ class Service:
             rmap = OpenPlcMap(self.plc.image)
         return ModbusTcpServer(rmap, m.bind, m.port, unit_ids=m.unit_ids, idle_timeout=m.idle_timeout_s,
                                max_clients=m.max_clients, first_request_timeout=m.first_request_timeout_s,
-                               health=self.problem)
+                               health=self.problem, max_requests_per_s=FACE_MAX_REQUESTS_PER_S)
 
     def problem(self) -> Optional[str]:
         """Why the PLC is not scanning (its fault), or None while it runs: the Modbus face
@@ -114,7 +122,8 @@ class Service:
         store = self.plc.retain_store
         if store is not None and store.save_error is not None:
             state += "  RETAIN NOT SAVED"
-        return (f"t={self.plc.now_ns / 1e9:9.2f} s  scans={s.ticks}  overruns={s.overruns}  "
+        missed = f" ({s.skipped_ticks} ticks missed, {s.max_lateness_s * 1000:.1f} ms latest)" if s.overruns else ""
+        return (f"t={self.plc.now_ns / 1e9:9.2f} s  scans={s.ticks}  overruns={s.overruns}{missed}  "
                 f"clients={clients}  {state}")
 
     def stop(self) -> None:

@@ -66,6 +66,10 @@ class CheckerBase:
         self.globals: dict[str, A.VarDecl] = {}
         self._resolving: set[str] = set()
         self._unresolvable: set[str] = set()
+        self.size_memo: dict[T.Type, int] = {}      # check_limits: bytes of each type, by identity
+        self.declared_bytes = 0                     # check_limits: data declared so far (no FB instances)
+        self.memory_refused = False                 # check_limits: a type or variable was too large (reported)
+        self.user_calls: list[tuple[Optional[A.PouDecl], A.Call]] = []   # (caller, call) of user FUNCTIONs
 
     # ------------------------------------------------------------------ reporting
     def error(self, node: Any, message: str) -> None:

@@ -34,6 +34,7 @@ class ExpressionChecks(CheckerBase):
 
     def _user_call(self, c: A.Call, pou: A.PouDecl, scope: _Scope) -> Optional[T.Type]:
         c.pou = pou
+        self.user_calls.append((scope.pou, c))
         if scope.pou is pou:
             self.error(c, f"recursive call of '{pou.name}' (IEC 61131-3 forbids recursion)")
         params = [d for d in pou.decls if d.section in ("VAR_INPUT", "VAR_OUTPUT", "VAR_IN_OUT")]

@@ -6,6 +6,7 @@ from typing import Any, Optional
 
 from plclab.frontend import ast as A
 from plclab.frontend.check_base import CheckerBase, _Scope
+from plclab.frontend.check_limits import nesting_violation
 from plclab.frontend.stdsigs import FUNCTIONS, FBSig
 from plclab.iec import types as T
 
@@ -19,6 +20,10 @@ class StatementChecks(CheckerBase):
         if not pou.body:
             self.error(pou, f"{pou.kind} '{pou.name}' has no statements: OpenPLC's compiler needs at least one")
         for s in pou.body:
+            too_deep = nesting_violation(s)
+            if too_deep is not None:
+                self.error(*too_deep)
+                continue
             try:
                 self.stmt(s, scope)
             except RecursionError:

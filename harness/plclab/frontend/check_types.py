@@ -11,6 +11,7 @@ from plclab.frontend.check_base import (
     AREA_LIMIT, CheckerBase, _is_signed_integer, _library_variable_message, LOCATED_AREAS,
     LOCATED_TYPES, MAX_TYPE_NESTING, RESERVED_WORDS, _Scope
 )
+from plclab.frontend.check_limits import MAX_DATA_BYTES, mib, type_bytes
 from plclab.frontend.checked import EnumValue
 from plclab.frontend.stdsigs import FUNCTION_BLOCKS, LIBRARY_VARIABLES, RESERVED_NAMES
 from plclab.iec import types as T
@@ -144,6 +145,10 @@ class DeclarationChecks(CheckerBase):
                 return None
             arr = T.ArrayType(name or f"ARRAY[{','.join(f'{a}..{b}' for a, b in dims)}] OF {elem.name}",
                               elem, tuple(dims))
+            if self._type_too_large(ref, arr, f"{arr.name} ({size} elements of {mib(type_bytes(elem, self.size_memo))})"):
+                return None
+            if init is not None and self._value_too_large(ref, arr, f"the initial value of {arr.name}"):
+                return None
             if init is not None:
                 arr = T.ArrayType(arr.name, elem, tuple(dims), self._init_value(init, arr))
             return arr
@@ -208,11 +213,16 @@ class DeclarationChecks(CheckerBase):
                 if isinstance(ft, T.FBType):
                     self.error(f.type_ref, "a STRUCT field cannot be a function block instance")
                     continue
+                if f.init is not None and self._value_too_large(f, ft, f"the initial value of field '{f.name}'"):
+                    continue
                 fv = self._init_value(f.init, ft) if f.init is not None else None
                 f.ty = ft
                 fields[f.key] = (ft, fv)
                 names[f.key] = f.name
-            return T.StructType(name or "STRUCT", fields, names)
+            struct = T.StructType(name or "STRUCT", fields, names)
+            if self._type_too_large(ref, struct, f"STRUCT {name or ''}".rstrip()):
+                return None
+            return struct
         self.error(ref, "unsupported type")
         return None
 
@@ -241,6 +251,45 @@ class DeclarationChecks(CheckerBase):
         if key not in DeclarationChecks._std_fb_cache:
             DeclarationChecks._std_fb_cache[key] = T.FBType(key, FUNCTION_BLOCKS[key])
         return DeclarationChecks._std_fb_cache[key]
+
+    # ------------------------------------------------------------------ declared memory (check_limits)
+    def _type_too_large(self, node: Any, t: T.Type, what: str) -> bool:
+        """Refuse a type whose one value is larger than the program may declare, before any
+        value of it is made."""
+        n = type_bytes(t, self.size_memo)
+        if n <= MAX_DATA_BYTES:
+            return False
+        self.error(node, f"{what} takes {mib(n)} ({n} bytes), more than the {mib(MAX_DATA_BYTES)} a "
+                         f"program may declare in all")
+        self.memory_refused = True
+        return True
+
+    def _value_too_large(self, node: Any, t: T.Type, what: str) -> bool:
+        """Count a value the checker makes for a type's own initial value (a variable's is
+        counted with the variable); refuse the one that takes the program past MAX_DATA_BYTES."""
+        n = type_bytes(t, self.size_memo)
+        if self.declared_bytes + n > MAX_DATA_BYTES:
+            self.error(node, f"{what} takes {mib(n)}; with what is declared before it the program declares "
+                             f"{mib(self.declared_bytes + n)}, more than the {mib(MAX_DATA_BYTES)} a program may declare")
+            self.memory_refused = True
+            return True
+        self.declared_bytes += n
+        return False
+
+    def _declaration_too_large(self, d: A.VarDecl, t: T.Type) -> bool:
+        """Count a variable's data (FB instances are counted later, per instance); refuse the one
+        that takes the declarations past MAX_DATA_BYTES, before its initial value is made."""
+        if isinstance(t, T.FBType):
+            return False
+        n = type_bytes(t, self.size_memo)
+        if self.declared_bytes + n > MAX_DATA_BYTES:
+            self.error(d, f"'{d.name}' ({t.name}) takes {mib(n)}; with the variables declared before it the "
+                          f"program declares {mib(self.declared_bytes + n)}, more than the "
+                          f"{mib(MAX_DATA_BYTES)} a program may declare")
+            self.memory_refused = True
+            return True
+        self.declared_bytes += n
+        return False
 
     # ------------------------------------------------------------------ constants and initial values
     def const_int(self, e: A.Expr, what: str, scope: Optional[_Scope] = None) -> Optional[int]:
@@ -475,6 +524,8 @@ class DeclarationChecks(CheckerBase):
         if d.section in ("VAR_IN_OUT", "VAR_TEMP") and d.init is not None \
                 and not isinstance(d.type_ref, A.StringTypeRef):   # (matiec's grammar allows it for STRING)
             self.error(d.init, f"a {d.section} cannot have an initial value in OpenPLC's compiler")
+        if self._declaration_too_large(d, ty):
+            return
         if d.init is not None:
             d.init_value = self._init_value(d.init, ty, _Scope(pou, names))
             if d.init_value is None:
@@ -612,7 +663,7 @@ class DeclarationChecks(CheckerBase):
             ret = A.VarDecl(line=pou.line, col=pou.col, file=pou.file, name=pou.name,
                             type_ref=pou.return_type, section="RETURN")
             ret.ty = pou.ret_ty
-            ret.init_value = T.default_value(pou.ret_ty)
+            ret.init_value = None if self._declaration_too_large(ret, pou.ret_ty) else T.default_value(pou.ret_ty)
             names[pou.key] = ret
             pou.ret_decl = ret
         if pou.kind != "PROGRAM" and "ENO" not in names:

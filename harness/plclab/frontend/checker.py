@@ -8,20 +8,22 @@ variables; an untyped literal takes the type its context needs if its value fits
 
 The checker is assembled from one part per concern: check_types (declarations and types),
 check_statements (bodies and FB calls), check_expressions (expressions, calls, overloads) and
-check_config (the CONFIGURATION), over check_base (shared state and rules).
+check_config (the CONFIGURATION) and check_limits (declared memory, nesting, POUs that refer
+to themselves), over check_base (shared state and rules).
 """
 from __future__ import annotations
 
 from plclab.frontend import ast as A
 from plclab.frontend.check_config import ConfigurationChecks
 from plclab.frontend.check_expressions import ExpressionChecks
+from plclab.frontend.check_limits import LimitChecks
 from plclab.frontend.check_statements import StatementChecks
 from plclab.frontend.check_types import DeclarationChecks
 from plclab.frontend.checked import CheckedUnit
 from plclab.iec import types as T
 
 
-class Checker(DeclarationChecks, StatementChecks, ExpressionChecks, ConfigurationChecks):
+class Checker(DeclarationChecks, StatementChecks, ExpressionChecks, ConfigurationChecks, LimitChecks):
     """Checks one compilation unit: every part's checks, driven in matiec's order."""
 
     # ------------------------------------------------------------------ driver
@@ -74,6 +76,7 @@ class Checker(DeclarationChecks, StatementChecks, ExpressionChecks, Configuratio
                 self._check_pou_body(pou)
         if config:
             self._check_config(config)
+        self._check_limits(config)
         return CheckedUnit(u, self.types, self.pous, self.globals, config, sorted(set(self.diags)),
                            len(self.global_scopes))
 

@@ -106,13 +106,19 @@ def _check(table: Table, start: int, count: int, size: int) -> None:
                               f"console face {table.value} {start}..{start + count - 1} outside 0..{size - 1}")
 
 
+CONSOLE_MAX_REQUESTS_PER_S = 1000
+"""Admission control of the console face (a panel operated by hand, polled by a page or a
+`plclab console`): a flood of requests waits instead of taking the interpreter from the scan
+of `plclab serve`, which runs in the same process (docs/reliability.md, "The scan first")."""
+
+
 def start_console_face(host: Any, address: tuple[str, int],
                        warn: Callable[[str], None]) -> ModbusTcpServer | None:
     """Serve the console face of `host` at (HOST, PORT), or warn once and return None: the
     PLC's I/O matters more than the console, so a busy port does not stop the plant."""
     try:
-        return ModbusTcpServer(ConsoleMap(host), address[0], address[1], max_clients=16,
-                               name="console").start()     # idle clients closed after 60 s
+        return ModbusTcpServer(ConsoleMap(host), address[0], address[1], max_clients=16,   # idle ones closed after 60 s
+                               name="console", max_requests_per_s=CONSOLE_MAX_REQUESTS_PER_S).start()
     except ServerError as exc:
         warn(f"warning: no console face: {exc}")
         return None

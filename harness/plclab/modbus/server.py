@@ -101,7 +101,8 @@ class ModbusTcpServer:
                  max_clients: int = DEFAULT_MAX_CLIENTS, name: str = "modbus",
                  on_request: Callable[[int, bytes, bytes], None] | None = None,
                  first_request_timeout: float | None = DEFAULT_FIRST_REQUEST_TIMEOUT,
-                 evict_when_full: bool = True, health: Callable[[], str | None] | None = None):
+                 evict_when_full: bool = True, health: Callable[[], str | None] | None = None,
+                 max_requests_per_s: float | None = None):
         if not 0 <= int(port) <= 65535:
             raise ServerError(f"{name}: port {port} is not a TCP port (1..65535, or 0 for any free port)")
         self.register_map = register_map
@@ -116,7 +117,13 @@ class ModbusTcpServer:
         self.evict_when_full = evict_when_full
         self.health = health
         self.stats = {"connections": 0, "refused": 0, "evicted": 0, "requests": 0, "bad_frames": 0,
-                      "ignored": 0, "faulted": 0}
+                      "ignored": 0, "faulted": 0, "throttled": 0}
+        # admission control (None: unlimited): a token bucket of max_requests_per_s, a burst of
+        # 20 ms worth; a request with no token waits (its connection is not read) until one is
+        self.max_requests_per_s = max_requests_per_s if max_requests_per_s and max_requests_per_s > 0 else None
+        self._burst = max(1.0, (self.max_requests_per_s or 0) * 0.02)
+        self._tokens = self._burst
+        self._refilled = 0.0
         self._requested_port = port
         self._port: int | None = None
         self._thread: threading.Thread | None = None
@@ -284,6 +291,20 @@ class ModbusTcpServer:
             if not made or made[0].transport is None:
                 self._attaching -= 1    # connection_made never ran: give the slot back here
 
+    def _admit(self, now: float) -> float:
+        """Admission control: 0 if a request may be answered now (a token is taken), else how
+        many seconds until the next token."""
+        rate = self.max_requests_per_s
+        if rate is None:
+            return 0.0
+        self._tokens = min(self._burst, self._tokens + (now - self._refilled) * rate)
+        self._refilled = now
+        if self._tokens >= 1.0:
+            self._tokens -= 1.0
+            return 0.0
+        self.stats["throttled"] += 1
+        return (1.0 - self._tokens) / rate
+
     def _handle_frame(self, transaction: int, unit: int, pdu: bytes) -> bytes | None:
         """The response ADU for one request frame, or None to send nothing."""
         if self.unit_ids is not None and unit not in self.unit_ids:
@@ -313,6 +334,8 @@ class _Connection(asyncio.Protocol):
         self.timer: asyncio.TimerHandle | None = None
         self.requests = 0                       # whole request frames received
         self.last_active = 0.0                  # loop time of connecting or of the last request
+        self.write_paused = False               # the client does not read its replies
+        self.throttled: asyncio.TimerHandle | None = None   # waiting for admission
 
     def connection_made(self, transport: asyncio.BaseTransport) -> None:
         assert isinstance(transport, asyncio.Transport)
@@ -329,12 +352,16 @@ class _Connection(asyncio.Protocol):
     def connection_lost(self, exc: Exception | None) -> None:
         if self.timer is not None:
             self.timer.cancel()
+        if self.throttled is not None:
+            self.throttled.cancel()
+            self.throttled = None
         self.server._connections.discard(self)
 
     def data_received(self, data: bytes) -> None:
         self.buffer += data
         server = self.server
-        while len(self.buffer) >= MBAP_SIZE and not server._stop_requested:
+        while len(self.buffer) >= MBAP_SIZE and not server._stop_requested and self.throttled is None \
+                and not (self.transport is not None and self.transport.is_closing()):   # a client gone: answer no more
             transaction, protocol, length, unit = MBAP.unpack_from(self.buffer)
             if protocol != 0 or not 2 <= length <= MAX_LENGTH_FIELD:
                 server.stats["bad_frames"] += 1
@@ -345,6 +372,13 @@ class _Connection(asyncio.Protocol):
             end = MBAP_SIZE - 1 + length
             if len(self.buffer) < end:
                 break
+            loop = asyncio.get_running_loop()
+            wait = server._admit(loop.time())
+            if wait > 0:                     # over the face's request rate: read no more until admitted
+                if self.transport is not None:
+                    self.transport.pause_reading()
+                self.throttled = loop.call_later(wait, self._admitted)
+                break
             pdu = bytes(self.buffer[MBAP_SIZE:end])
             del self.buffer[:end]
             self.requests += 1
@@ -354,13 +388,24 @@ class _Connection(asyncio.Protocol):
                 self.transport.write(reply)
             self._arm()
 
+    def _admitted(self) -> None:
+        """The wait for admission is over: answer what is buffered, then read again."""
+        self.throttled = None
+        if self.transport is None or self.transport.is_closing():
+            return
+        self.data_received(b"")
+        if self.throttled is None and not self.write_paused:
+            self.transport.resume_reading()
+
     def pause_writing(self) -> None:
         """The client does not read its replies: stop reading its requests until it does."""
+        self.write_paused = True
         if self.transport is not None:
             self.transport.pause_reading()
 
     def resume_writing(self) -> None:
-        if self.transport is not None and not self.transport.is_closing():
+        self.write_paused = False
+        if self.transport is not None and not self.transport.is_closing() and self.throttled is None:
             self.transport.resume_reading()
 
     def close(self, abort: bool = False) -> None:

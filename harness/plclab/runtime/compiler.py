@@ -33,6 +33,7 @@ from array import array
 from dataclasses import dataclass, field
 from typing import Any, Optional
 
+from plclab.errors import CompileError, Diagnostic
 from plclab.frontend import ast as A
 from plclab.frontend.checked import CheckedUnit, EnumValue, LiteralType
 from plclab.frontend.stdsigs import FBSig
@@ -247,7 +248,10 @@ class Compiler:
         out.pou = "CONFIGURATION"
         self.globals_init(result)
         source = "\n".join(out.lines) + "\n"
-        code = compile(source, result.filename, "exec")
+        try:
+            code = compile(source, result.filename, "exec")
+        except (SyntaxError, RecursionError, MemoryError) as e:
+            raise _too_complex(e, out.origin, cu) from None
         exec(code, self.ns)
         result.source = source
         result.line_map = out.origin
@@ -1025,6 +1029,23 @@ class _NoRanges:
 
     def raw(self, e: A.Expr) -> Optional[Range]:
         return None
+
+
+def _too_complex(exc: BaseException, origin: dict[int, LineInfo], cu: CheckedUnit) -> CompileError:
+    """Python's own compiler refused the generated code (nesting past its parser's or
+    compiler's limits): a diagnostic at the ST line, never an internal error. The checker's
+    limits (plclab.frontend.check_limits) are set so that this does not happen; this is the
+    wall behind them."""
+    line = getattr(exc, "lineno", None)
+    info = origin.get(line) if line else None
+    if info is None:
+        pou = next((p for p in cu.unit.pous), None)
+        where = (pou.file, pou.line, 1) if pou is not None else ("", 1, 1)
+    else:
+        where = (info.file, info.line, 1)
+    return CompileError([Diagnostic(*where, "this code nests too deeply for PLC Lab's compiler (Python refused it: "
+                                            f"{getattr(exc, 'msg', None) or type(exc).__name__}); split the statement "
+                                            "or move parts of it into functions")])
 
 
 def compile_unit(checked: CheckedUnit, optimize: bool = True) -> CompiledProgram:

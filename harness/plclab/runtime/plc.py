@@ -72,6 +72,7 @@ def _converters(ty: T.Type, bits: int) -> tuple[Callable[[Any], int], Callable[[
 _PROGRAM_FAULTS: dict[type, str] = {
     ZeroDivisionError: "division_by_zero", RecursionError: "stack_overflow",
     IndexError: "index_out_of_range", OverflowError: "overflow",
+    MemoryError: "out_of_memory",     # past the process limit of a program run (plclab.limits)
 }
 """Python errors a program's own arithmetic or nesting raises, as the fault kind it is (the
 compiled code raises PlcFault for the faults it checks itself)."""

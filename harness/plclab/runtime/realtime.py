@@ -13,6 +13,7 @@ behind a face that still says RUN.
 """
 from __future__ import annotations
 
+import sys
 import threading
 import time
 from dataclasses import dataclass, field
@@ -58,6 +59,7 @@ class RealTimeRunner:
         self._thread: Optional[threading.Thread] = None
 
     def start(self) -> None:
+        self._claim_the_interpreter()
         self._thread = threading.Thread(target=self._loop, name="plc-scan", daemon=True)
         self._thread.start()
 
@@ -65,11 +67,34 @@ class RealTimeRunner:
         self._stop.set()
         if self._thread is not None:
             self._thread.join(timeout)
+        self._release_the_interpreter()
         self.plc.stop()
+
+    def _claim_the_interpreter(self) -> None:
+        """The scan first: Python hands its interpreter lock to a waiting thread only every
+        switch interval (5 ms by default), and a scan waits for it each time it wakes, takes
+        the image lock or returns from I/O. With a Modbus face busy answering (another thread
+        that always wants the lock), a 10 ms task then lost whole ticks. A switch interval of
+        1/40 of the tick (0.25 ms for 10 ms) bounds each wait far below the period; restored
+        by stop()."""
+        self._old_switch = sys.getswitchinterval()
+        wanted = max(self.plc.tick_ns / 1e9 / 40, 0.0001)
+        if wanted < self._old_switch:
+            sys.setswitchinterval(wanted)
+
+    def _release_the_interpreter(self) -> None:
+        old = getattr(self, "_old_switch", None)
+        if old is not None:
+            sys.setswitchinterval(old)
+            self._old_switch = None
 
     def run_for(self, seconds: float) -> None:
         """Run in the calling thread for `seconds` of wall time (tests, benchmarks)."""
-        self._loop(until=self._clock() + seconds)
+        self._claim_the_interpreter()
+        try:
+            self._loop(until=self._clock() + seconds)
+        finally:
+            self._release_the_interpreter()
 
     def _loop(self, until: Optional[float] = None) -> None:
         try:

@@ -8,11 +8,18 @@
 """
 from .csvio import TraceFormatError, csv_text, parse_csv, read_csv, write_csv
 from .diff import Difference, diff
-from .plot import plot_trace
 from .recorder import Recorder
 from .times import format_seconds, ns_to_s, parse_seconds, s_to_ns
 from .trace import KINDS, NotFound, SignalInfo, State, Trace, UnknownSignal
 from .vcdio import vcd_names, write_vcd
+
+
+def plot_trace(*args, **kwargs):
+    """plclab.trace.plot.plot_trace, imported when a plot is asked for: matplotlib costs about
+    0.3 s to import, a third of a `plclab run` that plots nothing."""
+    from .plot import plot_trace as plot
+
+    return plot(*args, **kwargs)
 
 __all__ = [
     "KINDS", "Difference", "NotFound", "Recorder", "SignalInfo", "State", "Trace",
