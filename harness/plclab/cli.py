@@ -16,7 +16,7 @@ from plclab.errors import CompileError, PlcLabError
 def _cmd_check(args: argparse.Namespace) -> int:
     from plclab.frontend import check_sources, is_project_file, load_files, read_sources
 
-    if args.emit_st:      # the ST OpenPLC Editor makes of a plc.xml (LD / FBD bodies translated)
+    if getattr(args, "emit_st", False):      # the ST OpenPLC Editor makes of a plc.xml (LD / FBD bodies translated)
         sources = read_sources(args.files)
         print("".join(text for name, text in sources if is_project_file(name)), end="")
         check_sources(sources)
