@@ -56,7 +56,7 @@ from typing import Callable, Iterator, Optional, Sequence
 
 from lxml import etree
 
-from plclab import fileio
+from plclab import fileio, limits
 from plclab.errors import CompileError, PlcLabError
 from plclab.frontend import read_sources
 
@@ -351,16 +351,7 @@ def _isolate(scratch: str, memory_limit_mib: Optional[int], parent: int) -> None
     os.environ["TMPDIR"] = scratch
     tempfile.tempdir = scratch
     if memory_limit_mib is not None:
-        limit = _address_space() + memory_limit_mib * 1024 * 1024
-        resource.setrlimit(resource.RLIMIT_AS, (limit, limit))
-
-
-def _address_space() -> int:
-    """This process's address space now (bytes), 0 where /proc cannot tell."""
-    try:
-        return int(Path("/proc/self/statm").read_text().split()[0]) * os.sysconf("SC_PAGE_SIZE")
-    except (OSError, ValueError, IndexError):
-        return 0
+        limits.limit_memory(memory_limit_mib * 1024 * 1024)
 
 
 def _die_with_parent(parent: int) -> None:
