@@ -34,6 +34,22 @@ def browser() -> Iterator:
         b.close()
 
 
+@pytest.fixture(scope="module")
+def rebinding_browser() -> Iterator:
+    """A Chromium that resolves evil.example and attacker.example to 127.0.0.1, as an
+    attacker's DNS would (a hostile page, a DNS-rebinding name)."""
+    from playwright.sync_api import sync_playwright
+
+    if not Path(CHROMIUM).exists():
+        pytest.fail(f"the lab's browser tests need Debian's chromium at {CHROMIUM}: run `bash scripts/setup`")
+    with sync_playwright() as p:
+        b = p.chromium.launch(executable_path=CHROMIUM, args=[
+            "--no-sandbox", "--disable-gpu",
+            "--host-resolver-rules=MAP evil.example 127.0.0.1, MAP attacker.example 127.0.0.1"])
+        yield b
+        b.close()
+
+
 class LabPage:
     """One running lab and a browser page on it."""
 

@@ -35,7 +35,9 @@ async def _pages(url: str, n: int, seconds: float) -> list[dict]:
     async def page() -> dict:
         lags, count = [], 0
         async with aiohttp.ClientSession() as http:
-            async with http.ws_connect(url + "ws", max_msg_size=0) as ws:
+            async with http.get(url + "api/session") as r:          # the page's token (docs/lab.md)
+                token = (await r.json())["token"]
+            async with http.ws_connect(url + "ws", params={"token": token}, max_msg_size=0) as ws:
                 end = time.monotonic() + seconds
                 start = None
                 while time.monotonic() < end:

@@ -33,6 +33,9 @@ SPEEDS = (1, 2, 5, 10, 20, 50)
 MIN_BATCH_S = 0.01          # wall seconds between batches faster than real time (100 snapshots/s at most)
 MAX_BEHIND_S = 0.25         # wall seconds of backlog after which the engine stops catching up
 TREND_WINDOW_S = 60.0       # virtual seconds of trend history a page gets when it connects
+TRACE_KEEP_S = 30 * 60.0    # plant seconds the lab's trace keeps (a ring: older changes are dropped)
+TRIM_EVERY_S = 60.0         # plant seconds between two trims of the ring
+LOG_KEEP = 2000             # console actions and plant events kept (the newest)
 
 
 class LabError(PlcLabError):
@@ -53,6 +56,7 @@ class Lab:
         variant = variant or self.module.STAND.richest_variant
         self.variant = variant
         self.program_files = list(program_files)      # where --program came from (reload re-reads them)
+        self.uploaded: Optional[list[tuple[str, str]]] = None   # the last program a page loaded
         self._tmp = None
         if work_dir is None:
             self._tmp = tempfile.TemporaryDirectory(prefix=f"plclab-lab-{stand}-")
@@ -131,14 +135,23 @@ class Lab:
                     fut.set_exception(e)
             self._console_since_scan |= console
 
+    def ops(self) -> tuple[str, ...]:
+        """The commands this stand's page has (the SCADA registers are thermo's only)."""
+        ops = ("set", "press", "release", "speed", "pause", "run", "scan", "restart", "inject", "clear", "trends")
+        return ops + ("register",) if self.stand == "thermo" else ops
+
     # the commands themselves (each runs in the engine's thread through `call`)
     def set_control(self, label: str, value: int) -> None:
         control = self._control(label)
+        if control.kind != "switch":          # a push button set on would stay pressed for ever
+            raise LabError(f"{label} is a push button: it is pressed and released, not set")
         self.session.plant.set_switch(control.input, int(bool(value)))
         self.session.log(f"{label}={int(bool(value))}")
 
     def press(self, label: str, down: bool) -> None:
         control = self._control(label)
+        if control.kind != "button":
+            raise LabError(f"{label} is a switch: it is set on or off, not pressed")
         if down:
             self.session.console.hold(control.input)
         else:
@@ -169,9 +182,22 @@ class Lab:
         self.session.restart_plc()
         self._rebase = True
 
-    def load_program(self, sources: Sequence[tuple[str, str]], checked: Any, name: str) -> None:
-        self.session.load_program(sources, checked)
+    def load_program(self, sources: Sequence[tuple[str, str]], checked: Any, name: str, upload: bool = False) -> None:
+        """Download `sources` (already through `prepare_program`). Should the load still fail,
+        the previous program is loaded again (cold, retained variables kept) and the error
+        is one line: the lab always has a program running."""
+        s = self.session
+        old_sources, old_checked = s.sources, s.checked
+        try:
+            s.load_program(sources, checked)
+        except (Exception, RecursionError, MemoryError) as e:     # noqa: BLE001 - any failure: back
+            s.load_program(old_sources, old_checked)
+            self._rebase = True
+            raise LabError(f"the program could not be loaded ({_why(e)}); the PLC runs the previous "
+                           f"program again (restarted)") from None
         self.program_name = name
+        if upload:                         # Reload loads it again (the browser's files are not on disk)
+            self.uploaded = list(sources)
         self._extra_unknown.clear()
         self._rebase = True
 
@@ -306,6 +332,33 @@ class Lab:
                 s.run(s.tick)
                 self._sample_extras(extras)
         self.scans_run += n
+        if s.now - self._trimmed_at >= TRIM_EVERY_S:
+            self._trim()
+
+    _trimmed_at = 0.0
+
+    def _trim(self) -> None:
+        """Keep the last TRACE_KEEP_S of plant time in the traces and the last LOG_KEEP
+        actions and events: a lab left running at x50 for a day stays the size of that
+        window (the downloads say which window they hold)."""
+        s = self.session
+        self._trimmed_at = s.now
+        cut_ns = round((s.now - TRACE_KEEP_S) * 1e9)
+        if cut_ns > 0:
+            s.trace.drop_before(cut_ns)
+            self.extras.drop_before(cut_ns)
+            sim_cut = cut_ns - (round(s.now * 1e9) - s.plc.now_ns)    # the PLC's own clock (restarts)
+            if sim_cut > 0:
+                s.sim.trace.drop_before(sim_cut)
+        for items, sent in ((s.actions, "_actions_sent"), (s.plant.events, "_events_sent")):
+            extra = len(items) - LOG_KEEP
+            if extra > 0:
+                del items[:extra]
+                setattr(self, sent, max(0, getattr(self, sent) - extra))
+
+    def trace_window(self) -> tuple[float, float]:
+        """The plant times (from, to) the lab's trace holds now."""
+        return self.session.trace.start_ns / 1e9, max(0.0, self.session.now - self.session.tick)
 
     def _sample_extras(self, names: list[str]) -> None:
         t_ns = round((self.session.now - self.session.tick) * 1e9)
@@ -347,6 +400,7 @@ class Lab:
             "type": "state", "seq": self.seq, "t": round(s.now - s.tick, 6), "tick": s.tick,
             "speed": self.speed, "paused": self.paused, "actual_speed": round(self.actual_speed, 2),
             "program": self.program_name,
+            "trace_from": round(s.trace.start_ns / 1e9, 3), "trace_keep": TRACE_KEEP_S,
             "paced": self.paced_now(),          # where the plant should be now: t + the lag
             "wall": time.monotonic(),           # when (CLOCK_MONOTONIC, the same in every process here)
             "plc": {"state": plc.state, "fault": str(fault) if fault else None,
@@ -485,13 +539,34 @@ def _plain(value: Any) -> Any:
     return value
 
 
-def check_program(sources: Sequence[tuple[str, str]]):
-    """The front end's verdict on an uploaded program: (checked, []) or (None, diagnostics)."""
+def _why(e: BaseException) -> str:
+    if isinstance(e, RecursionError):
+        return "it nests too deeply: RecursionError"
+    if isinstance(e, MemoryError):
+        return "it needs more memory than the lab has: MemoryError"
+    return f"{type(e).__name__}: {str(e)[:200]}"
+
+
+def check_program(sources: Sequence[tuple[str, str]], trial: bool = False):
+    """The front end's verdict on an uploaded program: (checked, []) or (None, diagnostics).
+    With `trial`, the program is also compiled and instantiated once (no retain, no scan)
+    off the running PLC, so what fails there fails before the PLC stops. Whatever goes
+    wrong (even a RecursionError or a MemoryError) is one line, never an exception."""
     from plclab.frontend import check_sources
+    where = f"{sources[-1][0]}:1:1: error: " if sources else "<upload>:1:1: error: "
     try:
         checked = check_sources(sources)
     except CompileError as e:
         return None, [str(d) for d in e.diagnostics]
+    except (Exception, RecursionError, MemoryError) as e:       # noqa: BLE001 - a student's file
+        return None, [f"{where}the program cannot be checked ({_why(e)})"]
+    if trial and checked.config is not None:
+        try:
+            from plclab.runtime.compiler import compile_unit
+            from plclab.runtime.plc import PLC
+            PLC(compile_unit(checked)).stop()
+        except (Exception, RecursionError, MemoryError) as e:   # noqa: BLE001 - a student's file
+            return None, [f"{where}the program cannot be loaded ({_why(e)})"]
     if checked.config is None:
         return None, [f"{sources[-1][0]}:1:1: error: no CONFIGURATION: load the complete program (the bundle "
                       f"from `plclab build`, with its CONFIGURATION Config0 and TASKs)"]

@@ -22,9 +22,20 @@ const lab = {
 };
 
 // ------------------------------------------------------------------ connection
-function connect() {
+// The lab answers only its own page: every command carries the token of this run of the
+// lab, read from /api/session (another site's page cannot read it). A restarted lab has a
+// new token and a new session: the page reads them again when it reconnects.
+async function connect() {
+  try {
+    const r = await fetch("/api/session", { cache: "no-store" });
+    const info = await r.json();
+    lab.token = info.token;
+  } catch (e) {
+    lab.token = null;
+  }
+  if (!lab.token) { lost(); return; }
   const proto = location.protocol === "https:" ? "wss" : "ws";
-  const ws = new WebSocket(`${proto}://${location.host}/ws`);
+  const ws = new WebSocket(`${proto}://${location.host}/ws?token=${encodeURIComponent(lab.token)}`);
   lab.ws = ws;
   ws.onopen = () => { lab.retry = 0; $("#conn").textContent = ""; };
   ws.onmessage = (ev) => {
@@ -37,13 +48,23 @@ function connect() {
     else if (msg.type === "pages") showPages(msg.pages);
     else if (msg.type === "trends") setTrends(msg.names, msg.trends);
   };
-  ws.onclose = () => {
-    $("#conn").textContent = "connection to the lab lost: reconnecting...";
-    for (const [, p] of lab.pending) p.reject(new Error("connection lost"));
-    lab.pending.clear();
-    const delay = Math.min(5000, 250 * 2 ** lab.retry++);
-    setTimeout(connect, delay);
-  };
+  ws.onclose = () => { if (lab.ws === ws) lost(); };
+}
+
+function lost() {
+  lab.ws = null;
+  $("#conn").textContent = "connection to the lab lost: reconnecting...";
+  for (const [, p] of lab.pending) p.reject(new Error("connection lost"));
+  lab.pending.clear();
+  const delay = Math.min(5000, 250 * 2 ** lab.retry++);
+  setTimeout(connect, delay);
+}
+
+// POST to the lab with this run's token (a JSON or multipart body)
+function post(url, body, json) {
+  const headers = { "X-PLCLab-Token": lab.token || "" };
+  if (json) headers["content-type"] = "application/json";
+  return fetch(url, { method: "POST", headers, body: json ? JSON.stringify(body) : body });
 }
 
 function send(op, fields = {}) {
@@ -191,7 +212,7 @@ async function postProgram(url, body) {
   $("#program-errors").replaceChildren();
   let answer;
   try {
-    const r = await fetch(url, { method: "POST", body });
+    const r = await post(url, body, false);
     answer = r.headers.get("content-type")?.includes("json") ? await r.json()
       : { ok: false, message: `${r.status} ${r.statusText}: ${(await r.text()).slice(0, 200)}` };
   } catch (e) {
@@ -263,7 +284,7 @@ async function grade(task) {
   $("#grade-result").replaceChildren();
   let r;
   try {
-    const resp = await fetch("/api/grade", { method: "POST", headers: { "content-type": "application/json" }, body: JSON.stringify({ task }) });
+    const resp = await post("/api/grade", { task }, true);
     r = await resp.json();
   } catch (e) {
     r = { ok: false, message: `the lab did not answer (${e.message})` };
@@ -327,6 +348,8 @@ function render(s) {
   const speed = $("#speed");
   if (document.activeElement !== speed) speed.value = String(s.speed);
   $("#program-name").textContent = s.program;
+  $("#trace-window").textContent = `The trace downloads hold t = ${s.trace_from.toFixed(0)} .. ${s.t.toFixed(0)} s ` +
+    `(the lab keeps the last ${Math.round(s.trace_keep / 60)} min of plant time).`;
   for (const [label, v] of Object.entries(s.io)) {
     for (const node of document.querySelectorAll(`[aria-label="${CSS.escape(label)}"]`)) {
       if (node.getAttribute("role") === "switch") node.setAttribute("aria-checked", v ? "true" : "false");
