@@ -32,7 +32,6 @@ from plclab.trace import Trace
 SPEEDS = (1, 2, 5, 10, 20, 50)
 MIN_BATCH_S = 0.01          # wall seconds between batches faster than real time (100 snapshots/s at most)
 MAX_BEHIND_S = 0.25         # wall seconds of backlog after which the engine stops catching up
-TREND_WINDOW_S = 60.0       # virtual seconds of trend history a page gets when it connects
 TRACE_KEEP_S = 30 * 60.0    # plant seconds the lab's trace keeps (a ring: older changes are dropped)
 TRIM_EVERY_S = 60.0         # plant seconds between two trims of the ring
 LOG_KEEP = 2000             # console actions and plant events kept (the newest)
@@ -69,9 +68,14 @@ class Lab:
             if sources is not None else f"{variant} (shipped)"
         self.session: Session = self.module.session(variant, program=list(sources) if sources is not None else None,
                                                     retain_path=self.retain_path, watch_internals=False)
+        # the stand's observables (TUR-10's Target1..5, ...) are read by name where the program
+        # has them, for the drawing and the trends; not recorded (the trace stays the I/O's)
+        from plclab.stands.base import stand_spec
+        self.session.observables = stand_spec(stand).observables_for(variant if sources is None else None)
         self.speed = self._check_speed(speed)
         self.paused = False
         self.actual_speed = 0.0
+        self.held: set[str] = set()                   # push buttons held now (console inputs)
         self.trend_names: list[str] = list(self.panel.trends)
         self.extras = Trace()                        # trended variables the session does not record
         self._extra_unknown: dict[str, str] = {}
@@ -154,8 +158,17 @@ class Lab:
             raise LabError(f"{label} is a switch: it is set on or off, not pressed")
         if down:
             self.session.console.hold(control.input)
+            self.held.add(control.input)
         else:
             self.session.console.release(control.input)
+            self.held.discard(control.input)
+        self._rebase = True            # the pace changes while a button is held (see `pace`)
+
+    def pace(self) -> float:
+        """The speed the plant runs at now: x1 while a push button is held, whatever the
+        speed asked, so a hold lasts as long in the plant as the student holds it (a click
+        records a frame at x50 too, and only 3 s of the student's own time reset)."""
+        return 1.0 if self.held else self.speed
 
     def _control(self, label: str):
         try:
@@ -282,7 +295,8 @@ class Lab:
             if self._rebase:
                 self._rebase = False
                 base_wall, base_virt = time.monotonic(), s.now - s.tick
-            self._pace = (base_wall, self.speed, base_virt)
+            speed = self.pace()
+            self._pace = (base_wall, speed, base_virt)
             if self.paused:
                 self.actual_speed = 0.0
                 self._publish()
@@ -291,15 +305,15 @@ class Lab:
                 continue
             tick = s.tick
             now = time.monotonic()
-            target = base_virt + (now - base_wall) * self.speed
+            target = base_virt + (now - base_wall) * speed
             due = math.floor((target - s.now) / tick + 1e-9) + 1     # scans at or before `target`
             if due <= 0:
-                wait = (s.now - target) / self.speed
+                wait = (s.now - target) / speed
                 self._wake.wait(max(0.0, min(wait, 0.2)))
                 self._wake.clear()
                 continue
-            if (due - 1) * tick / self.speed > MAX_BEHIND_S:   # cannot keep up: run a slice, rebase
-                due = max(1, int(MAX_BEHIND_S * self.speed / tick))
+            if (due - 1) * tick / speed > MAX_BEHIND_S:   # cannot keep up: run a slice, rebase
+                due = max(1, int(MAX_BEHIND_S * speed / tick))
                 self._rebase = True
             self._run_scans(1 if self._commands else due)     # a command waits: one scan, then it
             if now - rate_wall >= 1.0:
@@ -308,8 +322,8 @@ class Lab:
             self._publish()
             # sleep until the next scan is due (at x1: wake on time, so the page is at most one
             # scan behind); faster than real time, batches at least MIN_BATCH_S apart
-            wake = base_wall + (s.now - base_virt) / self.speed
-            if self.speed > 1:
+            wake = base_wall + (s.now - base_virt) / speed
+            if speed > 1:
                 wake = max(wake, now + MIN_BATCH_S)
             pause = wake - time.monotonic()
             if pause > 0 and not self._commands:
@@ -399,6 +413,7 @@ class Lab:
         snap: dict[str, Any] = {
             "type": "state", "seq": self.seq, "t": round(s.now - s.tick, 6), "tick": s.tick,
             "speed": self.speed, "paused": self.paused, "actual_speed": round(self.actual_speed, 2),
+            "held": sorted(self.held), "pace": self.pace(),
             "program": self.program_name,
             "trace_from": round(s.trace.start_ns / 1e9, 3), "trace_keep": TRACE_KEEP_S,
             "paced": self.paced_now(),          # where the plant should be now: t + the lag
@@ -444,7 +459,7 @@ class Lab:
     def _trend_changes(self, full: bool) -> dict[str, list]:
         s = self.session
         out: dict[str, list] = {}
-        horizon_ns = round((s.now - TREND_WINDOW_S) * 1e9)
+        horizon_ns = round((s.now - self.panel.trend_window) * 1e9)
         for name in self.trend_names:
             trace = s.trace if name in s.trace else self.extras if name in self.extras else None
             if trace is None:

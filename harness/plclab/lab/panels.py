@@ -65,6 +65,7 @@ class Panel:
     lamps: tuple[Lamp, ...]
     faults: tuple[Fault, ...]
     trends: tuple[str, ...]                          # signals trended when the page opens
+    trend_window: float = 60.0                       # plant seconds a trend shows
     mimic: Callable[[Session], dict[str, Any]] = field(repr=False, default=lambda s: {})
 
     def control(self, label: str) -> Control:
@@ -103,6 +104,7 @@ class Look:
     # (fault, parameter) -> (choices, default); a parameter not here is a number field
     fault_params: Mapping[tuple[str, str], tuple[tuple[str, ...], str]] = field(default_factory=dict)
     trends: tuple[str, ...] = ()
+    trend_window: float = 60.0      # plant seconds a trend shows (thermo: its 300-s step response)
     mimic: Callable[[Session], dict[str, Any]] = field(repr=False, default=lambda s: {})
 
 
@@ -124,7 +126,7 @@ def derive_panel(spec: StandSpec, look: Look) -> Panel:
                   for group in look.lamp_groups for name in getattr(spec, group))
     faults = tuple(Fault(f.name, look.fault_texts.get(f.name, f.doc),
                          tuple(_fault_param(look, f.name, p) for p in f.params)) for f in spec.faults)
-    return Panel(spec.name, controls, lamps, faults, look.trends, look.mimic)
+    return Panel(spec.name, controls, lamps, faults, look.trends, look.trend_window, look.mimic)
 
 
 def _fault_param(look: Look, fault: str, param: Any) -> FaultParam:
@@ -203,7 +205,8 @@ TUR10 = derive_panel(stand_spec("tur10"), Look(
     hints={**{f"SA{k}_{w}": f"drive {k} ({_AXIS[k]}) {way}" for k in _AXIS for w, way in _WAYS.items()},
            "SA6": "low speed", "SB1": "short: record / start / stop; hold 3 s: reset",
            "SA7": "mode: off manual, on automatic", "I15": "spare input (Tasks 2, 3)", "HL1": "reset indicator"},
-    buttons=frozenset({"SB1"}),
+    # the jog controls are push buttons on the stand: the link moves while one is held
+    buttons=frozenset({"SB1", *(f"SA{k}_{w}" for k in _AXIS for w in _WAYS)}),
     fault_texts={"dead_sensor": "a position sensor reads a constant", "stuck_drive": "a link does not move",
                  "slow_drive": "a link runs slower"},
     fault_params={("dead_sensor", "axis"): (_AXES, "1"), ("dead_sensor", "value"): ((), ""),
@@ -229,6 +232,7 @@ THERMO = derive_panel(stand_spec("thermo"), Look(
     fault_texts={"sensor_open": "temperature sensor open circuit", "fan_stalled": "fan rotor jammed",
                  "heater_dead": "heater burnt out"},
     trends=("TEMP_ADC", "SETPOINT", "HEATER", "FAN", "DISTURBANCE"),
+    trend_window=600.0,
     mimic=_thermo_mimic,
 ))
 

@@ -260,7 +260,7 @@ class LabServer:
             twido = f"{self.bind}:{self.modbus.port}"
         return {"type": "hello", "stand": lab.stand, "title": lab.module.STAND.title, "panel": lab.panel.describe(),
                 "speeds": list(SPEEDS), "tasks": grade_tasks, "checks": checks, "twido": twido, "pages": len(self.clients) + 1,
-                "trend_names": lab.trend_names, "can_reload": True, "session": self.session_id}
+                "trend_names": lab.trend_names, "trend_window": lab.panel.trend_window, "can_reload": True, "session": self.session_id}
 
     async def websocket(self, request: web.Request) -> web.StreamResponse:
         ws = web.WebSocketResponse(heartbeat=20.0, max_msg_size=MAX_MESSAGE)

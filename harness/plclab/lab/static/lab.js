@@ -14,11 +14,10 @@ const el = (tag, attrs = {}, ...children) => {
   return e;
 };
 
-const TREND_WINDOW = 60;
 const lab = {
   ws: null, hello: null, state: null, nextId: 1, pending: new Map(),
   trends: new Map(),          // name -> [[t, v], ...]
-  trendNames: [], events: [], actions: [], retry: 0,
+  trendNames: [], events: [], actions: [], retry: 0, trendWindow: 60,
 };
 
 // ------------------------------------------------------------------ connection
@@ -121,6 +120,8 @@ function onHello(h) {
       el("span", { class: "bulb" }), el("span", { text: lamp.label })));
   }
   lab.trends.clear();
+  lab.trendWindow = h.trend_window;
+  $("#h-trends").textContent = `Trends (last ${h.trend_window} s of plant time)`;
   lab.trendNames = h.trend_names.slice();
   lab.events = []; lab.actions = [];
   buildTrendList();
@@ -147,13 +148,20 @@ function buildControls(panel) {
     b.setAttribute("aria-describedby", hint.id);
     box.append(el("div", { class: "control" }, b, hint));
   }
+  $("#hold-note").hidden = !panel.controls.some((c) => c.kind === "button");
 }
 
-// A push button stays pressed while the pointer or the space / enter key holds it.
+// A push button stays pressed while the pointer (mouse, finger, pen) or the space / enter key
+// holds it, as on the stand: it is let go on pointerup, when the pointer leaves it, when the
+// touch is cancelled, when it loses the focus and when the window does.
+const releasers = new Set();
+window.addEventListener("blur", () => { for (const r of releasers) r(); });
+document.addEventListener("visibilitychange", () => { if (document.hidden) for (const r of releasers) r(); });
+
 function pushButton(b, label) {
   let down = false;
   const press = () => {
-    if (down) return;
+    if (down || b.disabled) return;
     down = true;
     b.classList.add("held");
     b.setAttribute("aria-pressed", "true");
@@ -166,10 +174,12 @@ function pushButton(b, label) {
     b.setAttribute("aria-pressed", "false");
     send("release", { label }).catch((e) => notice(e.message));
   };
-  b.addEventListener("pointerdown", (e) => { b.setPointerCapture(e.pointerId); press(); e.preventDefault(); });
+  releasers.add(release);
+  b.addEventListener("pointerdown", (e) => { if (e.button === 0) { press(); e.preventDefault(); } });
   b.addEventListener("pointerup", release);
+  b.addEventListener("pointerleave", release);
   b.addEventListener("pointercancel", release);
-  b.addEventListener("lostpointercapture", release);
+  b.addEventListener("contextmenu", (e) => e.preventDefault());      // a long touch is a hold, not a menu
   b.addEventListener("keydown", (e) => {
     if ((e.key === " " || e.key === "Enter") && !e.repeat) { press(); e.preventDefault(); }
   });
@@ -341,7 +351,9 @@ function render(s) {
     fd.textContent = s.plc.fault;
   } else fd.hidden = true;
   $("#clock").textContent = `t = ${s.t.toFixed(2)} s`;
-  $("#speed-shown").textContent = s.paused ? "paused" : `x${s.speed}` + (s.actual_speed && s.actual_speed < s.speed * 0.9 ? ` (reaching x${s.actual_speed})` : "");
+  $("#speed-shown").textContent = s.paused ? "paused"
+    : s.held && s.held.length ? `x1 while ${s.held.join(", ")} held (then x${s.speed})`
+    : `x${s.speed}` + (s.actual_speed && s.actual_speed < s.speed * 0.9 ? ` (reaching x${s.actual_speed})` : "");
   $("#pause").textContent = s.paused ? "Run" : "Pause";
   $("#pause").setAttribute("aria-pressed", s.paused ? "true" : "false");
   $("#scan").disabled = !s.paused;
@@ -422,25 +434,31 @@ function addPoints(name, points) {
   }
   const now = lab.state ? lab.state.t : 0;
   let cut = 0;
-  while (cut < arr.length - 1 && arr[cut + 1][0] < now - TREND_WINDOW) cut++;
+  while (cut < arr.length - 1 && arr[cut + 1][0] < now - lab.trendWindow) cut++;
   if (cut) arr.splice(0, cut);
 }
 
+// Each trend is drawn at the canvas's size on screen (a phone's narrow column included), the
+// plot on the left, the current value in a margin of its own on the right.
 function drawTrends() {
   if (!lab.state) return;
-  const now = lab.state.t, from = now - TREND_WINDOW;
+  const span = lab.trendWindow, now = lab.state.t, from = now - span;
+  const dpr = window.devicePixelRatio || 1;
   for (const canvas of document.querySelectorAll("canvas[data-trend]")) {
+    const cw = Math.max(60, Math.round(canvas.clientWidth * dpr)), ch = Math.round(44 * dpr);
+    if (canvas.width !== cw || canvas.height !== ch) { canvas.width = cw; canvas.height = ch; }
     const name = canvas.dataset.trend;
     const pts = lab.trends.get(name) || [];
     const ctx = canvas.getContext("2d");
-    const w = canvas.width, h = canvas.height;
+    ctx.setTransform(dpr, 0, 0, dpr, 0, 0);
+    const w = cw / dpr, h = ch / dpr, plot = w - 64;
     ctx.clearRect(0, 0, w, h);
     if (!pts.length) continue;
     const nums = pts.map((p) => Number(p[1])).filter((v) => Number.isFinite(v));
     let lo = Math.min(...nums), hi = Math.max(...nums);
     if (nums.every((v) => v === 0 || v === 1)) { lo = 0; hi = 1; }      // a bit: low and high
     else if (hi - lo < 1e-9) { lo -= 1; hi += 1; }
-    const x = (t) => ((Math.max(t, from) - from) / TREND_WINDOW) * w;
+    const x = (t) => ((Math.max(t, from) - from) / span) * plot;
     const y = (v) => h - 4 - ((v - lo) / (hi - lo)) * (h - 8);
     ctx.strokeStyle = "#1d4ed8";
     ctx.lineWidth = 1.5;
@@ -452,13 +470,17 @@ function drawTrends() {
       else { ctx.lineTo(x(t), last); ctx.lineTo(x(t), vy); }
       last = vy;
     }
-    ctx.lineTo(w, last);
+    ctx.lineTo(plot, last);
     ctx.stroke();
+    ctx.strokeStyle = "#e5e7eb";
+    ctx.beginPath(); ctx.moveTo(plot + 2, 0); ctx.lineTo(plot + 2, h); ctx.stroke();
     ctx.fillStyle = "#111";
-    ctx.font = "11px sans-serif";
+    ctx.font = "12px sans-serif";
     const current = pts[pts.length - 1][1];
-    ctx.fillText(`${current}`, w - 60, h / 2 + 4);
+    const text = typeof current === "number" && !Number.isInteger(current) ? current.toFixed(2) : `${current}`;
+    ctx.fillText(text, plot + 6, h / 2 + 4, 58);
     ctx.fillStyle = "#6b7280";
+    ctx.font = "10px sans-serif";
     ctx.fillText(`${hi}`, 2, 10);
     ctx.fillText(`${lo}`, 2, h - 2);
   }

@@ -111,7 +111,8 @@ const Mimic = (() => {
       s("text", { class: "mimic-text", x: 10, y: 14, text: `${k + 1} ${AXES[k]}` }, g);
       const track = s("rect", { x: 150, y: 4, width: 360, height: 14, fill: "#e5e7eb", stroke: "#9ca3af" }, g);
       const working = s("rect", { x: 150, y: 4, width: 0, height: 14, fill: "#d1fae5" }, g);
-      const target = s("path", { d: "M0,0 l-6,-8 h12 z", fill: "#7c3aed", visibility: "hidden" }, g);
+      const target = s("path", { id: `target-${k + 1}`, d: "M0,0 l-6,-8 h12 z", fill: "#7c3aed", visibility: "hidden",
+        role: "img", "aria-label": `target of link ${k + 1}` }, g);
       const marker = s("rect", { x: 150, y: 0, width: 4, height: 22, fill: "#1d4ed8" }, g);
       const code = s("text", { id: `code-${k + 1}`, class: "mimic-small", x: 520, y: 15, text: "" }, g);
       const bus = s("text", { class: "mimic-small", x: 150, y: 46, text: "" }, g);
