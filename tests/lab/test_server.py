@@ -88,7 +88,7 @@ def test_bad_commands_get_one_line_and_the_server_goes_on(running):
     assert messages[3] == "jammed: mechanism must be one of lift, rotation, extension, gripper, not 'wing'"
     assert messages[4] == "low_pressure: factor must be a number, not 'lots'"
     assert "'Main.NoSuchThing' is neither a located address" in messages[5]
-    assert messages[6] == "speed x500: from x0.1 to x50"
+    assert messages[6] == "speed x500: from x0.1 to x50 (x1: real time)"
     assert messages[7] == "single scan: pause first"
     assert messages[8] == "set: a switch is 0 or 1, not None"
     assert replies[9]["ok"] is True
@@ -207,7 +207,7 @@ def test_out_of_range_values_another_stand_s_command_and_a_set_button_are_refuse
     assert messages[3] == "SB1 is a push button: it is pressed and released, not set"
     assert messages[4] == "mp9c has no 'register' command (that is another stand's)"
     assert messages[5] == "SA1 is a switch: it is set on or off, not pressed"
-    assert messages[6] == "speed xinf: from x0.1 to x50"
+    assert messages[6] == "speed xinf: from x0.1 to x50 (x1: real time)"
     assert replies[7]["ok"] is True
     server.lab.call(lambda: server.lab.advance(0.05)).result(10)
     assert server.lab.call(lambda: server.lab.session.value("SB1")).result(10) is False

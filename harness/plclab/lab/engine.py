@@ -16,6 +16,7 @@ from __future__ import annotations
 
 import collections
 import concurrent.futures
+import dataclasses
 import math
 import tempfile
 import threading
@@ -35,6 +36,7 @@ MAX_BEHIND_S = 0.25         # wall seconds of backlog after which the engine sto
 TRACE_KEEP_S = 30 * 60.0    # plant seconds the lab's trace keeps (a ring: older changes are dropped)
 TRIM_EVERY_S = 60.0         # plant seconds between two trims of the ring
 LOG_KEEP = 2000             # console actions and plant events kept (the newest)
+LAB_TICK_NS = 25_000_000    # the plant is stepped at least this often (40 page updates a second at x1)
 
 
 class LabError(PlcLabError):
@@ -72,10 +74,12 @@ class Lab:
         # has them, for the drawing and the trends; not recorded (the trace stays the I/O's)
         from plclab.stands.base import stand_spec
         self.session.observables = stand_spec(stand).observables_for(variant if sources is None else None)
+        self._refine_tick()
         self.speed = self._check_speed(speed)
         self.paused = False
         self.actual_speed = 0.0
         self.held: set[str] = set()                   # push buttons held now (console inputs)
+        self.console_levels: dict[str, int] = {}       # label -> what the operator set (the page shows it)
         self.trend_names: list[str] = list(self.panel.trends)
         self.extras = Trace()                        # trended variables the session does not record
         self._extra_unknown: dict[str, str] = {}
@@ -139,6 +143,19 @@ class Lab:
                     fut.set_exception(e)
             self._console_since_scan |= console
 
+    def _refine_tick(self) -> None:
+        """Step the plant at least every LAB_TICK_NS (thermo's task runs every 100 ms): the
+        page then gets >= 20 new plant states a second. The program's tasks keep their
+        periods (the tick divides every TASK interval), as in `plclab run --tick`."""
+        s = self.session
+        natural = s.plc.tick_ns
+        if natural <= LAB_TICK_NS or s.plc.ticks:
+            return
+        s.tick_ns = math.gcd(natural, LAB_TICK_NS)
+        logged = len(s.actions)
+        s.restart_plc()                       # not a scan run yet: the same cold start, finer steps
+        del s.actions[logged:]
+
     def ops(self) -> tuple[str, ...]:
         """The commands this stand's page has (the SCADA registers are thermo's only)."""
         ops = ("set", "press", "release", "speed", "pause", "run", "scan", "restart", "inject", "clear", "trends")
@@ -150,6 +167,7 @@ class Lab:
         if control.kind != "switch":          # a push button set on would stay pressed for ever
             raise LabError(f"{label} is a push button: it is pressed and released, not set")
         self.session.plant.set_switch(control.input, int(bool(value)))
+        self.console_levels[label] = int(bool(value))
         self.session.log(f"{label}={int(bool(value))}")
 
     def press(self, label: str, down: bool) -> None:
@@ -162,6 +180,7 @@ class Lab:
         else:
             self.session.console.release(control.input)
             self.held.discard(control.input)
+        self.console_levels[label] = int(down)
         self._rebase = True            # the pace changes while a button is held (see `pace`)
 
     def pace(self) -> float:
@@ -201,9 +220,13 @@ class Lab:
         is one line: the lab always has a program running."""
         s = self.session
         old_sources, old_checked = s.sources, s.checked
+        old_tick = s.tick_ns
         try:
+            s.tick_ns = None                  # the new program's own tick first (then refined)
             s.load_program(sources, checked)
+            self._refine_tick()
         except (Exception, RecursionError, MemoryError) as e:     # noqa: BLE001 - any failure: back
+            s.tick_ns = old_tick
             s.load_program(old_sources, old_checked)
             self._rebase = True
             raise LabError(f"the program could not be loaded ({_why(e)}); the PLC runs the previous "
@@ -410,6 +433,8 @@ class Lab:
         plc = s.plc
         self.seq += 1
         fault = plc.fault
+        if fault is not None:            # on the header's clock (the PLC's restarts at every load)
+            fault = dataclasses.replace(fault, time_ns=fault.time_ns + round(s.now * 1e9) - plc.now_ns)
         snap: dict[str, Any] = {
             "type": "state", "seq": self.seq, "t": round(s.now - s.tick, 6), "tick": s.tick,
             "speed": self.speed, "paused": self.paused, "actual_speed": round(self.actual_speed, 2),
@@ -450,8 +475,8 @@ class Lab:
     def _io(self) -> dict[str, int]:
         s = self.session
         io = {}
-        for c in self.panel.controls:
-            io[c.label] = int(bool(s.value(c.signal)))
+        for c in self.panel.controls:        # the console as the operator set it (seen while paused too)
+            io[c.label] = self.console_levels.setdefault(c.label, int(bool(s.value(c.signal))))
         for lamp in self.panel.lamps:
             io[lamp.label] = int(bool(s.value(lamp.label)))
         return io
@@ -487,12 +512,30 @@ class Lab:
                  "rule": f"writable only when {r.writable_when}" if r.writable_when else "",
                  "description": r.description, "value": r.as_value(raw[r.address])} for r in THERMO.registers]
 
-    def twido_map(self):
+    def twido_map(self, external: bool = False):
         """The Twido face's register map on whichever PLC runs now (a restart or a program
-        load makes a new process image; the map follows it)."""
+        load makes a new process image; the map follows it). `external`: the map an
+        external SCADA client writes through, each write (done or refused) in the lab's log."""
         from plclab.modbus.maps import TwidoMap
         from plclab.modbus.profiles import THERMO
-        return TwidoMap(_CurrentImage(self), THERMO)
+        from plclab.modbus.protocol import ModbusException
+
+        lab = self
+
+        class LoggedTwidoMap(TwidoMap):
+            def write(self, table, start, values):
+                what = ", ".join(f"%MW{start + i}={v}" for i, v in enumerate(values))
+                try:
+                    super().write(table, start, values)
+                except ModbusException as e:
+                    from plclab.hmi import EXCEPTION_NAMES
+                    code = int(e.code)
+                    text = (f"SCADA client: {what} refused: exception {code:02d} "
+                            f"({EXCEPTION_NAMES.get(code, 'unknown')}): {e.reason}")
+                    lab.call(lambda: lab.session.log(text))
+                    raise
+                lab.call(lambda: lab.session.log(f"SCADA client: {what} written"))
+        return (LoggedTwidoMap if external else TwidoMap)(_CurrentImage(self), THERMO)
 
     def write_register(self, address: int, value: int) -> None:
         from plclab.modbus.protocol import ModbusException, Table
@@ -527,9 +570,9 @@ class Lab:
         try:
             speed = float(speed)
         except (TypeError, ValueError):
-            raise LabError(f"speed must be a number (x1..x50), not '{speed}'") from None
+            raise LabError(f"speed must be a number (x0.1 .. x50), not '{str(speed)[:40]}'") from None
         if not 0.1 <= speed <= 50 or not math.isfinite(speed):
-            raise LabError(f"speed x{speed:g}: from x0.1 to x50")
+            raise LabError(f"speed x{speed:g}: from x0.1 to x50 (x1: real time)")
         return speed
 
 

@@ -140,7 +140,7 @@ class LabServer:
     def _start_modbus(self) -> None:
         from plclab.modbus.server import ModbusTcpServer
         try:
-            self.modbus = ModbusTcpServer(self.lab.twido_map(), self.bind, self.modbus_port, name="twido").start()
+            self.modbus = ModbusTcpServer(self.lab.twido_map(external=True), self.bind, self.modbus_port, name="twido").start()
         except (OSError, PlcLabError) as e:
             raise LabError(f"lab: the Twido Modbus face cannot listen on {self.bind}:{self.modbus_port} "
                            f"({getattr(e, 'strerror', None) or e}); choose another --modbus-port") from None

@@ -50,13 +50,32 @@ async function connect() {
   ws.onclose = () => { if (lab.ws === ws) lost(); };
 }
 
+// Connection lost: the page says so everywhere (badge, clock, controls), and no control can be
+// used until the lab answers again; what it then shows starts afresh from the lab's state.
 function lost() {
   lab.ws = null;
+  lab.state = null;
+  document.body.classList.add("offline");
+  const badge = $("#plc-state");
+  badge.textContent = "no connection";
+  badge.dataset.state = "OFFLINE";
+  $("#clock").textContent = "t = ? s";
+  $("#speed-shown").textContent = "";
+  setControlsEnabled(false);
+  for (const r of releasers) r();
   $("#conn").textContent = "connection to the lab lost: reconnecting...";
   for (const [, p] of lab.pending) p.reject(new Error("connection lost"));
   lab.pending.clear();
   const delay = Math.min(5000, 250 * 2 ** lab.retry++);
   setTimeout(connect, delay);
+}
+
+// every control of the page, on or off (the Single scan button is on only while paused)
+function setControlsEnabled(on) {
+  for (const c of document.querySelectorAll("main button, main input, main select")) {
+    if (on) { if (c.dataset.offline) { c.disabled = false; delete c.dataset.offline; } }
+    else if (!c.disabled) { c.disabled = true; c.dataset.offline = "1"; }
+  }
 }
 
 // POST to the lab with this run's token (a JSON or multipart body)
@@ -100,7 +119,18 @@ function say(target, text, ok) {
 
 // ------------------------------------------------------------------ building the page
 function onHello(h) {
+  const restarted = lab.hello && lab.hello.session !== h.session;
   lab.hello = h;
+  document.body.classList.remove("offline");
+  setControlsEnabled(true);
+  // a fresh log: what the lab sends now is its whole history (a restarted lab: a new one)
+  lab.events = []; lab.actions = [];
+  renderEvents(); renderActions();
+  if (restarted) {
+    for (const id of ["#program-message", "#program-errors", "#grade-message", "#grade-result", "#fault-message",
+                      "#register-message"]) $(id).replaceChildren();
+    notice("the lab was restarted: a new session");
+  }
   document.title = `PLC Lab: ${h.title}`;
   $("#title").textContent = h.title;
   showPages(h.pages);
@@ -123,7 +153,6 @@ function onHello(h) {
   lab.trendWindow = h.trend_window;
   $("#h-trends").textContent = `Trends (last ${h.trend_window} s of plant time)`;
   lab.trendNames = h.trend_names.slice();
-  lab.events = []; lab.actions = [];
   buildTrendList();
 }
 
@@ -273,7 +302,7 @@ function buildFaults(panel) {
 function buildGrade(h) {
   const box = $("#grade-buttons");
   box.replaceChildren();
-  if (!h.tasks.length) box.append(el("span", { text: "no graded tasks for this stand (its SCADA tasks are done in the registers table)" }));
+  if (!h.tasks.length) box.append(el("span", { text: "no task of this stand is graded in the lab: try the SCADA tasks on the registers below, then grade them with plclab grade thermo scada1 (or scada2)" }));
   for (const task of h.tasks) {
     box.append(el("button", { type: "button", text: `Grade ${task}`, onclick: () => grade(task) }));
   }
@@ -300,7 +329,7 @@ async function grade(task) {
     r = { ok: false, message: `the lab did not answer (${e.message})` };
   }
   if (!r.ok) { say("#grade-message", r.message, false); return; }
-  say("#grade-message", `${r.title}: ${r.summary}`, r.passed);
+  say("#grade-message", `${r.title.replace(/[.:\s]+$/, "")}: ${r.summary}`, r.passed);
   const out = $("#grade-result");
   if (r.errors.length) {
     out.append(el("ol", {}, ...r.errors.map((e) => el("li", { class: "bad", text: e }))));
@@ -337,7 +366,7 @@ function onState(s) {
   lab.dirtyActions ||= s.actions.length > 0;
   if (!drawScheduled) {
     drawScheduled = true;
-    requestAnimationFrame(() => { drawScheduled = false; render(lab.state); });
+    requestAnimationFrame(() => { drawScheduled = false; if (lab.state) render(lab.state); });
   }
 }
 
@@ -358,7 +387,11 @@ function render(s) {
   $("#pause").setAttribute("aria-pressed", s.paused ? "true" : "false");
   $("#scan").disabled = !s.paused;
   const speed = $("#speed");
-  if (document.activeElement !== speed) speed.value = String(s.speed);
+  if (document.activeElement !== speed) {
+    if (![...speed.options].some((o) => o.value === String(s.speed)))      // --speed 0.5: shown too
+      speed.append(el("option", { value: String(s.speed), text: `x${s.speed}` }));
+    speed.value = String(s.speed);
+  }
   $("#program-name").textContent = s.program;
   $("#trace-window").textContent = `The trace downloads hold t = ${s.trace_from.toFixed(0)} .. ${s.t.toFixed(0)} s ` +
     `(the lab keeps the last ${Math.round(s.trace_keep / 60)} min of plant time).`;
@@ -494,11 +527,21 @@ function renderRegisters(regs) {
     for (const r of regs) {
       const write = el("td");
       if (r.access === "read/write") {
-        const input = el("input", { type: "number", "aria-label": `new value of %MW${r.address}` });
+        const input = el("input", { type: "text", inputmode: "numeric", "aria-label": `new value of %MW${r.address}` });
         const b = el("button", { type: "button", text: "Write", "aria-label": `write %MW${r.address}` });
-        b.onclick = () => send("register", { address: r.address, value: Number(input.value) })
-          .then(() => say("#register-message", `%MW${r.address} = ${input.value} written`, true))
-          .catch((e) => say("#register-message", e.message, false));
+        b.onclick = () => {
+          const text = input.value.trim();
+          // a register holds a whole number: nothing is written for an empty box or 1.5
+          if (!/^[-+]?\d+$/.test(text)) {
+            say("#register-message", text === "" ? `%MW${r.address}: enter a value to write (a whole number)`
+              : `%MW${r.address}: '${text}' is not a whole number; nothing written`, false);
+            return;
+          }
+          const value = Number(text);
+          send("register", { address: r.address, value })
+            .then(() => say("#register-message", `%MW${r.address} = ${value} written`, true))
+            .catch((e) => say("#register-message", e.message, false));
+        };
         input.onkeydown = (e) => { if (e.key === "Enter") b.click(); };
         write.append(input, b);
       }

@@ -106,7 +106,7 @@ const Mimic = (() => {
     s("text", { class: "mimic-text", x: 10, y: 18, text: "links: position code (sensor), target of the frame (triangle), DAC reference (bar)" });
     parts.links = [];
     for (let k = 0; k < 5; k++) {
-      const y0 = 40 + k * 52;
+      const y0 = 30 + k * 52;
       const g = s("g", { transform: `translate(0,${y0})` });
       s("text", { class: "mimic-text", x: 10, y: 14, text: `${k + 1} ${AXES[k]}` }, g);
       const track = s("rect", { x: 150, y: 4, width: 360, height: 14, fill: "#e5e7eb", stroke: "#9ca3af" }, g);
@@ -122,7 +122,7 @@ const Mimic = (() => {
       const refText = s("text", { id: `dac-${k + 1}`, class: "mimic-small", x: 520, y: 34, text: "" }, g);
       parts.links.push({ track, working, target, marker, code, ref, refText, bus });
     }
-    parts.busLine = s("text", { class: "mimic-text", x: 10, y: 300, text: "" });
+    parts.busLine = s("text", { class: "mimic-text", x: 10, y: 298, text: "" });
   }
 
   function updateTur10(m) {
