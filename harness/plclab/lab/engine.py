@@ -36,6 +36,7 @@ MAX_BEHIND_S = 0.25         # wall seconds of backlog after which the engine sto
 TRACE_KEEP_S = 30 * 60.0    # plant seconds the lab's trace keeps (a ring: older changes are dropped)
 TRIM_EVERY_S = 60.0         # plant seconds between two trims of the ring
 LOG_KEEP = 2000             # console actions and plant events kept (the newest)
+FRAMES_EVERY_S = 0.1        # wall seconds between two reads of the recorded program's table
 LAB_TICK_NS = 25_000_000    # the plant is stepped at least this often (40 page updates a second at x1)
 
 
@@ -462,7 +463,26 @@ class Lab:
         snap["trend_errors"] = {n: self._extra_unknown[n] for n in self.trend_names if n in self._extra_unknown}
         if self.stand == "thermo":
             snap["registers"] = self.registers()
+        frames = self._frames(full)
+        if frames is not _SAME:
+            snap["frames"] = frames
         return snap
+
+    _frames_at = 0.0
+    _frames_sent: Any = None
+
+    def _frames(self, full: bool) -> Any:
+        """The recorded program's table (panels), when it changed (read at most every
+        FRAMES_EVERY_S of wall time: a page highlights the frame being executed)."""
+        now = time.monotonic()
+        if not full and now - self._frames_at < FRAMES_EVERY_S:
+            return _SAME
+        self._frames_at = now
+        table = self.panel.frames(self.session)
+        if not full and table == self._frames_sent:
+            return _SAME
+        self._frames_sent = table
+        return table
 
     def paced_now(self) -> float:
         """The plant time the wall clock says it is now (the last scan's time when paused):
@@ -574,6 +594,9 @@ class Lab:
         if not 0.1 <= speed <= 50 or not math.isfinite(speed):
             raise LabError(f"speed x{speed:g}: from x0.1 to x50 (x1: real time)")
         return speed
+
+
+_SAME = object()             # "as in the last snapshot" (not sent)
 
 
 class _CurrentImage:

@@ -58,6 +58,10 @@ class Fault:
     params: tuple[FaultParam, ...] = ()
 
 
+def _no_frames(s: Session) -> Any:
+    return None
+
+
 @dataclass(frozen=True)
 class Panel:
     stand: str
@@ -67,6 +71,7 @@ class Panel:
     trends: tuple[str, ...]                          # signals trended when the page opens
     trend_window: float = 60.0                       # plant seconds a trend shows
     mimic: Callable[[Session], dict[str, Any]] = field(repr=False, default=lambda s: {})
+    frames: Callable[[Session], Any] = field(repr=False, default=_no_frames)   # the recorded program
 
     def control(self, label: str) -> Control:
         for c in self.controls:
@@ -106,6 +111,7 @@ class Look:
     trends: tuple[str, ...] = ()
     trend_window: float = 60.0      # plant seconds a trend shows (thermo: its 300-s step response)
     mimic: Callable[[Session], dict[str, Any]] = field(repr=False, default=lambda s: {})
+    frames: Callable[[Session], Any] = field(repr=False, default=_no_frames)
 
 
 def derive_panel(spec: StandSpec, look: Look) -> Panel:
@@ -126,7 +132,7 @@ def derive_panel(spec: StandSpec, look: Look) -> Panel:
                   for group in look.lamp_groups for name in getattr(spec, group))
     faults = tuple(Fault(f.name, look.fault_texts.get(f.name, f.doc),
                          tuple(_fault_param(look, f.name, p) for p in f.params)) for f in spec.faults)
-    return Panel(spec.name, controls, lamps, faults, look.trends, look.trend_window, look.mimic)
+    return Panel(spec.name, controls, lamps, faults, look.trends, look.trend_window, look.mimic, look.frames)
 
 
 def _fault_param(look: Look, fault: str, param: Any) -> FaultParam:
@@ -134,6 +140,48 @@ def _fault_param(look: Look, fault: str, param: Any) -> FaultParam:
     if default is None:
         default = "" if param.required or param.default is None else str(param.default)
     return FaultParam(param.name, choices, default)
+
+
+# --------------------------------------------------------------------------- the recorded program
+
+def recorded_program(s: Session) -> Any:
+    """The control program in the PLC's frame memory, raw: (frames [(data words, pause ns or
+    None)], the frame pointer, whether playback runs), or None when the program has no frame
+    memory where the stand's observables say (FrameCount: `Main.Cp.Count`)."""
+    count_path = s.observables.get("FrameCount")
+    ptr_path = s.observables.get("FramePtr")
+    if not count_path:
+        return None
+    try:
+        cp = s.plc.read(count_path.rsplit(".", 1)[0])
+        frames, count = cp.FRAMES, int(cp.COUNT)
+    except Exception:        # noqa: BLE001 - a student's program need not have the shipped layout
+        return None
+    rows = []
+    for frame in frames[:max(0, min(count, len(frames)))]:
+        pause = getattr(frame, "PAUSE", None)
+        rows.append(([int(v) for v in frame.DATA], int(pause) if isinstance(pause, int) else None))
+    ptr = running = None
+    if ptr_path:
+        try:
+            seq = s.plc.read(ptr_path.rsplit(".", 1)[0])
+            ptr, running = int(seq.PTR), bool(getattr(seq, "RUNNING", False) or getattr(seq, "INFRAME", False))
+        except Exception:    # noqa: BLE001
+            pass
+    return rows, ptr, running
+
+
+def _pause_text(pause: Any) -> str:
+    return "1 s (fixed)" if pause is None else f"{pause / 1e9:g} s"
+
+
+def _frame_table(s: Session, columns: list[str], decode: Callable[[list[int]], list[str]]) -> Any:
+    raw = recorded_program(s)
+    if raw is None:
+        return None
+    rows, ptr, running = raw
+    return {"columns": ["frame", *columns, "pause"], "current": ptr if running else None, "next": ptr,
+            "rows": [[str(i), *decode(data), _pause_text(pause)] for i, (data, pause) in enumerate(rows, 1)]}
 
 
 # --------------------------------------------------------------------------- MP-9C
@@ -151,6 +199,18 @@ def _mp9c_mimic(s: Session) -> dict[str, Any]:
 _SQ_HINTS = ("arm up", "arm down", "gripper released", "rotated left", "rotated right", "arm forward",
              "arm backward")
 _L_HINTS = ("gripper clamp", "arm up", "arm down", "rotate left", "rotate right", "arm forward", "arm backward")
+
+
+def _bits(word: int, names: tuple[str, ...], prefix: str) -> str:
+    on = [f"{prefix}{i} {names[i - 1]}" for i in range(1, 8) if word >> (i - 1) & 1]
+    return ", ".join(on) or "none"
+
+
+def _mp9c_frames(s: Session) -> Any:
+    """Word 1 the valve byte (L1..L7 packed, bit 0 = L1), word 2 the sensor byte the frame
+    waits for (SQ1..SQ7): the coils energised and the position reached."""
+    return _frame_table(s, ["valves energised", "position (limit switches made)"],
+                        lambda d: [_bits(d[0], _L_HINTS, "L"), _bits(d[1], _SQ_HINTS, "SQ")])
 
 MP9C = derive_panel(stand_spec("mp9c"), Look(
     labels={"I07": "I0.7"},
@@ -173,6 +233,7 @@ MP9C = derive_panel(stand_spec("mp9c"), Look(
                   ("dead_coil", "coil"): (tuple(f"L{i}" for i in range(1, 8)), "L3")},
     trends=("SB1", "SA1", "SQ1", "SQ2", "L2", "L3", "HL1"),
     mimic=_mp9c_mimic,
+    frames=_mp9c_frames,
 ))
 
 
@@ -197,6 +258,11 @@ def _tur10_mimic(s: Session) -> dict[str, Any]:
 
 _AXIS = {1: "shoulder", 2: "raceme rotation", 3: "raceme inclination", 4: "platform rotation", 5: "hand"}
 
+
+def _tur10_frames(s: Session) -> Any:
+    """The five words: the link positions (sensor codes) the frame drives the links to."""
+    return _frame_table(s, [f"{k} {name}" for k, name in _AXIS.items()], lambda d: [str(v) for v in d])
+
 _WAYS = {"FWD": "forward", "BWD": "backward"}
 _AXES = ("1", "2", "3", "4", "5")
 
@@ -214,6 +280,7 @@ TUR10 = derive_panel(stand_spec("tur10"), Look(
                   ("slow_drive", "axis"): (_AXES, "1"), ("slow_drive", "factor"): ((), "0.5")},
     trends=("SB1", "SA7", "DRIVE1", "DRIVE2", "HL1"),
     mimic=_tur10_mimic,
+    frames=_tur10_frames,
 ))
 
 

@@ -359,6 +359,7 @@ async function grade(task) {
 let drawScheduled = false;
 function onState(s) {
   lab.state = s;
+  if ("frames" in s) { lab.frames = s.frames; lab.dirtyFrames = true; }
   if (s.events.length) lab.events.push(...s.events);
   if (s.actions.length) lab.actions.push(...s.actions);
   for (const [name, points] of Object.entries(s.trends)) addPoints(name, points);
@@ -406,6 +407,7 @@ function render(s) {
   if (lab.dirtyActions) { lab.dirtyActions = false; renderActions(); }
   for (const [name, why] of Object.entries(s.trend_errors || {})) say("#trend-message", why, false);
   if (s.registers) renderRegisters(s.registers);
+  if (lab.dirtyFrames) { lab.dirtyFrames = false; renderFrames(lab.frames); }
   drawTrends();
 }
 
@@ -424,6 +426,29 @@ function renderActions() {
   lab.actions = lab.actions.slice(-200);
   list.replaceChildren(...lab.actions.map((a) => el("li", { text: `t=${a.t.toFixed(2)} s ${a.text}` })));
   list.scrollTop = list.scrollHeight;
+}
+
+// ------------------------------------------------------------------ the recorded program
+// The frames in the PLC's frame memory, decoded (MP-9C: valves and position; TUR-10: the five
+// link positions), with their pauses; the frame being executed is highlighted.
+function renderFrames(f) {
+  const section = $("#frames");
+  section.hidden = !lab.hello || (lab.hello.stand !== "mp9c" && lab.hello.stand !== "tur10");
+  const head = $("#frame-table thead"), body = $("#frame-table tbody");
+  if (!f) {
+    head.replaceChildren(); body.replaceChildren();
+    $("#frames-status").textContent = "this program keeps no frame memory where the shipped ones do (Main.Cp)";
+    return;
+  }
+  head.replaceChildren(el("tr", {}, ...f.columns.map((c) => el("th", { text: c }))));
+  body.replaceChildren(...f.rows.map((r, i) => {
+    const tr = el("tr", {}, ...r.map((c) => el("td", { text: c })));
+    if (f.current === i + 1) { tr.className = "current"; tr.setAttribute("aria-current", "true"); }
+    return tr;
+  }));
+  $("#frames-status").textContent = !f.rows.length ? "no frame recorded (a short SB1 press in manual mode records one)"
+    : f.current ? `${f.rows.length} frame(s); executing frame ${f.current}`
+    : `${f.rows.length} frame(s); stopped (next: frame ${f.next})`;
 }
 
 // ------------------------------------------------------------------ trends

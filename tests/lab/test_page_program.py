@@ -1,0 +1,40 @@
+"""The PLC's side in the page (issue 22, "Beyond"): the recorded program (the frames in the
+PLC's frame memory, decoded, the frame being executed highlighted)."""
+from __future__ import annotations
+
+from playwright.sync_api import expect
+from test_page import WAIT, flip, lamp, off, on, tap_sb1
+
+
+def test_mp9c_recorded_program_table_decodes_the_frames_and_follows_playback(lab_page, shots):
+    lp = lab_page("mp9c", speed=2)
+    page = lp.page
+    status = page.locator("#frames-status")
+    expect(status).to_have_text("no frame recorded (a short SB1 press in manual mode records one)", timeout=WAIT)
+    flip(page, "SA5", True)
+    on(lamp(page, "SQ2"))
+    tap_sb1(page)                                     # frame 1: arm down (I0.7 off: 0.5 s pause)
+    flip(page, "SA5", False)
+    on(lamp(page, "SQ1"))
+    flip(page, "I0.7", True)
+    tap_sb1(page)                                     # frame 2: arm up (I0.7 on: 3 s pause)
+    table = page.get_by_role("table", name="recorded frames")
+    expect(status).to_have_text("2 frame(s); stopped (next: frame 1)", timeout=WAIT)
+    cells = table.locator("tbody tr").evaluate_all("rows => rows.map(r => [...r.cells].map(c => c.textContent))")
+    assert cells == [
+        ["1", "L3 arm down, L4 rotate left, L7 arm backward",
+         "SQ2 arm down, SQ3 gripper released, SQ4 rotated left, SQ7 arm backward", "0.5 s"],
+        ["2", "L2 arm up, L4 rotate left, L7 arm backward",
+         "SQ1 arm up, SQ3 gripper released, SQ4 rotated left, SQ7 arm backward", "3 s"]], cells
+    # the same words the PLC holds (Main.Cp.Frames[i].Data[1] = the valve byte, [2] the sensor byte)
+    plc = lp.lab.session.plc
+    assert [plc.read(f"Main.Cp.Frames[{i}].Data[{w}]") for i in (1, 2) for w in (1, 2)] == [76, 78, 74, 77]
+    flip(page, "SA1", True)                           # automatic: start
+    tap_sb1(page)
+    current = table.locator("tr[aria-current='true']")
+    expect(current).to_contain_text("L3 arm down", timeout=WAIT)          # frame 1 executing
+    expect(status).to_have_text("2 frame(s); executing frame 1")
+    on(lamp(page, "SQ2"))
+    expect(current).to_contain_text("L2 arm up", timeout=WAIT)            # then frame 2
+    expect(status).to_have_text("2 frame(s); executing frame 2")
+    page.screenshot(path=str(shots / "lab-mp9c-frames.png"), full_page=True)
