@@ -38,3 +38,56 @@ def test_mp9c_recorded_program_table_decodes_the_frames_and_follows_playback(lab
     expect(current).to_contain_text("L2 arm up", timeout=WAIT)            # then frame 2
     expect(status).to_have_text("2 frame(s); executing frame 2")
     page.screenshot(path=str(shots / "lab-mp9c-frames.png"), full_page=True)
+
+
+def test_watch_and_force_from_the_program_tree(lab_page, shots):
+    lp = lab_page("mp9c", speed=2)
+    page = lp.page
+    page.get_by_role("button", name="Pick variables from the program").click()
+    tree = page.get_by_label("program variables")
+    tree.get_by_text("Main : PRG_Mp9cBaseline", exact=True).click()
+    tree.get_by_text("Cp : ST_ControlProgram", exact=True).click()
+    tree.get_by_role("button", name="watch Main.Cp.Count").click()
+    tree.get_by_text("globals", exact=True).click()
+    tree.get_by_role("button", name="watch SA5", exact=True).click()
+    tree.get_by_role("button", name="watch L7", exact=True).click()
+    count = page.get_by_label("value of Main.Cp.Count", exact=True)
+    expect(count).to_have_text("0", timeout=WAIT)
+    expect(page.get_by_label("value of SA5", exact=True)).to_have_text("FALSE")
+    # force an input: the program sees it (manual mode: the arm goes down), the console switch
+    # stays where it is, and SA5 is marked forced on the console and in the table
+    page.get_by_label("force value of SA5").fill("TRUE")
+    page.get_by_role("button", name="force SA5", exact=True).click()
+    expect(page.get_by_label("value of SA5", exact=True)).to_have_text("TRUE (forced)", timeout=WAIT)
+    on(lamp(page, "L3"))
+    on(lamp(page, "SQ2"))
+    expect(switch_(page, "SA5")).to_have_attribute("aria-checked", "false")
+    expect(switch_(page, "SA5")).to_have_attribute("data-forced", "true")
+    expect(page.get_by_label("forces")).to_have_text("1 forced")
+    expect(page.locator("#actions")).to_contain_text("FORCE SA5 := TRUE")
+    # force an output: the valve coil stays off whatever the program says
+    on(lamp(page, "L7"))
+    page.get_by_label("force value of L7").fill("FALSE")
+    page.get_by_role("button", name="force L7", exact=True).click()
+    off(lamp(page, "L7"))
+    expect(lamp(page, "L7")).to_have_attribute("data-forced", "true")
+    expect(page.get_by_label("forces")).to_have_text("2 forced")
+    page.screenshot(path=str(shots / "lab-mp9c-force.png"), full_page=True)
+    # a value the type does not take: one line, nothing forced
+    page.get_by_label("force value of Main.Cp.Count").fill("70000")
+    page.get_by_role("button", name="force Main.Cp.Count", exact=True).click()
+    expect(page.locator("#watch-message")).to_have_text("70000 is outside INT (-32768..32767)")
+    expect(count).to_have_text("0")
+    # release: the program has its inputs and outputs back
+    page.get_by_role("button", name="release SA5", exact=True).click()
+    expect(page.get_by_label("value of SA5", exact=True)).to_have_text("FALSE", timeout=WAIT)
+    on(lamp(page, "SQ1"))
+    expect(switch_(page, "SA5")).not_to_have_attribute("data-forced", "true")
+    page.get_by_role("button", name="Release all forces").click()
+    on(lamp(page, "L7"))
+    expect(page.get_by_label("forces")).to_have_text("")
+    assert lp.lab.forces.values == {}
+
+
+def switch_(page, label: str):
+    return page.get_by_role("switch", name=label, exact=True)

@@ -76,6 +76,10 @@ class Lab:
         from plclab.stands.base import stand_spec
         self.session.observables = stand_spec(stand).observables_for(variant if sources is None else None)
         self._refine_tick()
+        from plclab.lab.variables import Forces
+        self.forces = Forces()                         # the watch and force table's forces
+        self.forces.attach(self.session.plc)
+        self.watched: list[str] = []                   # the watch table's variables
         self.speed = self._check_speed(speed)
         self.paused = False
         self.actual_speed = 0.0
@@ -159,7 +163,8 @@ class Lab:
 
     def ops(self) -> tuple[str, ...]:
         """The commands this stand's page has (the SCADA registers are thermo's only)."""
-        ops = ("set", "press", "release", "speed", "pause", "run", "scan", "restart", "inject", "clear", "trends")
+        ops = ("set", "press", "release", "speed", "pause", "run", "scan", "restart", "inject", "clear", "trends",
+               "tree", "watch", "force", "unforce")
         return ops + ("register",) if self.stand == "thermo" else ops
 
     # the commands themselves (each runs in the engine's thread through `call`)
@@ -211,9 +216,77 @@ class Lab:
         self._run_scans(1)
 
     def restart_plc(self) -> None:
-        """Power-cycle the controller: retained variables kept, the plant stays."""
+        """Power-cycle the controller: retained variables kept, the plant stays; forces stay
+        (as a programming tool keeps them through a restart)."""
         self.session.restart_plc()
+        self.forces.attach(self.session.plc)
         self._rebase = True
+
+    # the watch and force table (plclab.lab.variables)
+    def variable_tree(self) -> list[dict]:
+        from plclab.lab.variables import variable_tree
+        return variable_tree(self.session.plc)
+
+    def set_watch(self, paths: Sequence[str]) -> list[str]:
+        from plclab.lab.variables import MAX_WATCH, elementary
+        clean: list[str] = []
+        for p in paths:
+            p = str(p).strip()
+            if p and p not in clean:
+                clean.append(p)
+        if len(clean) > MAX_WATCH:
+            raise LabError(f"at most {MAX_WATCH} watched variables ({len(clean)} asked)")
+        for p in clean:
+            elementary(self.session.plc, p)
+        self.watched = clean
+        return clean
+
+    def force(self, path: str, value: Any) -> None:
+        shown = self.forces.force(path, value)
+        self.session.log(f"FORCE {path} := {_force_text(shown)}")
+        if path not in self.watched:
+            self.watched = [*self.watched, path][-32:]
+
+    def unforce(self, path: Optional[str]) -> None:
+        for p in self.forces.release(path):
+            self.session.log(f"force released: {p}")
+
+    def _watch_values(self) -> list[list]:
+        from plclab.lab.variables import show
+        out = []
+        plc = self.session.plc
+        for p in self.watched:
+            try:
+                value = show(plc.read(p))
+            except PlcLabError:
+                value = None
+            out.append([p, value, p in self.forces.values])
+        return out
+
+    def _forced_labels(self) -> list[str]:
+        """The console controls and lamps a force holds (forced by label, address or path)."""
+        if not self.forces.values:
+            return []
+        plc = self.session.plc
+        targets = set()
+        for p in self.forces.values:
+            try:
+                c, k = plc.resolve(p)
+                targets.add((id(c), k))
+            except PlcLabError:
+                pass
+        out = []
+        for label, signal in [(c.label, c.signal) for c in self.panel.controls] + \
+                             [(lamp.label, lamp.label) for lamp in self.panel.lamps]:
+            for name in (signal, self.session.labels.get(signal, "")):
+                try:
+                    c, k = plc.resolve(name)
+                except PlcLabError:
+                    continue
+                if (id(c), k) in targets:
+                    out.append(label)
+                    break
+        return out
 
     def load_program(self, sources: Sequence[tuple[str, str]], checked: Any, name: str, upload: bool = False) -> None:
         """Download `sources` (already through `prepare_program`). Should the load still fail,
@@ -229,9 +302,13 @@ class Lab:
         except (Exception, RecursionError, MemoryError) as e:     # noqa: BLE001 - any failure: back
             s.tick_ns = old_tick
             s.load_program(old_sources, old_checked)
+            self.forces.attach(s.plc)
             self._rebase = True
             raise LabError(f"the program could not be loaded ({_why(e)}); the PLC runs the previous "
                            f"program again (restarted)") from None
+        for path in self.forces.attach(s.plc):          # forces on what the new program has stay
+            s.log(f"force released: {path} (not in the program loaded)")
+        self.watched = [p for p in self.watched if _has(s.plc, p)]
         self.program_name = name
         if upload:                         # Reload loads it again (the browser's files are not on disk)
             self.uploaded = list(sources)
@@ -463,6 +540,9 @@ class Lab:
         snap["trend_errors"] = {n: self._extra_unknown[n] for n in self.trend_names if n in self._extra_unknown}
         if self.stand == "thermo":
             snap["registers"] = self.registers()
+        snap["watch"] = self._watch_values()
+        snap["forced"] = {p: _force_text(v) for p, v in self.forces.values.items()}
+        snap["forced_labels"] = self._forced_labels()
         frames = self._frames(full)
         if frames is not _SAME:
             snap["frames"] = frames
@@ -597,6 +677,20 @@ class Lab:
 
 
 _SAME = object()             # "as in the last snapshot" (not sent)
+
+
+def _force_text(value: Any) -> str:
+    if isinstance(value, bool):
+        return "TRUE" if value else "FALSE"
+    return str(value)
+
+
+def _has(plc: Any, path: str) -> bool:
+    try:
+        plc.resolve(path)
+    except PlcLabError:
+        return False
+    return True
 
 
 class _CurrentImage:

@@ -348,6 +348,22 @@ class LabServer:
                 chosen = await asyncio.wrap_future(lab.call(lambda: lab.set_trends(names)))
                 full = await asyncio.wrap_future(lab.call(lambda: lab.snapshot(full=True)))
                 self._broadcast({"type": "trends", "names": chosen, "trends": full["trends"]})
+            elif op == "tree":
+                tree = await asyncio.wrap_future(lab.call(lab.variable_tree))
+                return {"type": "reply", "id": mid, "op": op, "ok": True, "tree": tree}
+            elif op == "watch":
+                paths = msg.get("paths")
+                if not isinstance(paths, list):
+                    raise LabError("watch: a list of variable paths was expected")
+                await asyncio.wrap_future(lab.call(lambda: lab.set_watch(paths)))
+            elif op == "force":
+                path, value = str(msg["path"]), msg.get("value")
+                if not isinstance(value, (str, int, float, bool)):
+                    raise LabError("force: a value (TRUE, 12, 1.5, T#2s) was expected")
+                await asyncio.wrap_future(lab.call(lambda: lab.force(path, value)))
+            elif op == "unforce":
+                path = msg.get("path")
+                await asyncio.wrap_future(lab.call(lambda: lab.unforce(None if path is None else str(path))))
             elif op == "register":
                 address = _whole(msg.get("address"), "address", 0, 65535)
                 value = _whole(msg.get("value"), "value", -32768, 65535)
@@ -509,7 +525,7 @@ class LabServer:
 
 
 ALL_OPS = ("set", "press", "release", "speed", "pause", "run", "scan", "restart", "inject", "clear", "trends",
-           "register")
+           "tree", "watch", "force", "unforce", "register")
 
 
 def _bit(value: Any) -> int:

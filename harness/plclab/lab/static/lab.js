@@ -17,7 +17,7 @@ const el = (tag, attrs = {}, ...children) => {
 const lab = {
   ws: null, hello: null, state: null, nextId: 1, pending: new Map(),
   trends: new Map(),          // name -> [[t, v], ...]
-  trendNames: [], events: [], actions: [], retry: 0, trendWindow: 60,
+  trendNames: [], events: [], actions: [], retry: 0, trendWindow: 60, watched: [], watchBuilt: "",
 };
 
 // ------------------------------------------------------------------ connection
@@ -138,6 +138,7 @@ function onHello(h) {
   buildRun(h);
   buildFaults(h.panel);
   buildGrade(h);
+  buildWatch();
   $("#registers").hidden = h.stand !== "thermo";
   $("#twido").textContent = h.twido ? `The Twido Modbus face answers at ${h.twido} (holding register n = %MWn) for an external SCADA client.` : "";
   Mimic.build($("#mimic"), h.stand, h.panel);
@@ -408,6 +409,8 @@ function render(s) {
   for (const [name, why] of Object.entries(s.trend_errors || {})) say("#trend-message", why, false);
   if (s.registers) renderRegisters(s.registers);
   if (lab.dirtyFrames) { lab.dirtyFrames = false; renderFrames(lab.frames); }
+  renderWatch(s.watch || []);
+  markForced(s);
   drawTrends();
 }
 
@@ -426,6 +429,102 @@ function renderActions() {
   lab.actions = lab.actions.slice(-200);
   list.replaceChildren(...lab.actions.map((a) => el("li", { text: `t=${a.t.toFixed(2)} s ${a.text}` })));
   list.scrollTop = list.scrollHeight;
+}
+
+// ------------------------------------------------------------------ watch and force
+// The program's variables as a tree to pick from (no path to type); the watched ones live,
+// each with a force box: Force holds the value in the PLC's I/O stage every scan until
+// Release. A forced variable is marked wherever the page shows it.
+function buildWatch() {
+  const open = $("#tree-open");
+  open.onclick = async () => {
+    const tree = $("#tree");
+    if (!tree.hidden) { tree.hidden = true; open.setAttribute("aria-expanded", "false"); return; }
+    try {
+      const r = await send("tree");
+      tree.replaceChildren(...r.tree.map(treeNode));
+      tree.hidden = false;
+      open.setAttribute("aria-expanded", "true");
+    } catch (e) { say("#watch-message", e.message, false); }
+  };
+  $("#unforce-all").onclick = () => send("unforce").then(() => say("#watch-message", "all forces released", true))
+    .catch((e) => say("#watch-message", e.message, false));
+  lab.watchBuilt = "";
+}
+
+function treeNode(n) {
+  if (n.children) {
+    const d = el("details", {}, el("summary", { text: n.type ? `${n.name} : ${n.type}` : n.name }));
+    d.addEventListener("toggle", () => {          // children built when opened (big arrays)
+      if (d.open && d.children.length === 1) {
+        d.append(el("ul", {}, ...n.children.map((c) => el("li", {}, treeNode(c)))));
+        if (n.more) d.append(el("p", { class: "note", text: "more elements: watch them by index" }));
+      }
+    });
+    return d;
+  }
+  return el("button", { type: "button", class: "leaf", "aria-label": `watch ${n.path}`, title: n.path,
+    onclick: () => watch(lab.watched.concat([n.path])) }, `${n.name} : ${n.type}`);
+}
+
+// the list asked for is the page's until the lab answers (two quick picks both count)
+function watch(paths) {
+  lab.watched = paths;
+  lab.watchPending = (lab.watchPending || 0) + 1;
+  return send("watch", { paths }).then(() => say("#watch-message", "", true))
+    .catch((e) => say("#watch-message", e.message, false))
+    .finally(() => { lab.watchPending--; });
+}
+
+function renderWatch(rows) {
+  if (!lab.watchPending) lab.watched = rows.map((r) => r[0]);
+  const key = lab.watched.join("\n") + "|" + rows.map((r) => r[2]).join();
+  const body = $("#watch-table tbody");
+  if (key !== lab.watchBuilt) {
+    lab.watchBuilt = key;
+    const typed = {}, focused = document.activeElement && document.activeElement.dataset.forceOf;
+    for (const x of body.querySelectorAll("input[data-force-of]")) typed[x.dataset.forceOf] = x.value;
+    body.replaceChildren(...rows.map(([path, , forced]) => {
+      const input = el("input", { type: "text", size: "7", "aria-label": `force value of ${path}`, "data-force-of": path });
+      input.value = typed[path] || "";
+      if (focused === path) setTimeout(() => input.focus(), 0);
+      const force = el("button", { type: "button", text: "Force", "aria-label": `force ${path}`,
+        onclick: () => send("force", { path, value: input.value })
+          .then(() => say("#watch-message", `${path} forced`, true)).catch((e) => say("#watch-message", e.message, false)) });
+      const release = el("button", { type: "button", text: "Release", "aria-label": `release ${path}`, disabled: "",
+        onclick: () => send("unforce", { path }).then(() => say("#watch-message", `${path} released`, true))
+          .catch((e) => say("#watch-message", e.message, false)) });
+      if (forced) release.removeAttribute("disabled");
+      const remove = el("button", { type: "button", text: "x", "aria-label": `stop watching ${path}`,
+        onclick: () => watch(lab.watched.filter((p) => p !== path)) });
+      return el("tr", { "data-path": path, class: forced ? "forced" : "" }, el("td", { text: path }),
+        el("td", { "aria-label": `value of ${path}` }), el("td", {}, input, force, release), el("td", {}, remove));
+    }));
+  }
+  rows.forEach(([path, value, forced], i) => {
+    const cell = body.children[i] && body.children[i].children[1];
+    if (cell) cell.textContent = (value === null ? "?" : String(value)) + (forced ? " (forced)" : "");
+  });
+}
+
+function markForced(s) {
+  const labels = new Set(s.forced_labels || []);
+  for (const node of document.querySelectorAll("[data-label], #lamps [aria-label], #mimic [aria-label][data-state]")) {
+    const label = node.dataset.label || node.getAttribute("aria-label");
+    const forced = labels.has(label);
+    if (forced !== node.classList.contains("forced")) {
+      node.classList.toggle("forced", forced);
+      if (forced) node.setAttribute("data-forced", "true"); else node.removeAttribute("data-forced");
+    }
+  }
+  const forcedNames = new Set(Object.keys(s.forced || {}).map((p) => p.toUpperCase()));
+  for (const name of document.querySelectorAll("#trend-list .name")) {
+    const forced = forcedNames.has(name.title.toUpperCase()) || labels.has(name.title);
+    name.classList.toggle("forced", forced);
+  }
+  const n = Object.keys(s.forced || {}).length;
+  $("#unforce-all").disabled = n === 0;
+  $("#forces").textContent = n ? `${n} forced` : "";
 }
 
 // ------------------------------------------------------------------ the recorded program
