@@ -1,6 +1,9 @@
 """The PLC's side in the page (issue 22, "Beyond"): the recorded program (the frames in the
-PLC's frame memory, decoded, the frame being executed highlighted)."""
+PLC's frame memory, decoded, the frame being executed highlighted); the watch and force table;
+online monitoring (the ST with live values beside each use, a fault's statement)."""
 from __future__ import annotations
+
+import re
 
 from playwright.sync_api import expect
 from test_page import WAIT, flip, lamp, off, on, tap_sb1
@@ -91,3 +94,43 @@ def test_watch_and_force_from_the_program_tree(lab_page, shots):
 
 def switch_(page, label: str):
     return page.get_by_role("switch", name=label, exact=True)
+
+
+def test_online_monitoring_shows_values_beside_their_use_and_a_fault_opens_its_statement(lab_page, shots):
+    from test_page import FAULTY
+
+    lp = lab_page("mp9c", speed=2)
+    page = lp.page
+    page.get_by_role("button", name="Show the program").click()
+    page.get_by_label("POU", exact=True).select_option("FB_Mp9cManual")
+    expect(page.get_by_label("instance", exact=True)).to_have_value("Main.Manual")
+    source = page.get_by_label("program source")
+    lift = source.locator('li[data-text^="L3 := SA5;"]')                  # the line as written ...
+    expect(lift).to_have_count(1)
+    sa5 = lift.get_by_label("value of SA5")                                # ... a value beside each use
+    expect(sa5).to_have_text("FALSE", timeout=WAIT)
+    flip(page, "SA5", True)
+    expect(sa5).to_have_text("TRUE", timeout=WAIT)                         # live
+    expect(lift.get_by_label("value of L3")).to_have_text("TRUE")
+    expect(source.get_by_label("value of Cp.Count").first).to_have_text("0")
+    page.screenshot(path=str(shots / "lab-mp9c-online.png"), full_page=True)
+    # a program that faults: the fault opens its statement, the values as they were then
+    page.get_by_label("Load ST files").set_input_files(
+        files=[{"name": "faulty.st", "mimeType": "text/plain", "buffer": FAULTY.encode()}])
+    expect(page.locator("#plc-state")).to_have_text("FAULT", timeout=WAIT)
+    page.locator("#fault-detail").click()
+    expect(page.get_by_label("POU", exact=True)).to_have_value("Faulty", timeout=WAIT)
+    line = source.locator("#src-4")
+    expect(line).to_have_class(re.compile(r"\bfault-line\b"))
+    expect(line).to_have_class(re.compile(r"\btarget-line\b"))
+    expect(line).to_have_attribute("data-text", "IF n > 20 THEN n := 10 / d; END_IF;")
+    expect(line.get_by_label("value of n").first).to_have_text("21", timeout=WAIT)
+    expect(line.get_by_label("value of d")).to_have_text("0")
+    # a grade row naming the statement opens it too
+    source.locator("#src-3").click()
+    page.get_by_role("button", name="Grade task1").click()
+    opener = page.get_by_role("button", name="open faulty.st:4")
+    expect(opener).to_be_visible(timeout=120_000)
+    page.get_by_label("POU", exact=True).select_option("Faulty")
+    opener.click()
+    expect(line).to_have_class(re.compile(r"\btarget-line\b"), timeout=WAIT)

@@ -80,11 +80,15 @@ class Lab:
         self.forces = Forces()                         # the watch and force table's forces
         self.forces.attach(self.session.plc)
         self.watched: list[str] = []                   # the watch table's variables
+        from plclab.lab.monitor import Monitor
+        self.monitor = Monitor()                       # online monitoring: one POU instance's values
+        self._listing: tuple[Any, list] = (None, [])
         self.speed = self._check_speed(speed)
         self.paused = False
         self.actual_speed = 0.0
         self.held: set[str] = set()                   # push buttons held now (console inputs)
         self.console_levels: dict[str, int] = {}       # label -> what the operator set (the page shows it)
+        self.loads = 0                                 # programs loaded so far (a page re-reads the source)
         self.trend_names: list[str] = list(self.panel.trends)
         self.extras = Trace()                        # trended variables the session does not record
         self._extra_unknown: dict[str, str] = {}
@@ -164,7 +168,7 @@ class Lab:
     def ops(self) -> tuple[str, ...]:
         """The commands this stand's page has (the SCADA registers are thermo's only)."""
         ops = ("set", "press", "release", "speed", "pause", "run", "scan", "restart", "inject", "clear", "trends",
-               "tree", "watch", "force", "unforce")
+               "tree", "watch", "force", "unforce", "source", "monitor")
         return ops + ("register",) if self.stand == "thermo" else ops
 
     # the commands themselves (each runs in the engine's thread through `call`)
@@ -241,6 +245,31 @@ class Lab:
         self.watched = clean
         return clean
 
+    def listing(self) -> list[dict]:
+        """The program's POUs for online monitoring (plclab.lab.monitor), once per program."""
+        from plclab.lab.monitor import listing
+        s = self.session
+        if self._listing[0] is not s.checked:
+            self._listing = (s.checked, listing(s.plc, s.sources))
+        return self._listing[1]
+
+    def select_monitor(self, pou: str, instance: Optional[str]) -> None:
+        for p in self.listing():
+            if p["name"].upper() == str(pou).upper():
+                self.monitor.select(self.session.plc, p, instance if instance else None)
+                self._monitor_at = 0.0
+                return
+        raise LabError(f"the program has no POU '{str(pou)[:80]}'")
+
+    _monitor_at = 0.0
+
+    def _monitor_values(self, full: bool) -> Any:
+        now = time.monotonic()
+        if not full and now - self._monitor_at < FRAMES_EVERY_S:
+            return _SAME
+        self._monitor_at = now
+        return self.monitor.values(self.session.plc, full)
+
     def force(self, path: str, value: Any) -> None:
         shown = self.forces.force(path, value)
         self.session.log(f"FORCE {path} := {_force_text(shown)}")
@@ -309,7 +338,9 @@ class Lab:
         for path in self.forces.attach(s.plc):          # forces on what the new program has stay
             s.log(f"force released: {path} (not in the program loaded)")
         self.watched = [p for p in self.watched if _has(s.plc, p)]
+        self.monitor.pou = None                        # the page picks a POU of the new program
         self.program_name = name
+        self.loads += 1
         if upload:                         # Reload loads it again (the browser's files are not on disk)
             self.uploaded = list(sources)
         self._extra_unknown.clear()
@@ -517,7 +548,7 @@ class Lab:
             "type": "state", "seq": self.seq, "t": round(s.now - s.tick, 6), "tick": s.tick,
             "speed": self.speed, "paused": self.paused, "actual_speed": round(self.actual_speed, 2),
             "held": sorted(self.held), "pace": self.pace(),
-            "program": self.program_name,
+            "program": self.program_name, "loads": self.loads,
             "trace_from": round(s.trace.start_ns / 1e9, 3), "trace_keep": TRACE_KEEP_S,
             "paced": self.paced_now(),          # where the plant should be now: t + the lag
             "wall": time.monotonic(),           # when (CLOCK_MONOTONIC, the same in every process here)
@@ -543,6 +574,9 @@ class Lab:
         snap["watch"] = self._watch_values()
         snap["forced"] = {p: _force_text(v) for p, v in self.forces.values.items()}
         snap["forced_labels"] = self._forced_labels()
+        values = self._monitor_values(full)
+        if values is not _SAME and values is not None:
+            snap["monitor"] = {"pou": self.monitor.pou, "instance": self.monitor.instance, "values": values}
         frames = self._frames(full)
         if frames is not _SAME:
             snap["frames"] = frames

@@ -66,6 +66,14 @@ def _merge(old: dict, new: dict) -> dict:
     for name, points in new.get("trends", {}).items():
         trends.setdefault(name, []).extend(points)
     out["trends"] = trends
+    for key in ("frames",):                  # sent only when changed: the older one still counts
+        if key not in new and key in old:
+            out[key] = old[key]
+    if "monitor" in old:                     # values sent only when changed: keep the older ones
+        if "monitor" not in new:
+            out["monitor"] = old["monitor"]
+        elif (old["monitor"]["pou"], old["monitor"]["instance"]) == (new["monitor"]["pou"], new["monitor"]["instance"]):
+            out["monitor"] = dict(new["monitor"], values={**old["monitor"]["values"], **new["monitor"]["values"]})
     return out
 
 
@@ -364,6 +372,12 @@ class LabServer:
             elif op == "unforce":
                 path = msg.get("path")
                 await asyncio.wrap_future(lab.call(lambda: lab.unforce(None if path is None else str(path))))
+            elif op == "source":
+                pous = await asyncio.wrap_future(lab.call(lab.listing))
+                return {"type": "reply", "id": mid, "op": op, "ok": True, "pous": pous}
+            elif op == "monitor":
+                pou, instance = str(msg["pou"]), msg.get("instance")
+                await asyncio.wrap_future(lab.call(lambda: lab.select_monitor(pou, instance)))
             elif op == "register":
                 address = _whole(msg.get("address"), "address", 0, 65535)
                 value = _whole(msg.get("value"), "value", -32768, 65535)
@@ -525,7 +539,7 @@ class LabServer:
 
 
 ALL_OPS = ("set", "press", "release", "speed", "pause", "run", "scan", "restart", "inject", "clear", "trends",
-           "tree", "watch", "force", "unforce", "register")
+           "tree", "watch", "force", "unforce", "source", "monitor", "register")
 
 
 def _bit(value: Any) -> int:

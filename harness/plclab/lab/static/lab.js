@@ -139,6 +139,7 @@ function onHello(h) {
   buildFaults(h.panel);
   buildGrade(h);
   buildWatch();
+  buildOnline();
   $("#registers").hidden = h.stand !== "thermo";
   $("#twido").textContent = h.twido ? `The Twido Modbus face answers at ${h.twido} (holding register n = %MWn) for an external SCADA client.` : "";
   Mimic.build($("#mimic"), h.stand, h.panel);
@@ -348,8 +349,14 @@ async function grade(task) {
     if (row.result === "FAIL") {
       for (const t of row.traces) links.append(el("a", { href: t.url, download: t.name, text: t.name }), " ");
     }
+    const whyCell = el("td", { text: why });
+    const where = /(<[^>]+>|[^\s:]+\.st):(\d+)/.exec(`${row.observed || ""} ${row.expected || ""} ${row.text}`);
+    if (where) {
+      whyCell.append(" ", el("button", { type: "button", class: "link", text: `open ${where[1].split("/").pop()}:${where[2]}`,
+        onclick: () => openSource(where[1].trim(), Number(where[2])) }));
+    }
     body.append(el("tr", {}, el("td", { text: row.id }), el("td", { text: row.text }),
-      el("td", { class: row.result, text: row.result }), el("td", { text: why }), links));
+      el("td", { class: row.result, text: row.result }), whyCell, links));
   }
   table.append(body);
   out.append(table);
@@ -361,6 +368,11 @@ let drawScheduled = false;
 function onState(s) {
   lab.state = s;
   if ("frames" in s) { lab.frames = s.frames; lab.dirtyFrames = true; }
+  if (s.monitor) {                           // changes only: kept until drawn (several may come per frame)
+    const p = lab.pendingMonitor;
+    lab.pendingMonitor = p && p.pou === s.monitor.pou && p.instance === s.monitor.instance
+      ? { ...s.monitor, values: { ...p.values, ...s.monitor.values } } : s.monitor;
+  }
   if (s.events.length) lab.events.push(...s.events);
   if (s.actions.length) lab.actions.push(...s.actions);
   for (const [name, points] of Object.entries(s.trends)) addPoints(name, points);
@@ -395,6 +407,12 @@ function render(s) {
     speed.value = String(s.speed);
   }
   $("#program-name").textContent = s.program;
+  if (s.loads !== lab.loads) {               // another program: the online listing is read again
+    const shown = lab.pous !== null && lab.pous !== undefined;
+    lab.loads = s.loads;
+    buildOnline();
+    if (shown) loadSource().catch((e) => notice(e.message));
+  }
   $("#trace-window").textContent = `The trace downloads hold t = ${s.trace_from.toFixed(0)} .. ${s.t.toFixed(0)} s ` +
     `(the lab keeps the last ${Math.round(s.trace_keep / 60)} min of plant time).`;
   for (const [label, v] of Object.entries(s.io)) {
@@ -410,6 +428,8 @@ function render(s) {
   if (s.registers) renderRegisters(s.registers);
   if (lab.dirtyFrames) { lab.dirtyFrames = false; renderFrames(lab.frames); }
   renderWatch(s.watch || []);
+  if (lab.pendingMonitor) { renderMonitor(lab.pendingMonitor); lab.pendingMonitor = null; }
+  markFaultLine();
   markForced(s);
   drawTrends();
 }
@@ -429,6 +449,93 @@ function renderActions() {
   lab.actions = lab.actions.slice(-200);
   list.replaceChildren(...lab.actions.map((a) => el("li", { text: `t=${a.t.toFixed(2)} s ${a.text}` })));
   list.scrollTop = list.scrollHeight;
+}
+
+// ------------------------------------------------------------------ program online
+// The ST of the running program, one POU at a time, with the live value of each variable use
+// of the chosen instance beside it; the line a fault stopped on is marked; a fault (or a grade
+// row naming file:line) opens the source there.
+function buildOnline() {
+  lab.pous = null;
+  $("#source").replaceChildren();
+  $("#pou").replaceChildren(); $("#instance").replaceChildren();
+  $("#pou").disabled = $("#instance").disabled = true;
+  $("#source-open").onclick = () => loadSource();
+  $("#pou").onchange = () => showPou($("#pou").value, null);
+  $("#instance").onchange = () => showPou($("#pou").value, $("#instance").value);
+  $("#fault-detail").onclick = () => { const f = lab.state && lab.state.plc; if (f && f.file) openSource(f.file, f.line); };
+}
+
+async function loadSource() {
+  if (lab.pous) return lab.pous;
+  const r = await send("source");
+  lab.pous = r.pous;
+  const sel = $("#pou");
+  sel.replaceChildren(...lab.pous.map((p) => el("option", { value: p.name, text: `${p.name} (${p.kind.toLowerCase().replace("_", " ")}, ${p.display})` })));
+  sel.disabled = false;
+  if (lab.pous.length) await showPou(lab.pous[0].name, null);
+  return lab.pous;
+}
+
+async function showPou(name, instance) {
+  const pou = lab.pous.find((p) => p.name === name);
+  if (!pou) return;
+  $("#pou").value = name;
+  const inst = $("#instance");
+  inst.replaceChildren(...pou.instances.map((i) => el("option", { value: i, text: i })));
+  inst.disabled = pou.instances.length < 2;
+  instance = instance || pou.instances[0] || null;
+  if (instance) inst.value = instance;
+  lab.shownPou = pou;
+  lab.monitorValues = {};
+  const byLine = new Map();
+  for (const ref of pou.refs) { if (!byLine.has(ref[0])) byLine.set(ref[0], []); byLine.get(ref[0]).push(ref); }
+  $("#source").replaceChildren(...pou.lines.map((text, i) => {
+    const n = pou.line + i;
+    const li = el("li", { value: String(n), id: `src-${n}`, "data-line": String(n), "data-text": text });
+    let at = 0;
+    for (const [, c0, c1, chain] of byLine.get(n) || []) {
+      li.append(text.slice(at, c1), el("span", { class: "val", "data-chain": chain, "aria-label": `value of ${chain}` }));
+      at = c1;
+    }
+    li.append(text.slice(at) || (at ? "" : " "));
+    return li;
+  }));
+  markFaultLine();
+  await send("monitor", { pou: name, instance }).catch((e) => notice(e.message));
+}
+
+function openSource(file, line) {
+  loadSource().then((pous) => {
+    const pou = pous.find((p) => p.file === file && line >= p.line && line < p.line + p.lines.length)
+      || pous.find((p) => p.display === file.split("/").pop() && line >= p.line && line < p.line + p.lines.length);
+    if (!pou) { notice(`${file}:${line} is not in a POU of the running program`); return; }
+    return showPou(pou.name, null).then(() => {
+      const li = $(`#src-${line}`);
+      if (!li) return;
+      for (const x of document.querySelectorAll("#source li.target-line")) x.classList.remove("target-line");
+      li.classList.add("target-line");
+      li.scrollIntoView({ block: "center" });
+    });
+  }).catch((e) => notice(e.message));
+}
+
+function renderMonitor(m) {
+  if (!lab.shownPou || m.pou !== lab.shownPou.name) return;
+  for (const [chain, value] of Object.entries(m.values)) {
+    for (const span of document.querySelectorAll(`#source .val[data-chain="${CSS.escape(chain)}"]`)) span.textContent = String(value);
+  }
+}
+
+function markFaultLine() {
+  const f = lab.state && lab.state.plc;
+  const pou = lab.shownPou;
+  const want = f && f.fault && pou && f.file === pou.file ? f.line : null;
+  if (want === lab.faultLine && (want === null || $(`#src-${want}.fault-line`))) return;
+  for (const x of document.querySelectorAll("#source li.fault-line")) x.classList.remove("fault-line");
+  lab.faultLine = want;
+  const li = want !== null ? $(`#src-${want}`) : null;
+  if (li) li.classList.add("fault-line");
 }
 
 // ------------------------------------------------------------------ watch and force
@@ -539,7 +646,7 @@ function renderFrames(f) {
     $("#frames-status").textContent = "this program keeps no frame memory where the shipped ones do (Main.Cp)";
     return;
   }
-  head.replaceChildren(el("tr", {}, ...f.columns.map((c) => el("th", { text: c }))));
+  head.replaceChildren(...(f.rows.length ? [el("tr", {}, ...f.columns.map((c) => el("th", { text: c })))] : []));
   body.replaceChildren(...f.rows.map((r, i) => {
     const tr = el("tr", {}, ...r.map((c) => el("td", { text: c })));
     if (f.current === i + 1) { tr.className = "current"; tr.setAttribute("aria-current", "true"); }
