@@ -41,6 +41,15 @@ def test_tur10_jog_buttons_move_a_link_only_while_held(lab_page):
     drift = int(page.locator("#code-1").text_content().split()[1]) - code
     assert abs(drift) <= 3, f"link 1 moved on {drift} codes in 1 s after its button was let go"
     assert code - 16000 > 100, code                         # it had moved while held
+    # the robot drawn as it stands: the shoulder's angle follows link 1's position code
+    # (-60 deg at the lower stop, code 1000, to +60 deg at the upper, 31000), the rest at mid travel
+    drawn = page.evaluate("""() => ({code: document.querySelector('#code-1').textContent,
+        shoulder: document.querySelector('#robot-shoulder').dataset.angle,
+        elbow: document.querySelector('#robot-elbow').dataset.angle,
+        platform: document.querySelector('#robot-platform').dataset.angle})""")
+    code_now = int(drawn["code"].split()[1])
+    assert abs(float(drawn["shoulder"]) - (-60 + 120 * (code_now - 1000) / 30000)) < 0.01, drawn
+    assert float(drawn["shoulder"]) > 0.4 and float(drawn["elbow"]) == 0 and float(drawn["platform"]) == 0, drawn
     assert levels(lp, "SA1_FWD")[-2:] == ["1", "0"]
     # keyboard: space holds, the focus moving away lets go
     bwd = button(page, "SA2 backward")
@@ -89,10 +98,12 @@ def test_tur10_playback_shows_each_link_s_target(lab_page, shots):
     assert lp.lab.session.value("FrameCount") == 2
     target = page.locator("#target-1")
     expect(target).to_have_attribute("visibility", "hidden")   # no frame played yet
+    expect(page.locator("#robot-target")).to_have_attribute("visibility", "hidden")
     flip(page, "I1.5", True)
     flip(page, "SA7", True)                                 # automatic ...
     tap_sb1(page, address=sb1)                              # ... start
     expect(target).to_have_attribute("visibility", "visible", timeout=WAIT)
+    expect(page.locator("#robot-target")).to_have_attribute("visibility", "visible")   # the ghost robot
     targets = [link["target"] for link in lp.lab.call(lambda: lp.lab.snapshot()).result(10)["mimic"]["links"]]
     assert all(t is not None for t in targets), targets
     page.screenshot(path=str(shots / "lab-tur10-playback.png"))

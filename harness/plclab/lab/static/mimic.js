@@ -34,10 +34,11 @@ const Mimic = (() => {
     svg.replaceChildren();
     const hints = {};
     for (const l of panel.lamps) hints[l.label] = l.hint;
+    svg.setAttribute("viewBox", stand === "tur10" ? "0 0 640 545" : "0 0 640 320");
     if (stand === "mp9c") buildMp9c(hints);
     else if (stand === "tur10") buildTur10();
     else if (stand === "thermo") buildThermo();
-    parts.faults = s("text", { class: "fault-mark", x: 10, y: 312, text: "" });
+    parts.faults = s("text", { class: "fault-mark", x: 10, y: stand === "tur10" ? 540 : 312, text: "" });
   }
 
   // ---------------------------------------------------------------- MP-9C
@@ -123,6 +124,82 @@ const Mimic = (() => {
       parts.links.push({ track, working, target, marker, code, ref, refText, bus });
     }
     parts.busLine = s("text", { class: "mimic-text", x: 10, y: 298, text: "" });
+    buildRobot();
+  }
+
+  // The robot itself, side view, below the gauges: platform rotation (a dial seen from above),
+  // shoulder, raceme inclination and rotation, hand; the target of the frame as a dashed ghost.
+  // Each joint's angle follows its position code over the travel between the stops.
+  const JOINTS = {      // axis: [angle at the lower stop, angle at the upper stop] (degrees)
+    1: [-60, 60],         // shoulder: the upper arm from the vertical
+    3: [-100, 100],       // raceme inclination: the forearm against the upper arm
+    2: [-180, 180],       // raceme rotation: about the forearm's own axis
+    4: [-135, 135],       // platform rotation: about the vertical
+  };
+  function arm(cls, ghost) {
+    const g = s("g", { class: cls, transform: "translate(400,522)" });
+    const dash = ghost ? { "stroke-dasharray": "5 4", fill: "none", stroke: "#7c3aed", "stroke-width": 2 } : { class: "metal" };
+    const shoulder = s("g", {}, g);
+    s("rect", { x: -9, y: -80, width: 18, height: 80, rx: 6, ...dash }, shoulder);
+    const elbow = s("g", { transform: "translate(0,-80)" }, shoulder);
+    s("circle", { r: 10, ...dash }, elbow);
+    s("rect", { x: -7, y: -65, width: 14, height: 65, rx: 5, ...dash }, elbow);
+    const wrist = s("g", { transform: "translate(0,-65)" }, elbow);
+    const roll = s("ellipse", { rx: 12, ry: 5, ...dash }, wrist);
+    const rollMark = s("line", { x1: 0, y1: 0, x2: 12, y2: 0, stroke: ghost ? "#7c3aed" : "#1d4ed8", "stroke-width": 2 }, wrist);
+    const jawL = s("rect", { x: -10, y: -22, width: 5, height: 16, ...dash }, wrist);
+    const jawR = s("rect", { x: 5, y: -22, width: 5, height: 16, ...dash }, wrist);
+    return { g, shoulder, elbow, wrist, roll, rollMark, jawL, jawR };
+  }
+  function buildRobot() {
+    s("line", { x1: 0, x2: 640, y1: 322, y2: 322, stroke: "#e5e7eb" });
+    s("text", { class: "mimic-text", x: 10, y: 342, text: "robot: side view, target dashed" });
+    s("rect", { class: "metal", x: 360, y: 522, width: 80, height: 12 });                 // base
+    parts.robotTarget = arm("robot-target", true);
+    parts.robotTarget.g.setAttribute("id", "robot-target");
+    parts.robotTarget.g.setAttribute("visibility", "hidden");
+    parts.robot = arm("robot", false);
+    parts.robot.shoulder.setAttribute("id", "robot-shoulder");
+    parts.robot.elbow.setAttribute("id", "robot-elbow");
+    parts.robot.rollMark.setAttribute("id", "robot-roll");
+    parts.robot.jawL.setAttribute("id", "robot-hand");
+    s("text", { class: "mimic-small", x: 30, y: 370, text: "platform rotation (4)" });
+    s("circle", { cx: 80, cy: 440, r: 44, fill: "#f1f5f9", stroke: "#94a3b8" });
+    parts.dialTarget = s("line", { x1: 80, y1: 440, x2: 80, y2: 400, stroke: "#7c3aed", "stroke-width": 2, "stroke-dasharray": "4 3", visibility: "hidden" });
+    parts.dial = s("line", { id: "robot-platform", x1: 80, y1: 440, x2: 80, y2: 400, stroke: "#1d4ed8", "stroke-width": 4 });
+  }
+  function frac(code, lo, hi) { return Math.max(0, Math.min(1, (code - lo) / (hi - lo))); }
+  function angle(axis, code, lo, hi) { const [a, b] = JOINTS[axis]; return a + (b - a) * frac(code, lo, hi); }
+  function pose(p, codes, lo, hi) {
+    const a1 = angle(1, codes[0], lo, hi), a3 = angle(3, codes[2], lo, hi), a2 = angle(2, codes[1], lo, hi);
+    p.shoulder.setAttribute("transform", `rotate(${a1.toFixed(2)})`);
+    p.shoulder.dataset.angle = a1.toFixed(2);
+    p.elbow.setAttribute("transform", `translate(0,-80) rotate(${a3.toFixed(2)})`);
+    p.elbow.dataset.angle = a3.toFixed(2);
+    const c = Math.cos((a2 * Math.PI) / 180);         // a roll seen from the side: the mark swings
+    p.rollMark.setAttribute("x2", (12 * c).toFixed(2));
+    p.rollMark.dataset.angle = a2.toFixed(2);
+    const open = 4 + 10 * frac(codes[4], lo, hi);     // hand: the jaws open with its code
+    p.jawL.setAttribute("x", (-open - 5).toFixed(2));
+    p.jawR.setAttribute("x", open.toFixed(2));
+    p.jawL.dataset.open = frac(codes[4], lo, hi).toFixed(3);
+  }
+  function dial(line, code, lo, hi) {
+    const a = (angle(4, code, lo, hi) * Math.PI) / 180;
+    line.setAttribute("x2", (80 + 40 * Math.sin(a)).toFixed(2));
+    line.setAttribute("y2", (440 - 40 * Math.cos(a)).toFixed(2));
+    line.dataset.angle = angle(4, code, lo, hi).toFixed(2);
+  }
+  function updateRobot(m) {
+    const [lo, hi] = m.stops;
+    const codes = m.links.map((l) => l.code);
+    pose(parts.robot, codes, lo, hi);
+    dial(parts.dial, codes[3], lo, hi);
+    const targets = m.links.map((l) => l.target);
+    const shown = targets.every((t) => t !== null && t !== undefined && t >= lo && t <= hi);
+    parts.robotTarget.g.setAttribute("visibility", shown ? "visible" : "hidden");
+    parts.dialTarget.setAttribute("visibility", shown ? "visible" : "hidden");
+    if (shown) { pose(parts.robotTarget, targets, lo, hi); dial(parts.dialTarget, targets[3], lo, hi); }
   }
 
   function updateTur10(m) {
@@ -154,6 +231,7 @@ const Mimic = (() => {
     });
     const sel = m.selected.length ? m.selected.join(", ") : "none";
     parts.busLine.textContent = `sensor bus: ${m.bus} (enabled: ${sel})` + (m.selected.length > 1 ? "  BUS CONTENTION" : "");
+    updateRobot(m);
   }
 
   // ---------------------------------------------------------------- thermo
