@@ -416,7 +416,7 @@ def build_parser() -> argparse.ArgumentParser:
     c.set_defaults(func=_cmd_serve)
 
     c = sub.add_parser("lab", help="the virtual lab in the browser: mimic, console, trends, grade")
-    c.add_argument("stand", choices=stands)
+    c.add_argument("stand", choices=stands + ("cnc",))
     c.add_argument("--program", nargs="+", metavar="FILE.st", help="run these ST files instead of the variant")
     c.add_argument("--variant", choices=("baseline", "task1", "task2", "task3", "full"),
                    help="default: the most complete program there is")

@@ -166,10 +166,43 @@ class Lab:
         del s.actions[logged:]
 
     def ops(self) -> tuple[str, ...]:
-        """The commands this stand's page has (the SCADA registers are thermo's only)."""
+        """The commands this stand's page has (the SCADA registers are thermo's only, the
+        knobs and part programs the CNC's)."""
         ops = ("set", "press", "release", "speed", "pause", "run", "scan", "restart", "inject", "clear", "trends",
                "tree", "watch", "force", "unforce", "source", "monitor")
-        return ops + ("register",) if self.stand == "thermo" else ops
+        if self.stand == "thermo":
+            ops += ("register",)
+        if self.panel.knobs:
+            ops += ("knob",)
+        if self.panel.part is not None:
+            ops += ("part", "contour")
+        return ops
+
+    def set_knob(self, label: str, value: int) -> None:
+        try:
+            knob = self.panel.knob(label)
+        except KeyError:
+            raise LabError(f"{self.stand} has no setting '{str(label)[:40]}' "
+                           f"(one of {', '.join(k.label for k in self.panel.knobs)})") from None
+        if not knob.lo <= value <= knob.hi:
+            raise LabError(f"{label}: {value} is outside {knob.lo}..{knob.hi} {knob.unit}")
+        try:
+            knob.apply(self.session, value)
+        except PlantError as e:
+            raise LabError(str(e)) from None
+        self.console_levels[label] = value
+
+    def load_part(self, text: str, name: str, method: str) -> str:
+        """A CNC part program into the PLC's frame table (plclab.lab.cncview)."""
+        from plclab.cnc.gcode import GcodeError
+        try:
+            return self.panel.part.load(self.session, text, name, method)
+        except (GcodeError, ValueError) as e:
+            raise LabError(str(e)) from None
+
+    def contour(self) -> dict:
+        from plclab.lab.cncview import cnc_contour
+        return cnc_contour(self.session)
 
     # the commands themselves (each runs in the engine's thread through `call`)
     def set_control(self, label: str, value: int) -> None:
@@ -455,7 +488,7 @@ class Lab:
             # sleep until the next scan is due (at x1: wake on time, so the page is at most one
             # scan behind); faster than real time, batches at least MIN_BATCH_S apart
             wake = base_wall + (s.now - base_virt) / speed
-            if speed > 1:
+            if speed > 1 or tick < MIN_BATCH_S:         # the CNC's 1-ms cycle: batches of 10 ms
                 wake = max(wake, now + MIN_BATCH_S)
             pause = wake - time.monotonic()
             if pause > 0 and not self._commands:
@@ -611,6 +644,8 @@ class Lab:
         io = {}
         for c in self.panel.controls:        # the console as the operator set it (seen while paused too)
             io[c.label] = self.console_levels.setdefault(c.label, int(bool(s.value(c.signal))))
+        for k in self.panel.knobs:
+            io[k.label] = self.console_levels.setdefault(k.label, k.initial)
         for lamp in self.panel.lamps:
             io[lamp.label] = int(bool(s.value(lamp.label)))
         return io

@@ -63,6 +63,20 @@ def _no_frames(s: Session) -> Any:
 
 
 @dataclass(frozen=True)
+class Knob:
+    """A console setting that is not a contact: a potentiometer (the CNC's feed override
+    RP1) or a plant setting the lab offers (the CNC's backlash)."""
+
+    label: str
+    lo: int
+    hi: int
+    unit: str
+    initial: int
+    hint: str
+    apply: Callable[[Session, int], None] = field(repr=False, default=lambda s, v: None)
+
+
+@dataclass(frozen=True)
 class Panel:
     stand: str
     controls: tuple[Control, ...]
@@ -72,6 +86,8 @@ class Panel:
     trend_window: float = 60.0                       # plant seconds a trend shows
     mimic: Callable[[Session], dict[str, Any]] = field(repr=False, default=lambda s: {})
     frames: Callable[[Session], Any] = field(repr=False, default=_no_frames)   # the recorded program
+    knobs: tuple[Knob, ...] = ()
+    part: Any = None             # CNC: load_part(session, text, name, method) -> str, and its methods
 
     def control(self, label: str) -> Control:
         for c in self.controls:
@@ -89,7 +105,16 @@ class Panel:
             "faults": [{"name": f.name, "text": f.text,
                         "params": [{"name": p.name, "choices": list(p.choices), "default": p.default}
                                    for p in f.params]} for f in self.faults],
+            "knobs": [{"label": k.label, "lo": k.lo, "hi": k.hi, "unit": k.unit, "initial": k.initial, "hint": k.hint}
+                      for k in self.knobs],
+            "part": self.part.describe() if self.part is not None else None,
         }
+
+    def knob(self, label: str) -> Knob:
+        for k in self.knobs:
+            if k.label == label:
+                return k
+        raise KeyError(label)
 
 
 # Which of a spec's I/O groups the page draws as lamps, and in which lamp group.
@@ -112,6 +137,8 @@ class Look:
     trend_window: float = 60.0      # plant seconds a trend shows (thermo: its 300-s step response)
     mimic: Callable[[Session], dict[str, Any]] = field(repr=False, default=lambda s: {})
     frames: Callable[[Session], Any] = field(repr=False, default=_no_frames)
+    knobs: tuple[Knob, ...] = ()    # settings that are not contacts (their labels leave the console)
+    part: Any = None
 
 
 def derive_panel(spec: StandSpec, look: Look) -> Panel:
@@ -119,6 +146,7 @@ def derive_panel(spec: StandSpec, look: Look) -> Panel:
     have is a PlcLabError (a stale presentation entry)."""
     shown = {name for group in look.lamp_groups for name in getattr(spec, group)}
     params = {(f.name, p.name) for f in spec.faults for p in f.params}
+    knobs = {k.label for k in look.knobs}
     stale = [*(k for k in look.labels if k not in spec.console), *(b for b in look.buttons if b not in spec.console),
              *(k for k in look.hints if k not in set(spec.console) | shown),
              *(k for k in look.fault_texts if k not in {f.name for f in spec.faults}),
@@ -127,12 +155,13 @@ def derive_panel(spec: StandSpec, look: Look) -> Panel:
     if stale:
         raise PlcLabError(f"lab panel of {spec.name}: {', '.join(stale)} not in the stand's StandSpec")
     controls = tuple(Control(look.labels.get(i, i), i, "button" if i in look.buttons else "switch",
-                             look.hints.get(i, "")) for i in spec.console)
+                             look.hints.get(i, "")) for i in spec.console if i not in knobs)
     lamps = tuple(Lamp(name, look.hints.get(name, ""), LAMP_GROUPS[group])
                   for group in look.lamp_groups for name in getattr(spec, group))
     faults = tuple(Fault(f.name, look.fault_texts.get(f.name, f.doc),
                          tuple(_fault_param(look, f.name, p) for p in f.params)) for f in spec.faults)
-    return Panel(spec.name, controls, lamps, faults, look.trends, look.trend_window, look.mimic, look.frames)
+    return Panel(spec.name, controls, lamps, faults, look.trends, look.trend_window, look.mimic, look.frames,
+                 look.knobs, look.part)
 
 
 def _fault_param(look: Look, fault: str, param: Any) -> FaultParam:
@@ -303,4 +332,8 @@ THERMO = derive_panel(stand_spec("thermo"), Look(
     mimic=_thermo_mimic,
 ))
 
-PANELS = {p.stand: p for p in (MP9C, TUR10, THERMO)}
+from plclab.lab.cncview import CNC_LOOK  # noqa: E402 - the CNC's look builds on the classes above
+
+CNC = derive_panel(stand_spec("cnc"), CNC_LOOK)
+
+PANELS = {p.stand: p for p in (MP9C, TUR10, THERMO, CNC)}

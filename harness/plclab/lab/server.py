@@ -378,6 +378,18 @@ class LabServer:
             elif op == "monitor":
                 pou, instance = str(msg["pou"]), msg.get("instance")
                 await asyncio.wrap_future(lab.call(lambda: lab.select_monitor(pou, instance)))
+            elif op == "knob":
+                label, value = str(msg["label"]), _whole(msg.get("value"), "value", -(1 << 31), 1 << 31)
+                await asyncio.wrap_future(lab.call(lambda: lab.set_knob(label, value), console=True))
+            elif op == "part":
+                text, name, method = msg.get("text"), str(msg.get("name") or "part.nc")[:80], str(msg.get("method") or "evalfn")
+                if not isinstance(text, str) or len(text) > MAX_MESSAGE:
+                    raise LabError("part: the part program's text was expected (at most 64 KiB)")
+                done = await asyncio.wrap_future(lab.call(lambda: lab.load_part(text, name, method)))
+                self._broadcast({"type": "notice", "text": done})
+            elif op == "contour":
+                contour = await asyncio.wrap_future(lab.call(lab.contour))
+                return {"type": "reply", "id": mid, "op": op, "ok": True, **contour}
             elif op == "register":
                 address = _whole(msg.get("address"), "address", 0, 65535)
                 value = _whole(msg.get("value"), "value", -32768, 65535)
@@ -539,7 +551,7 @@ class LabServer:
 
 
 ALL_OPS = ("set", "press", "release", "speed", "pause", "run", "scan", "restart", "inject", "clear", "trends",
-           "tree", "watch", "force", "unforce", "source", "monitor", "register")
+           "tree", "watch", "force", "unforce", "source", "monitor", "register", "knob", "part", "contour")
 
 
 def _bit(value: Any) -> int:

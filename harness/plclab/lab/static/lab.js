@@ -180,6 +180,28 @@ function buildControls(panel) {
     box.append(el("div", { class: "control" }, b, hint));
   }
   $("#hold-note").hidden = !panel.controls.some((c) => c.kind === "button");
+  // settings that are not contacts (the CNC's feed override RP1 and backlash): a slider each
+  const knobs = $("#knobs");
+  knobs.replaceChildren();
+  for (const k of panel.knobs || []) {
+    const id = `knob-${k.label}`;
+    const out = el("output", { for: id, text: `${k.initial} ${k.unit}` });
+    const range = el("input", { id, type: "range", min: String(k.lo), max: String(k.hi), value: String(k.initial),
+      "aria-label": k.label, "data-knob": k.label });
+    range.oninput = () => { out.textContent = `${range.value} ${k.unit}`; };
+    range.onchange = () => send("knob", { label: k.label, value: Number(range.value) }).catch((e) => notice(e.message));
+    knobs.append(el("div", { class: "knob" }, el("label", { for: id, text: `${k.label}: ${k.hint}` }), range, out));
+  }
+  // the CNC's part program
+  const part = panel.part;
+  $("#part").hidden = !part;
+  if (part) {
+    $("#part-text").value = part.example;
+    $("#part-method").replaceChildren(...part.methods.map((m) => el("option", { value: m, text: m })));
+    $("#part-load").onclick = () => send("part", { text: $("#part-text").value, name: "part.nc", method: $("#part-method").value })
+      .then(() => say("#part-message", "part program loaded: press SB1 to run it", true))
+      .catch((e) => say("#part-message", e.message, false));
+  }
 }
 
 // A push button stays pressed while the pointer (mouse, finger, pen) or the space / enter key
@@ -417,7 +439,9 @@ function render(s) {
     `(the lab keeps the last ${Math.round(s.trace_keep / 60)} min of plant time).`;
   for (const [label, v] of Object.entries(s.io)) {
     for (const node of document.querySelectorAll(`[aria-label="${CSS.escape(label)}"]`)) {
-      if (node.getAttribute("role") === "switch") node.setAttribute("aria-checked", v ? "true" : "false");
+      if (node.dataset.knob !== undefined) {
+        if (document.activeElement !== node && node.value !== String(v)) { node.value = String(v); node.oninput(); }
+      } else if (node.getAttribute("role") === "switch") node.setAttribute("aria-checked", v ? "true" : "false");
       else if (node.dataset.state !== undefined) node.dataset.state = v ? "on" : "off";
     }
   }
@@ -787,4 +811,5 @@ function renderRegisters(regs) {
   }
 }
 
+Mimic.askContour = () => send("contour");
 connect();

@@ -38,6 +38,7 @@ const Mimic = (() => {
     if (stand === "mp9c") buildMp9c(hints);
     else if (stand === "tur10") buildTur10();
     else if (stand === "thermo") buildThermo();
+    else if (stand === "cnc") buildCnc();
     parts.faults = s("text", { class: "fault-mark", x: 10, y: stand === "tur10" ? 540 : 312, text: "" });
   }
 
@@ -266,15 +267,78 @@ const Mimic = (() => {
     parts.fanText.textContent = `fan ${Math.round(m.fan_rpm)} rpm (command ${m.fan_command})` + (m.faults.includes("fan_stalled") ? " STALLED" : "");
   }
 
+  // ---------------------------------------------------------------- CNC
+  // The X-Y table seen from above: the contour (as the PLC runs it) grey, the tool path as it
+  // is cut blue, the tool a dot; beside it the frame, the contour error against its bound,
+  // the drives' step counters and missed steps.
+  function buildCnc() {
+    s("text", { class: "mimic-text", x: 10, y: 18, text: "X-Y table from above: contour (grey), tool path as cut (blue)" });
+    s("rect", { x: 10, y: 26, width: 380, height: 284, fill: "#fff", stroke: "#e5e7eb" });
+    parts.contour = s("polyline", { id: "cnc-contour", fill: "none", stroke: "#9ca3af", "stroke-width": 3 });
+    parts.path = s("polyline", { id: "cnc-path", fill: "none", stroke: "#1d4ed8", "stroke-width": 1.2 });
+    parts.tool = s("circle", { id: "cnc-tool", r: 4, fill: "#b91c1c" });
+    const lines = ["frame", "error", "bound", "steps", "missed", "override", "state"];
+    parts.cncText = {};
+    lines.forEach((k, i) => { parts.cncText[k] = s("text", { id: `cnc-${k}`, class: "mimic-text", x: 400, y: 50 + i * 22, text: "" }); });
+    parts.pathPts = []; parts.contourId = -1; parts.view = null;
+  }
+  function cncView(points) {
+    let x0 = Infinity, y0 = Infinity, x1 = -Infinity, y1 = -Infinity;
+    for (const [x, y] of points) { x0 = Math.min(x0, x); x1 = Math.max(x1, x); y0 = Math.min(y0, y); y1 = Math.max(y1, y); }
+    if (!Number.isFinite(x0)) { x0 = -10; x1 = 10; y0 = -10; y1 = 10; }
+    const pad = Math.max(1, 0.1 * Math.max(x1 - x0, y1 - y0));
+    x0 -= pad; x1 += pad; y0 -= pad; y1 += pad;
+    const k = Math.min(360 / (x1 - x0), 264 / (y1 - y0));
+    return { k, x: (x) => 20 + (x - x0) * k, y: (y) => 300 - (y - y0) * k };
+  }
+  function setContour(c) {
+    parts.contourId = c.contour_id;
+    parts.view = cncView(c.contour);
+    const v = parts.view;
+    parts.contour.setAttribute("points", c.contour.map(([x, y]) => `${v.x(x).toFixed(1)},${v.y(y).toFixed(1)}`).join(" "));
+    parts.contour.dataset.points = String(c.contour.length);
+    parts.pathPts = [];
+    parts.path.setAttribute("points", "");
+  }
+  function updateCnc(m) {
+    if (m.contour_id !== parts.contourId && !parts.asking) {        // a new part (or its executed form)
+      parts.asking = true;
+      Mimic.askContour().then(setContour).catch(() => {}).finally(() => { parts.asking = false; });
+    }
+    const v = parts.view || cncView([[m.x, m.y]]);
+    if (m.path.length) {
+      for (const p of m.path) parts.pathPts.push(`${v.x(p[0]).toFixed(1)},${v.y(p[1]).toFixed(1)}`);
+      if (parts.pathPts.length > 20000) parts.pathPts.splice(0, parts.pathPts.length - 20000);
+      parts.path.setAttribute("points", parts.pathPts.join(" "));
+      parts.path.dataset.points = String(parts.pathPts.length);
+    }
+    parts.tool.setAttribute("cx", v.x(m.x).toFixed(1));
+    parts.tool.setAttribute("cy", v.y(m.y).toFixed(1));
+    const t = parts.cncText;
+    t.frame.textContent = m.part ? `frame ${m.frame} of ${m.frames} (${m.part}, ${m.method})` : "no part program loaded";
+    const over = m.bound_mm !== null && m.error_mm > m.bound_mm + 1e-9;
+    t.error.textContent = `contour error ${m.error_now_mm === null ? "-" : m.error_now_mm.toFixed(4)} mm, max ${m.error_mm.toFixed(4)} mm`;
+    t.error.setAttribute("fill", over ? "#b91c1c" : "#111");
+    t.bound.textContent = m.bound_mm === null ? "bound: -" : `bound ${m.bound_mm.toFixed(4)} mm (frame ${m.error_frame})` + (over ? "  OUT OF BOUND" : "  ok");
+    t.steps.textContent = `steps X ${m.steps.X}  Y ${m.steps.Y}  Z ${m.steps.Z}`;
+    const missed = m.missed.X + m.missed.Y + m.missed.Z;
+    t.missed.textContent = `missed steps X ${m.missed.X}  Y ${m.missed.Y}  Z ${m.missed.Z}`;
+    t.missed.setAttribute("fill", missed ? "#b91c1c" : "#111");
+    t.override.textContent = `feed override ${m.override} %`;
+    t.state.textContent = m.end ? "program end" : m.frame ? "running" : "";
+  }
+
   function update(state) {
     if (!svg) return;
     const m = state.mimic;
     if (stand === "mp9c") updateMp9c(m);
     else if (stand === "tur10") updateTur10(m);
     else if (stand === "thermo") updateThermo(m, state.t);
+    else if (stand === "cnc") updateCnc(m);
     lastT = state.t;
     parts.faults.textContent = m.faults && m.faults.length ? `injected: ${m.faults.join(", ")}` : "";
   }
 
-  return { build, update, placed: () => placedLabels };
+  const api = { build, update, placed: () => placedLabels, askContour: () => Promise.reject(new Error("no lab")) };
+  return api;
 })();
