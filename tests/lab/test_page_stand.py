@@ -154,7 +154,7 @@ PHONE = """() => {
 def test_a_390x844_phone_gets_one_column_without_sideways_scroll(browser, shots):
     from conftest import LabPage
 
-    for stand in ("tur10", "thermo"):
+    for stand in ("mp9c", "tur10", "thermo", "cnc"):
         lp = LabPage(browser, stand, 2.0, variant="full", viewport={"width": 390, "height": 844}, mobile=True)
         try:
             page = lp.page

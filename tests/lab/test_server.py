@@ -372,3 +372,30 @@ def test_a_load_that_fails_after_the_check_goes_back_to_the_previous_program(run
     assert lab.session.plc.state == "RUN"
     assert "mp9c.st" not in [n for n, _ in lab.session.sources]
     assert any("Mp9cFull" in text or "PRG_Mp9c" in text for _n, text in lab.session.sources)
+
+
+def test_cnc_lab_runs_a_task4_block_alone_and_loads_part_programs(tmp_path):
+    """`plclab lab cnc --program FB_CncEvalLinear.st` (the block alone, as `plclab cnc` takes
+    it); a part program that does not parse gets its G-code line; the table cuts a loaded one."""
+    from pathlib import Path
+
+    from plclab.stands.cnc import SQUARE
+
+    block = Path(__file__).resolve().parents[2] / "solutions" / "POUs" / "FB_CncEvalLinear.st"
+    server = open_lab("cnc", program=[str(block)], port=0, modbus_port=None)
+    lab = server.lab
+    try:
+        assert "FB_CncEvalLinear.st" in lab.program_name
+        with pytest.raises(Exception) as e:
+            lab.load_part("G01 X10 Q\n", "bad.nc", "evalfn")
+        assert str(e.value).startswith("bad.nc:1:"), e.value
+        assert lab.load_part(SQUARE, "square.nc", "evalfn") == "4 frames of square.nc loaded (evalfn)"
+        lab.press("SB1", True)
+        lab.session.run(0.01)
+        lab.press("SB1", False)
+        lab.session.run(5.0)                                # F300: 5 mm/s along X
+        m = lab.panel.mimic(lab.session)
+        assert m["frame"] == 2 and m["x"] == 20.0 and m["missed"] == {"X": 0, "Y": 0, "Z": 0}, m
+        assert m["bound_mm"] == 0.01 and m["error_mm"] <= m["bound_mm"]
+    finally:
+        lab.stop()

@@ -48,8 +48,12 @@ class CncPart:
         st = _state(s)
         st.update(frames=program.frames, method=method, name=name, executed=None, err={}, bound={},
                   origin=tuple(s.plant.axes[a].steps for a in "XYZ"), contour_id=st.get("contour_id", 0) + 1,
-                  ix=s.trace.change_count("CNT_X"), iy=s.trace.change_count("CNT_Y"))
+                  ix=_count(s, "CNT_X"), iy=_count(s, "CNT_Y"))
         return f"{len(program.frames)} frames of {name} loaded ({method})"
+
+
+def _count(s: Session, name: str) -> int:
+    return s.trace.change_count(name) if name in s.trace else 0
 
 
 def _state(s: Session) -> dict:
