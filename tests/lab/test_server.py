@@ -399,3 +399,22 @@ def test_cnc_lab_runs_a_task4_block_alone_and_loads_part_programs(tmp_path):
         assert m["bound_mm"] == 0.01 and m["error_mm"] <= m["bound_mm"]
     finally:
         lab.stop()
+
+
+def test_two_snapshots_a_slow_page_has_not_received_merge_without_losing_what_is_sent_once():
+    from plclab.lab.server import _merge
+
+    old = {"t": 1.0, "events": [1], "actions": ["a"], "trends": {"SB1": [[0.5, 1]]}, "frames": {"rows": [["1"]]},
+           "monitor": {"pou": "P", "instance": "Main", "values": {"n": 1, "d": 0}},
+           "mimic": {"x": 1.0, "path": [[0.0, 0.0], [1.0, 0.0]]}}
+    new = {"t": 2.0, "events": [2], "actions": ["b"], "trends": {"SB1": [[1.5, 0]]},
+           "monitor": {"pou": "P", "instance": "Main", "values": {"n": 2}},
+           "mimic": {"x": 2.0, "path": [[2.0, 0.0]]}}
+    out = _merge(old, new)
+    assert out["t"] == 2.0 and out["events"] == [1, 2] and out["actions"] == ["a", "b"]
+    assert out["trends"] == {"SB1": [[0.5, 1], [1.5, 0]]}
+    assert out["frames"] == {"rows": [["1"]]}                                 # sent when it changed: kept
+    assert out["monitor"]["values"] == {"n": 2, "d": 0}                     # changes only: both
+    assert out["mimic"] == {"x": 2.0, "path": [[0.0, 0.0], [1.0, 0.0], [2.0, 0.0]]}
+    other = _merge(old, dict(new, monitor={"pou": "Q", "instance": None, "values": {"x": 5}}))
+    assert other["monitor"] == {"pou": "Q", "instance": None, "values": {"x": 5}}   # another POU: its own

@@ -66,6 +66,9 @@ def _merge(old: dict, new: dict) -> dict:
     for name, points in new.get("trends", {}).items():
         trends.setdefault(name, []).extend(points)
     out["trends"] = trends
+    old_path, new_mimic = old.get("mimic", {}).get("path"), new.get("mimic")
+    if old_path and isinstance(new_mimic, dict) and "path" in new_mimic:   # the CNC's tool path: new points only
+        out["mimic"] = dict(new_mimic, path=old_path + new_mimic["path"])
     for key in ("frames",):                  # sent only when changed: the older one still counts
         if key not in new and key in old:
             out[key] = old[key]
