@@ -193,7 +193,8 @@ class LabServer:
         browser's Origin / Sec-Fetch-Site, then the token of state-changing requests."""
         host = request.headers.get("Host", "")
         if not self.host_ok(host):
-            names = "localhost or an IP address" + (f" or {self.bind}" if not _is_ip(self.bind) else "")
+            named = not _is_ip(self.bind) and self.bind.lower() != "localhost"
+            names = "localhost or an IP address" + (f" or {self.bind}" if named else "")
             return (f"refused: this lab answers to {names} on port {self.port}, not to the host "
                     f"'{host[:80]}' (open the address `plclab lab` printed)")
         origin = request.headers.get("Origin")
@@ -584,7 +585,8 @@ async def _one_line_errors(request: web.Request, handler):
     except Exception as e:      # noqa: BLE001 - the page gets a line, the log the traceback
         import logging
         logging.getLogger("plclab.lab").exception("request %s failed", request.path)
-        return _refuse(f"internal error of the lab ({type(e).__name__}: {e}); please report it", status=500)
+        why = " ".join(str(e).split())[:200]
+        return _refuse(f"internal error of the lab ({type(e).__name__}: {why}); please report it", status=500)
 
 
 def _is_ip(name: str) -> bool:
