@@ -54,20 +54,26 @@ def test_watch_and_force_from_the_program_tree(lab_page, shots):
     tree.get_by_text("globals", exact=True).click()
     tree.get_by_role("button", name="watch SA5", exact=True).click()
     tree.get_by_role("button", name="watch L7", exact=True).click()
-    count = page.get_by_label("value of Main.Cp.Count", exact=True)
+    table = page.get_by_role("table", name="watched variables")
+    count = table.get_by_label("value of Main.Cp.Count", exact=True)
     expect(count).to_have_text("0", timeout=WAIT)
-    expect(page.get_by_label("value of SA5", exact=True)).to_have_text("FALSE")
+    expect(table.get_by_label("value of SA5", exact=True)).to_have_text("FALSE")
     # force an input: the program sees it (manual mode: the arm goes down), the console switch
     # stays where it is, and SA5 is marked forced on the console and in the table
     page.get_by_label("force value of SA5").fill("TRUE")
     page.get_by_role("button", name="force SA5", exact=True).click()
-    expect(page.get_by_label("value of SA5", exact=True)).to_have_text("TRUE (forced)", timeout=WAIT)
+    expect(table.get_by_label("value of SA5", exact=True)).to_have_text("TRUE (forced)", timeout=WAIT)
     on(lamp(page, "L3"))
     on(lamp(page, "SQ2"))
     expect(switch_(page, "SA5")).to_have_attribute("aria-checked", "false")
     expect(switch_(page, "SA5")).to_have_attribute("data-forced", "true")
     expect(page.get_by_label("forces")).to_have_text("1 forced")
     expect(page.locator("#actions")).to_contain_text("FORCE SA5 := TRUE")
+    page.get_by_role("button", name="Show the program").click()          # the program online marks it too
+    page.get_by_label("POU", exact=True).select_option("FB_Mp9cManual")
+    use = page.get_by_label("program source").locator('li[data-text^="L3 := SA5;"]').get_by_label("value of SA5")
+    expect(use).to_have_text("TRUE", timeout=WAIT)
+    expect(use).to_have_attribute("data-forced", "true")
     # force an output: the valve coil stays off whatever the program says
     on(lamp(page, "L7"))
     page.get_by_label("force value of L7").fill("FALSE")
@@ -83,7 +89,7 @@ def test_watch_and_force_from_the_program_tree(lab_page, shots):
     expect(count).to_have_text("0")
     # release: the program has its inputs and outputs back
     page.get_by_role("button", name="release SA5", exact=True).click()
-    expect(page.get_by_label("value of SA5", exact=True)).to_have_text("FALSE", timeout=WAIT)
+    expect(table.get_by_label("value of SA5", exact=True)).to_have_text("FALSE", timeout=WAIT)
     on(lamp(page, "SQ1"))
     expect(switch_(page, "SA5")).not_to_have_attribute("data-forced", "true")
     page.get_by_role("button", name="Release all forces").click()

@@ -518,8 +518,9 @@ async function showPou(name, instance) {
     const n = pou.line + i;
     const li = el("li", { value: String(n), id: `src-${n}`, "data-line": String(n), "data-text": text });
     let at = 0;
-    for (const [, c0, c1, chain] of byLine.get(n) || []) {
-      li.append(text.slice(at, c1), el("span", { class: "val", "data-chain": chain, "aria-label": `value of ${chain}` }));
+    for (const [, c0, c1, chain, scope] of byLine.get(n) || []) {
+      const path = scope === "global" || !instance ? chain : `${instance}.${chain}`;
+      li.append(text.slice(at, c1), el("span", { class: "val", "data-chain": chain, "data-path": path, "aria-label": `value of ${chain}` }));
       at = c1;
     }
     li.append(text.slice(at) || (at ? "" : " "));
@@ -609,7 +610,7 @@ function watch(paths) {
 
 function renderWatch(rows) {
   if (!lab.watchPending) lab.watched = rows.map((r) => r[0]);
-  const key = lab.watched.join("\n") + "|" + rows.map((r) => r[2]).join();
+  const key = rows.map((r) => r[0]).join("\n");        // rebuilt only when the variables change
   const body = $("#watch-table tbody");
   if (key !== lab.watchBuilt) {
     lab.watchBuilt = key;
@@ -633,8 +634,13 @@ function renderWatch(rows) {
     }));
   }
   rows.forEach(([path, value, forced], i) => {
-    const cell = body.children[i] && body.children[i].children[1];
-    if (cell) cell.textContent = (value === null ? "?" : String(value)) + (forced ? " (forced)" : "");
+    const row = body.children[i];
+    if (!row) return;
+    const text = (value === null ? "?" : String(value)) + (forced ? " (forced)" : "");
+    if (row.children[1].textContent !== text) row.children[1].textContent = text;
+    row.classList.toggle("forced", forced);
+    const release = row.querySelector(`[aria-label="release ${CSS.escape(path)}"]`);
+    if (release && release.disabled === forced && !document.body.classList.contains("offline")) release.disabled = !forced;
   });
 }
 
@@ -652,6 +658,10 @@ function markForced(s) {
   for (const name of document.querySelectorAll("#trend-list .name")) {
     const forced = forcedNames.has(name.title.toUpperCase()) || labels.has(name.title);
     name.classList.toggle("forced", forced);
+  }
+  for (const v of document.querySelectorAll("#source .val[data-path]")) {       // the program online too
+    const forced = forcedNames.has(v.dataset.path.toUpperCase());
+    if (forced !== (v.dataset.forced === "true")) { if (forced) v.dataset.forced = "true"; else delete v.dataset.forced; }
   }
   const n = Object.keys(s.forced || {}).length;
   $("#unforce-all").disabled = n === 0;
