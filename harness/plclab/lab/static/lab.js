@@ -17,7 +17,7 @@ const el = (tag, attrs = {}, ...children) => {
 const lab = {
   ws: null, hello: null, state: null, nextId: 1, pending: new Map(),
   trends: new Map(),          // name -> [[t, v], ...]
-  trendNames: [], events: [], actions: [], retry: 0, trendWindow: 60, watched: [], watchBuilt: "",
+  trendNames: [], events: [], actions: [], retry: 0, trendWindow: 60, watched: [],
 };
 
 // ------------------------------------------------------------------ connection
@@ -581,7 +581,6 @@ function buildWatch() {
   };
   $("#unforce-all").onclick = () => send("unforce").then(() => say("#watch-message", "all forces released", true))
     .catch((e) => say("#watch-message", e.message, false));
-  lab.watchBuilt = "";
 }
 
 function treeNode(n) {
@@ -608,30 +607,37 @@ function watch(paths) {
     .finally(() => { lab.watchPending--; });
 }
 
+function watchRow(path) {
+  const input = el("input", { type: "text", size: "7", "aria-label": `force value of ${path}`, "data-force-of": path });
+  const force = el("button", { type: "button", text: "Force", "aria-label": `force ${path}`,
+    onclick: () => send("force", { path, value: input.value })
+      .then(() => say("#watch-message", `${path} forced`, true)).catch((e) => say("#watch-message", e.message, false)) });
+  const release = el("button", { type: "button", text: "Release", "aria-label": `release ${path}`, disabled: "",
+    onclick: () => send("unforce", { path }).then(() => say("#watch-message", `${path} released`, true))
+      .catch((e) => say("#watch-message", e.message, false)) });
+  const remove = el("button", { type: "button", text: "x", "aria-label": `stop watching ${path}`,
+    onclick: () => watch(lab.watched.filter((p) => p !== path)) });
+  return el("tr", { "data-path": path }, el("td", { text: path }),
+    el("td", { "aria-label": `value of ${path}` }), el("td", {}, input, force, release), el("td", {}, remove));
+}
+
+// Rows are kept while their variable is watched (what is typed in a force box, the focus and
+// a click in progress survive another variable being added or removed); new ones are added.
 function renderWatch(rows) {
   if (!lab.watchPending) lab.watched = rows.map((r) => r[0]);
-  const key = rows.map((r) => r[0]).join("\n");        // rebuilt only when the variables change
   const body = $("#watch-table tbody");
-  if (key !== lab.watchBuilt) {
-    lab.watchBuilt = key;
-    const typed = {}, focused = document.activeElement && document.activeElement.dataset.forceOf;
-    for (const x of body.querySelectorAll("input[data-force-of]")) typed[x.dataset.forceOf] = x.value;
-    body.replaceChildren(...rows.map(([path, , forced]) => {
-      const input = el("input", { type: "text", size: "7", "aria-label": `force value of ${path}`, "data-force-of": path });
-      input.value = typed[path] || "";
-      if (focused === path) setTimeout(() => input.focus(), 0);
-      const force = el("button", { type: "button", text: "Force", "aria-label": `force ${path}`,
-        onclick: () => send("force", { path, value: input.value })
-          .then(() => say("#watch-message", `${path} forced`, true)).catch((e) => say("#watch-message", e.message, false)) });
-      const release = el("button", { type: "button", text: "Release", "aria-label": `release ${path}`, disabled: "",
-        onclick: () => send("unforce", { path }).then(() => say("#watch-message", `${path} released`, true))
-          .catch((e) => say("#watch-message", e.message, false)) });
-      if (forced) release.removeAttribute("disabled");
-      const remove = el("button", { type: "button", text: "x", "aria-label": `stop watching ${path}`,
-        onclick: () => watch(lab.watched.filter((p) => p !== path)) });
-      return el("tr", { "data-path": path, class: forced ? "forced" : "" }, el("td", { text: path }),
-        el("td", { "aria-label": `value of ${path}` }), el("td", {}, input, force, release), el("td", {}, remove));
-    }));
+  const want = rows.map((r) => r[0]);
+  const have = [...body.children].map((tr) => tr.dataset.path);
+  if (want.join("\n") !== have.join("\n")) {
+    const wanted = new Set(want);
+    for (const tr of [...body.children]) if (!wanted.has(tr.dataset.path)) tr.remove();
+    const kept = [...body.children].map((tr) => tr.dataset.path);
+    if (kept.join("\n") === want.slice(0, kept.length).join("\n")) {
+      for (const path of want.slice(kept.length)) body.append(watchRow(path));
+    } else {                                  // reordered: rebuilt, the rows reused
+      const byPath = new Map([...body.children].map((tr) => [tr.dataset.path, tr]));
+      body.replaceChildren(...want.map((path) => byPath.get(path) || watchRow(path)));
+    }
   }
   rows.forEach(([path, value, forced], i) => {
     const row = body.children[i];
