@@ -476,13 +476,13 @@ def build_parser() -> argparse.ArgumentParser:
     c.set_defaults(func=_cmd_serve)
 
     c = sub.add_parser("lab", help="the virtual lab in the browser: mimic, console, trends, grade")
-    c.add_argument("stand", choices=stands)
+    c.add_argument("stand", choices=stands + ("cnc",))
     c.add_argument("--program", nargs="+", metavar="FILE.st", help="run these ST files instead of the variant")
     c.add_argument("--variant", choices=("baseline", "task1", "task2", "task3", "full"),
                    help="default: the most complete program there is")
     c.add_argument("--port", type=_port, default=8080, metavar="P", help="web page port (default 8080; 0: any free)")
     c.add_argument("--bind", default="127.0.0.1", metavar="ADDR", help="address to listen on (default 127.0.0.1)")
-    c.add_argument("--speed", type=float, default=1.0, metavar="X", help="x1 (real time) .. x50")
+    c.add_argument("--speed", type=float, default=1.0, metavar="X", help="x0.1 .. x50 (x1: real time)")
     c.add_argument("--modbus-port", type=_port, default=5020, metavar="P",
                    help="thermo: port of the Twido Modbus face for an external SCADA client (default 5020)")
     c.set_defaults(func=_cmd_lab)

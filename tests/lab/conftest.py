@@ -10,7 +10,7 @@ from __future__ import annotations
 import os
 import shutil
 from pathlib import Path
-from typing import Iterator
+from typing import Iterator, Optional
 
 import pytest
 
@@ -34,14 +34,33 @@ def browser() -> Iterator:
         b.close()
 
 
+@pytest.fixture(scope="module")
+def rebinding_browser() -> Iterator:
+    """A Chromium that resolves evil.example and attacker.example to 127.0.0.1, as an
+    attacker's DNS would (a hostile page, a DNS-rebinding name)."""
+    from playwright.sync_api import sync_playwright
+
+    if not Path(CHROMIUM).exists():
+        pytest.fail(f"the lab's browser tests need Debian's chromium at {CHROMIUM}: run `bash scripts/setup`")
+    with sync_playwright() as p:
+        b = p.chromium.launch(executable_path=CHROMIUM, args=[
+            "--no-sandbox", "--disable-gpu",
+            "--host-resolver-rules=MAP evil.example 127.0.0.1, MAP attacker.example 127.0.0.1"])
+        yield b
+        b.close()
+
+
 class LabPage:
     """One running lab and a browser page on it."""
 
-    def __init__(self, browser, stand: str, speed: float, program=None, variant: str = "full"):
+    def __init__(self, browser, stand: str, speed: float, program=None, variant: str = "full",
+                 viewport: Optional[dict] = None, mobile: bool = False):
         self.server = open_lab(stand, program=program, variant=variant, port=0, speed=speed, modbus_port=0)
         self.thread = LabThread(self.server)
         self.url = self.thread.start()
-        self.context = browser.new_context(viewport={"width": 1400, "height": 1000})
+        # a phone: its viewport, touch, and 2 screen pixels per CSS pixel
+        self.context = browser.new_context(viewport=viewport or {"width": 1400, "height": 1000}, is_mobile=mobile,
+                                           has_touch=mobile, device_scale_factor=2 if mobile else 1)
         self.page = self.open()
 
     def open(self):

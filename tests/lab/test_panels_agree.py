@@ -15,7 +15,9 @@ from plclab.stands.base import Fault, FaultParam, stand_spec
 @pytest.mark.parametrize("stand", sorted(PANELS))
 def test_panel_shows_the_stands_console_lamps_and_faults(stand):
     spec, panel = stand_spec(stand), PANELS[stand]
-    assert tuple(c.input for c in panel.controls) == spec.console
+    knobs = {k.label for k in panel.knobs}          # the CNC's RP1: a slider, not a contact
+    assert tuple(c.input for c in panel.controls) == tuple(i for i in spec.console if i not in knobs)
+    assert knobs & set(spec.console) == ({"RP1"} if stand == "cnc" else set())
     assert set(spec.lamps) <= {lamp.label for lamp in panel.lamps}
     assert [(f.name, [p.name for p in f.params]) for f in panel.faults] == \
         [(f.name, [p.name for p in f.params]) for f in spec.faults]

@@ -28,7 +28,9 @@ def open_lab(stand: str, program: Optional[Sequence[str]] = None, variant: Optio
     get_stand(stand).variant(variant)
     sources = None
     if program:
-        sources = read_sources(program)              # unreadable files: CompileError, one line each
+        from plclab.stands.base import stand_spec
+        combine = stand_spec(stand).program_sources   # the CNC: a file with FB_CncEvalLinear alone runs
+        sources = combine(program) if combine else read_sources(program)   # unreadable: CompileError lines
         _checked, errors = check_program(sources)
         if errors:
             raise LabError("the program does not pass the check:\n" + "\n".join(errors))

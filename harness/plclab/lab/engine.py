@@ -16,6 +16,7 @@ from __future__ import annotations
 
 import collections
 import concurrent.futures
+import dataclasses
 import math
 import tempfile
 import threading
@@ -32,7 +33,11 @@ from plclab.trace import Trace
 SPEEDS = (1, 2, 5, 10, 20, 50)
 MIN_BATCH_S = 0.01          # wall seconds between batches faster than real time (100 snapshots/s at most)
 MAX_BEHIND_S = 0.25         # wall seconds of backlog after which the engine stops catching up
-TREND_WINDOW_S = 60.0       # virtual seconds of trend history a page gets when it connects
+TRACE_KEEP_S = 30 * 60.0    # plant seconds the lab's trace keeps (a ring: older changes are dropped)
+TRIM_EVERY_S = 60.0         # plant seconds between two trims of the ring
+LOG_KEEP = 2000             # console actions and plant events kept (the newest)
+FRAMES_EVERY_S = 0.1        # wall seconds between two reads of the recorded program's table
+LAB_TICK_NS = 25_000_000    # the plant is stepped at least this often (40 page updates a second at x1)
 
 
 class LabError(PlcLabError):
@@ -53,6 +58,7 @@ class Lab:
         variant = variant or self.module.STAND.richest_variant
         self.variant = variant
         self.program_files = list(program_files)      # where --program came from (reload re-reads them)
+        self.uploaded: Optional[list[tuple[str, str]]] = None   # the last program a page loaded
         self._tmp = None
         if work_dir is None:
             self._tmp = tempfile.TemporaryDirectory(prefix=f"plclab-lab-{stand}-")
@@ -65,9 +71,24 @@ class Lab:
             if sources is not None else f"{variant} (shipped)"
         self.session: Session = self.module.session(variant, program=list(sources) if sources is not None else None,
                                                     retain_path=self.retain_path, watch_internals=False)
+        # the stand's observables (TUR-10's Target1..5, ...) are read by name where the program
+        # has them, for the drawing and the trends; not recorded (the trace stays the I/O's)
+        from plclab.stands.base import stand_spec
+        self.session.observables = stand_spec(stand).observables_for(variant if sources is None else None)
+        self._refine_tick()
+        from plclab.lab.variables import Forces
+        self.forces = Forces()                         # the watch and force table's forces
+        self.forces.attach(self.session.plc)
+        self.watched: list[str] = []                   # the watch table's variables
+        from plclab.lab.monitor import Monitor
+        self.monitor = Monitor()                       # online monitoring: one POU instance's values
+        self._listing: tuple[Any, list] = (None, [])
         self.speed = self._check_speed(speed)
         self.paused = False
         self.actual_speed = 0.0
+        self.held: set[str] = set()                   # push buttons held now (console inputs)
+        self.console_levels: dict[str, int] = {}       # label -> what the operator set (the page shows it)
+        self.loads = 0                                 # programs loaded so far (a page re-reads the source)
         self.trend_names: list[str] = list(self.panel.trends)
         self.extras = Trace()                        # trended variables the session does not record
         self._extra_unknown: dict[str, str] = {}
@@ -131,18 +152,85 @@ class Lab:
                     fut.set_exception(e)
             self._console_since_scan |= console
 
+    def _refine_tick(self) -> None:
+        """Step the plant at least every LAB_TICK_NS (thermo's task runs every 100 ms): the
+        page then gets >= 20 new plant states a second. The program's tasks keep their
+        periods (the tick divides every TASK interval), as in `plclab run --tick`."""
+        s = self.session
+        natural = s.plc.tick_ns
+        if natural <= LAB_TICK_NS or s.plc.ticks:
+            return
+        s.tick_ns = math.gcd(natural, LAB_TICK_NS)
+        logged = len(s.actions)
+        s.restart_plc()                       # not a scan run yet: the same cold start, finer steps
+        del s.actions[logged:]
+
+    def ops(self) -> tuple[str, ...]:
+        """The commands this stand's page has (the SCADA registers are thermo's only, the
+        knobs and part programs the CNC's)."""
+        ops = ("set", "press", "release", "speed", "pause", "run", "scan", "restart", "inject", "clear", "trends",
+               "tree", "watch", "force", "unforce", "source", "monitor")
+        if self.stand == "thermo":
+            ops += ("register",)
+        if self.panel.knobs:
+            ops += ("knob",)
+        if self.panel.part is not None:
+            ops += ("part", "contour")
+        return ops
+
+    def set_knob(self, label: str, value: int) -> None:
+        try:
+            knob = self.panel.knob(label)
+        except KeyError:
+            raise LabError(f"{self.stand} has no setting '{str(label)[:40]}' "
+                           f"(one of {', '.join(k.label for k in self.panel.knobs)})") from None
+        if not knob.lo <= value <= knob.hi:
+            raise LabError(f"{label}: {value} is outside {knob.lo}..{knob.hi} {knob.unit}")
+        try:
+            knob.apply(self.session, value)
+        except PlantError as e:
+            raise LabError(str(e)) from None
+        self.console_levels[label] = value
+
+    def load_part(self, text: str, name: str, method: str) -> str:
+        """A CNC part program into the PLC's frame table (plclab.lab.cncview)."""
+        from plclab.cnc.gcode import GcodeError
+        try:
+            return self.panel.part.load(self.session, text, name, method)
+        except (GcodeError, ValueError) as e:
+            raise LabError(str(e)) from None
+
+    def contour(self) -> dict:
+        from plclab.lab.cncview import cnc_contour
+        return cnc_contour(self.session)
+
     # the commands themselves (each runs in the engine's thread through `call`)
     def set_control(self, label: str, value: int) -> None:
         control = self._control(label)
+        if control.kind != "switch":          # a push button set on would stay pressed for ever
+            raise LabError(f"{label} is a push button: it is pressed and released, not set")
         self.session.plant.set_switch(control.input, int(bool(value)))
+        self.console_levels[label] = int(bool(value))
         self.session.log(f"{label}={int(bool(value))}")
 
     def press(self, label: str, down: bool) -> None:
         control = self._control(label)
+        if control.kind != "button":
+            raise LabError(f"{label} is a switch: it is set on or off, not pressed")
         if down:
             self.session.console.hold(control.input)
+            self.held.add(control.input)
         else:
             self.session.console.release(control.input)
+            self.held.discard(control.input)
+        self.console_levels[label] = int(down)
+        self._rebase = True            # the pace changes while a button is held (see `pace`)
+
+    def pace(self) -> float:
+        """The speed the plant runs at now: x1 while a push button is held, whatever the
+        speed asked, so a hold lasts as long in the plant as the student holds it (a click
+        records a frame at x50 too, and only 3 s of the student's own time reset)."""
+        return 1.0 if self.held else self.speed
 
     def _control(self, label: str):
         try:
@@ -165,13 +253,129 @@ class Lab:
         self._run_scans(1)
 
     def restart_plc(self) -> None:
-        """Power-cycle the controller: retained variables kept, the plant stays."""
+        """Power-cycle the controller: retained variables kept, the plant stays; forces stay
+        (as a programming tool keeps them through a restart)."""
         self.session.restart_plc()
+        self.forces.attach(self.session.plc)
         self._rebase = True
 
-    def load_program(self, sources: Sequence[tuple[str, str]], checked: Any, name: str) -> None:
-        self.session.load_program(sources, checked)
+    # the watch and force table (plclab.lab.variables)
+    def variable_tree(self) -> list[dict]:
+        from plclab.lab.variables import variable_tree
+        return variable_tree(self.session.plc)
+
+    def set_watch(self, paths: Sequence[str]) -> list[str]:
+        from plclab.lab.variables import MAX_WATCH, elementary
+        clean: list[str] = []
+        for p in paths:
+            p = str(p).strip()
+            if p and p not in clean:
+                clean.append(p)
+        if len(clean) > MAX_WATCH:
+            raise LabError(f"at most {MAX_WATCH} watched variables ({len(clean)} asked)")
+        for p in clean:
+            elementary(self.session.plc, p)
+        self.watched = clean
+        return clean
+
+    def listing(self) -> list[dict]:
+        """The program's POUs for online monitoring (plclab.lab.monitor), once per program."""
+        from plclab.lab.monitor import listing
+        s = self.session
+        if self._listing[0] is not s.checked:
+            self._listing = (s.checked, listing(s.plc, s.sources))
+        return self._listing[1]
+
+    def select_monitor(self, pou: str, instance: Optional[str]) -> None:
+        for p in self.listing():
+            if p["name"].upper() == str(pou).upper():
+                self.monitor.select(self.session.plc, p, instance if instance else None)
+                self._monitor_at = 0.0
+                return
+        raise LabError(f"the program has no POU '{str(pou)[:80]}'")
+
+    _monitor_at = 0.0
+
+    def _monitor_values(self, full: bool) -> Any:
+        now = time.monotonic()
+        if not full and now - self._monitor_at < FRAMES_EVERY_S:
+            return _SAME
+        self._monitor_at = now
+        return self.monitor.values(self.session.plc, full)
+
+    def force(self, path: str, value: Any) -> None:
+        shown = self.forces.force(path, value)
+        self.session.log(f"FORCE {path} := {_force_text(shown)}")
+        if path not in self.watched:
+            self.watched = [*self.watched, path][-32:]
+
+    def unforce(self, path: Optional[str]) -> None:
+        for p in self.forces.release(path):
+            self.session.log(f"force released: {p}")
+
+    def _watch_values(self) -> list[list]:
+        from plclab.lab.variables import show
+        out = []
+        plc = self.session.plc
+        for p in self.watched:
+            try:
+                value = show(plc.read(p))
+            except PlcLabError:
+                value = None
+            out.append([p, value, p in self.forces.values])
+        return out
+
+    def _forced_labels(self) -> list[str]:
+        """The console controls and lamps a force holds (forced by label, address or path)."""
+        if not self.forces.values:
+            return []
+        plc = self.session.plc
+        targets = set()
+        for p in self.forces.values:
+            try:
+                c, k = plc.resolve(p)
+                targets.add((id(c), k))
+            except PlcLabError:
+                pass
+        out = []
+        for label, signal in [(c.label, c.signal) for c in self.panel.controls] + \
+                             [(lamp.label, lamp.label) for lamp in self.panel.lamps]:
+            for name in (signal, self.session.labels.get(signal, "")):
+                try:
+                    c, k = plc.resolve(name)
+                except PlcLabError:
+                    continue
+                if (id(c), k) in targets:
+                    out.append(label)
+                    break
+        return out
+
+    def load_program(self, sources: Sequence[tuple[str, str]], checked: Any, name: str, upload: bool = False) -> None:
+        """Download `sources` (already through `prepare_program`). Should the load still fail,
+        the previous program is loaded again (cold, retained variables kept) and the error
+        is one line: the lab always has a program running."""
+        s = self.session
+        old_sources, old_checked = s.sources, s.checked
+        old_tick = s.tick_ns
+        try:
+            s.tick_ns = None                  # the new program's own tick first (then refined)
+            s.load_program(sources, checked)
+            self._refine_tick()
+        except (Exception, RecursionError, MemoryError) as e:     # noqa: BLE001 - any failure: back
+            s.tick_ns = old_tick
+            s.load_program(old_sources, old_checked)
+            self.forces.attach(s.plc)
+            self._rebase = True
+            raise LabError(f"the program could not be loaded ({_why(e)}); the PLC runs the previous "
+                           f"program again (restarted)") from None
+        for path in self.forces.attach(s.plc):          # forces on what the new program has stay
+            s.log(f"force released: {path} (not in the program loaded)")
+        self.watched = [p for p in self.watched if _has(s.plc, p)]
+        self.monitor.pou = None                        # the page picks a POU of the new program
         self.program_name = name
+        self.loads += 1
+        if upload:                         # Reload loads it again (the browser's files are not on disk)
+            self.uploaded = list(sources)
         self._extra_unknown.clear()
         self._rebase = True
 
@@ -256,7 +460,8 @@ class Lab:
             if self._rebase:
                 self._rebase = False
                 base_wall, base_virt = time.monotonic(), s.now - s.tick
-            self._pace = (base_wall, self.speed, base_virt)
+            speed = self.pace()
+            self._pace = (base_wall, speed, base_virt)
             if self.paused:
                 self.actual_speed = 0.0
                 self._publish()
@@ -265,15 +470,15 @@ class Lab:
                 continue
             tick = s.tick
             now = time.monotonic()
-            target = base_virt + (now - base_wall) * self.speed
+            target = base_virt + (now - base_wall) * speed
             due = math.floor((target - s.now) / tick + 1e-9) + 1     # scans at or before `target`
             if due <= 0:
-                wait = (s.now - target) / self.speed
+                wait = (s.now - target) / speed
                 self._wake.wait(max(0.0, min(wait, 0.2)))
                 self._wake.clear()
                 continue
-            if (due - 1) * tick / self.speed > MAX_BEHIND_S:   # cannot keep up: run a slice, rebase
-                due = max(1, int(MAX_BEHIND_S * self.speed / tick))
+            if (due - 1) * tick / speed > MAX_BEHIND_S:   # cannot keep up: run a slice, rebase
+                due = max(1, int(MAX_BEHIND_S * speed / tick))
                 self._rebase = True
             self._run_scans(1 if self._commands else due)     # a command waits: one scan, then it
             if now - rate_wall >= 1.0:
@@ -282,8 +487,8 @@ class Lab:
             self._publish()
             # sleep until the next scan is due (at x1: wake on time, so the page is at most one
             # scan behind); faster than real time, batches at least MIN_BATCH_S apart
-            wake = base_wall + (s.now - base_virt) / self.speed
-            if self.speed > 1:
+            wake = base_wall + (s.now - base_virt) / speed
+            if speed > 1 or tick < MIN_BATCH_S:         # the CNC's 1-ms cycle: batches of 10 ms
                 wake = max(wake, now + MIN_BATCH_S)
             pause = wake - time.monotonic()
             if pause > 0 and not self._commands:
@@ -306,6 +511,33 @@ class Lab:
                 s.run(s.tick)
                 self._sample_extras(extras)
         self.scans_run += n
+        if s.now - self._trimmed_at >= TRIM_EVERY_S:
+            self._trim()
+
+    _trimmed_at = 0.0
+
+    def _trim(self) -> None:
+        """Keep the last TRACE_KEEP_S of plant time in the traces and the last LOG_KEEP
+        actions and events: a lab left running at x50 for a day stays the size of that
+        window (the downloads say which window they hold)."""
+        s = self.session
+        self._trimmed_at = s.now
+        cut_ns = round((s.now - TRACE_KEEP_S) * 1e9)
+        if cut_ns > 0:
+            s.trace.drop_before(cut_ns)
+            self.extras.drop_before(cut_ns)
+            sim_cut = cut_ns - (round(s.now * 1e9) - s.plc.now_ns)    # the PLC's own clock (restarts)
+            if sim_cut > 0:
+                s.sim.trace.drop_before(sim_cut)
+        for items, sent in ((s.actions, "_actions_sent"), (s.plant.events, "_events_sent")):
+            extra = len(items) - LOG_KEEP
+            if extra > 0:
+                del items[:extra]
+                setattr(self, sent, max(0, getattr(self, sent) - extra))
+
+    def trace_window(self) -> tuple[float, float]:
+        """The plant times (from, to) the lab's trace holds now."""
+        return self.session.trace.start_ns / 1e9, max(0.0, self.session.now - self.session.tick)
 
     def _sample_extras(self, names: list[str]) -> None:
         t_ns = round((self.session.now - self.session.tick) * 1e9)
@@ -343,10 +575,14 @@ class Lab:
         plc = s.plc
         self.seq += 1
         fault = plc.fault
+        if fault is not None:            # on the header's clock (the PLC's restarts at every load)
+            fault = dataclasses.replace(fault, time_ns=fault.time_ns + round(s.now * 1e9) - plc.now_ns)
         snap: dict[str, Any] = {
             "type": "state", "seq": self.seq, "t": round(s.now - s.tick, 6), "tick": s.tick,
             "speed": self.speed, "paused": self.paused, "actual_speed": round(self.actual_speed, 2),
-            "program": self.program_name,
+            "held": sorted(self.held), "pace": self.pace(),
+            "program": self.program_name, "loads": self.loads,
+            "trace_from": round(s.trace.start_ns / 1e9, 3), "trace_keep": TRACE_KEEP_S,
             "paced": self.paced_now(),          # where the plant should be now: t + the lag
             "wall": time.monotonic(),           # when (CLOCK_MONOTONIC, the same in every process here)
             "plc": {"state": plc.state, "fault": str(fault) if fault else None,
@@ -368,7 +604,32 @@ class Lab:
         snap["trend_errors"] = {n: self._extra_unknown[n] for n in self.trend_names if n in self._extra_unknown}
         if self.stand == "thermo":
             snap["registers"] = self.registers()
+        snap["watch"] = self._watch_values()
+        snap["forced"] = {p: _force_text(v) for p, v in self.forces.values.items()}
+        snap["forced_labels"] = self._forced_labels()
+        values = self._monitor_values(full)
+        if values is not _SAME and values is not None:
+            snap["monitor"] = {"pou": self.monitor.pou, "instance": self.monitor.instance, "values": values}
+        frames = self._frames(full)
+        if frames is not _SAME:
+            snap["frames"] = frames
         return snap
+
+    _frames_at = 0.0
+    _frames_sent: Any = None
+
+    def _frames(self, full: bool) -> Any:
+        """The recorded program's table (panels), when it changed (read at most every
+        FRAMES_EVERY_S of wall time: a page highlights the frame being executed)."""
+        now = time.monotonic()
+        if not full and now - self._frames_at < FRAMES_EVERY_S:
+            return _SAME
+        self._frames_at = now
+        table = self.panel.frames(self.session)
+        if not full and table == self._frames_sent:
+            return _SAME
+        self._frames_sent = table
+        return table
 
     def paced_now(self) -> float:
         """The plant time the wall clock says it is now (the last scan's time when paused):
@@ -381,8 +642,10 @@ class Lab:
     def _io(self) -> dict[str, int]:
         s = self.session
         io = {}
-        for c in self.panel.controls:
-            io[c.label] = int(bool(s.value(c.signal)))
+        for c in self.panel.controls:        # the console as the operator set it (seen while paused too)
+            io[c.label] = self.console_levels.setdefault(c.label, int(bool(s.value(c.signal))))
+        for k in self.panel.knobs:
+            io[k.label] = self.console_levels.setdefault(k.label, k.initial)
         for lamp in self.panel.lamps:
             io[lamp.label] = int(bool(s.value(lamp.label)))
         return io
@@ -390,7 +653,7 @@ class Lab:
     def _trend_changes(self, full: bool) -> dict[str, list]:
         s = self.session
         out: dict[str, list] = {}
-        horizon_ns = round((s.now - TREND_WINDOW_S) * 1e9)
+        horizon_ns = round((s.now - self.panel.trend_window) * 1e9)
         for name in self.trend_names:
             trace = s.trace if name in s.trace else self.extras if name in self.extras else None
             if trace is None:
@@ -418,12 +681,30 @@ class Lab:
                  "rule": f"writable only when {r.writable_when}" if r.writable_when else "",
                  "description": r.description, "value": r.as_value(raw[r.address])} for r in THERMO.registers]
 
-    def twido_map(self):
+    def twido_map(self, external: bool = False):
         """The Twido face's register map on whichever PLC runs now (a restart or a program
-        load makes a new process image; the map follows it)."""
+        load makes a new process image; the map follows it). `external`: the map an
+        external SCADA client writes through, each write (done or refused) in the lab's log."""
         from plclab.modbus.maps import TwidoMap
         from plclab.modbus.profiles import THERMO
-        return TwidoMap(_CurrentImage(self), THERMO)
+        from plclab.modbus.protocol import ModbusException
+
+        lab = self
+
+        class LoggedTwidoMap(TwidoMap):
+            def write(self, table, start, values):
+                what = ", ".join(f"%MW{start + i}={v}" for i, v in enumerate(values))
+                try:
+                    super().write(table, start, values)
+                except ModbusException as e:
+                    from plclab.hmi import EXCEPTION_NAMES
+                    code = int(e.code)
+                    text = (f"SCADA client: {what} refused: exception {code:02d} "
+                            f"({EXCEPTION_NAMES.get(code, 'unknown')}): {e.reason}")
+                    lab.call(lambda: lab.session.log(text))
+                    raise
+                lab.call(lambda: lab.session.log(f"SCADA client: {what} written"))
+        return (LoggedTwidoMap if external else TwidoMap)(_CurrentImage(self), THERMO)
 
     def write_register(self, address: int, value: int) -> None:
         from plclab.modbus.protocol import ModbusException, Table
@@ -458,10 +739,27 @@ class Lab:
         try:
             speed = float(speed)
         except (TypeError, ValueError):
-            raise LabError(f"speed must be a number (x1..x50), not '{speed}'") from None
+            raise LabError(f"speed must be a number (x0.1 .. x50), not '{str(speed)[:40]}'") from None
         if not 0.1 <= speed <= 50 or not math.isfinite(speed):
-            raise LabError(f"speed x{speed:g}: from x0.1 to x50")
+            raise LabError(f"speed x{speed:g}: from x0.1 to x50 (x1: real time)")
         return speed
+
+
+_SAME = object()             # "as in the last snapshot" (not sent)
+
+
+def _force_text(value: Any) -> str:
+    if isinstance(value, bool):
+        return "TRUE" if value else "FALSE"
+    return str(value)
+
+
+def _has(plc: Any, path: str) -> bool:
+    try:
+        plc.resolve(path)
+    except PlcLabError:
+        return False
+    return True
 
 
 class _CurrentImage:
@@ -485,13 +783,34 @@ def _plain(value: Any) -> Any:
     return value
 
 
-def check_program(sources: Sequence[tuple[str, str]]):
-    """The front end's verdict on an uploaded program: (checked, []) or (None, diagnostics)."""
+def _why(e: BaseException) -> str:
+    if isinstance(e, RecursionError):
+        return "it nests too deeply: RecursionError"
+    if isinstance(e, MemoryError):
+        return "it needs more memory than the lab has: MemoryError"
+    return f"{type(e).__name__}: {str(e)[:200]}"
+
+
+def check_program(sources: Sequence[tuple[str, str]], trial: bool = False):
+    """The front end's verdict on an uploaded program: (checked, []) or (None, diagnostics).
+    With `trial`, the program is also compiled and instantiated once (no retain, no scan)
+    off the running PLC, so what fails there fails before the PLC stops. Whatever goes
+    wrong (even a RecursionError or a MemoryError) is one line, never an exception."""
     from plclab.frontend import check_sources
+    where = f"{sources[-1][0]}:1:1: error: " if sources else "<upload>:1:1: error: "
     try:
         checked = check_sources(sources)
     except CompileError as e:
         return None, [str(d) for d in e.diagnostics]
+    except (Exception, RecursionError, MemoryError) as e:       # noqa: BLE001 - a student's file
+        return None, [f"{where}the program cannot be checked ({_why(e)})"]
+    if trial and checked.config is not None:
+        try:
+            from plclab.runtime.compiler import compile_unit
+            from plclab.runtime.plc import PLC
+            PLC(compile_unit(checked)).stop()
+        except (Exception, RecursionError, MemoryError) as e:   # noqa: BLE001 - a student's file
+            return None, [f"{where}the program cannot be loaded ({_why(e)})"]
     if checked.config is None:
         return None, [f"{sources[-1][0]}:1:1: error: no CONFIGURATION: load the complete program (the bundle "
                       f"from `plclab build`, with its CONFIGURATION Config0 and TASKs)"]

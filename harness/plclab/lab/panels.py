@@ -58,6 +58,24 @@ class Fault:
     params: tuple[FaultParam, ...] = ()
 
 
+def _no_frames(s: Session) -> Any:
+    return None
+
+
+@dataclass(frozen=True)
+class Knob:
+    """A console setting that is not a contact: a potentiometer (the CNC's feed override
+    RP1) or a plant setting the lab offers (the CNC's backlash)."""
+
+    label: str
+    lo: int
+    hi: int
+    unit: str
+    initial: int
+    hint: str
+    apply: Callable[[Session, int], None] = field(repr=False, default=lambda s, v: None)
+
+
 @dataclass(frozen=True)
 class Panel:
     stand: str
@@ -65,7 +83,11 @@ class Panel:
     lamps: tuple[Lamp, ...]
     faults: tuple[Fault, ...]
     trends: tuple[str, ...]                          # signals trended when the page opens
+    trend_window: float = 60.0                       # plant seconds a trend shows
     mimic: Callable[[Session], dict[str, Any]] = field(repr=False, default=lambda s: {})
+    frames: Callable[[Session], Any] = field(repr=False, default=_no_frames)   # the recorded program
+    knobs: tuple[Knob, ...] = ()
+    part: Any = None             # CNC: load_part(session, text, name, method) -> str, and its methods
 
     def control(self, label: str) -> Control:
         for c in self.controls:
@@ -83,7 +105,16 @@ class Panel:
             "faults": [{"name": f.name, "text": f.text,
                         "params": [{"name": p.name, "choices": list(p.choices), "default": p.default}
                                    for p in f.params]} for f in self.faults],
+            "knobs": [{"label": k.label, "lo": k.lo, "hi": k.hi, "unit": k.unit, "initial": k.initial, "hint": k.hint}
+                      for k in self.knobs],
+            "part": self.part.describe() if self.part is not None else None,
         }
+
+    def knob(self, label: str) -> Knob:
+        for k in self.knobs:
+            if k.label == label:
+                return k
+        raise KeyError(label)
 
 
 # Which of a spec's I/O groups the page draws as lamps, and in which lamp group.
@@ -103,7 +134,11 @@ class Look:
     # (fault, parameter) -> (choices, default); a parameter not here is a number field
     fault_params: Mapping[tuple[str, str], tuple[tuple[str, ...], str]] = field(default_factory=dict)
     trends: tuple[str, ...] = ()
+    trend_window: float = 60.0      # plant seconds a trend shows (thermo: its 300-s step response)
     mimic: Callable[[Session], dict[str, Any]] = field(repr=False, default=lambda s: {})
+    frames: Callable[[Session], Any] = field(repr=False, default=_no_frames)
+    knobs: tuple[Knob, ...] = ()    # settings that are not contacts (their labels leave the console)
+    part: Any = None
 
 
 def derive_panel(spec: StandSpec, look: Look) -> Panel:
@@ -111,6 +146,7 @@ def derive_panel(spec: StandSpec, look: Look) -> Panel:
     have is a PlcLabError (a stale presentation entry)."""
     shown = {name for group in look.lamp_groups for name in getattr(spec, group)}
     params = {(f.name, p.name) for f in spec.faults for p in f.params}
+    knobs = {k.label for k in look.knobs}
     stale = [*(k for k in look.labels if k not in spec.console), *(b for b in look.buttons if b not in spec.console),
              *(k for k in look.hints if k not in set(spec.console) | shown),
              *(k for k in look.fault_texts if k not in {f.name for f in spec.faults}),
@@ -119,12 +155,13 @@ def derive_panel(spec: StandSpec, look: Look) -> Panel:
     if stale:
         raise PlcLabError(f"lab panel of {spec.name}: {', '.join(stale)} not in the stand's StandSpec")
     controls = tuple(Control(look.labels.get(i, i), i, "button" if i in look.buttons else "switch",
-                             look.hints.get(i, "")) for i in spec.console)
+                             look.hints.get(i, "")) for i in spec.console if i not in knobs)
     lamps = tuple(Lamp(name, look.hints.get(name, ""), LAMP_GROUPS[group])
                   for group in look.lamp_groups for name in getattr(spec, group))
     faults = tuple(Fault(f.name, look.fault_texts.get(f.name, f.doc),
                          tuple(_fault_param(look, f.name, p) for p in f.params)) for f in spec.faults)
-    return Panel(spec.name, controls, lamps, faults, look.trends, look.mimic)
+    return Panel(spec.name, controls, lamps, faults, look.trends, look.trend_window, look.mimic, look.frames,
+                 look.knobs, look.part)
 
 
 def _fault_param(look: Look, fault: str, param: Any) -> FaultParam:
@@ -132,6 +169,48 @@ def _fault_param(look: Look, fault: str, param: Any) -> FaultParam:
     if default is None:
         default = "" if param.required or param.default is None else str(param.default)
     return FaultParam(param.name, choices, default)
+
+
+# --------------------------------------------------------------------------- the recorded program
+
+def recorded_program(s: Session) -> Any:
+    """The control program in the PLC's frame memory, raw: (frames [(data words, pause ns or
+    None)], the frame pointer, whether playback runs), or None when the program has no frame
+    memory where the stand's observables say (FrameCount: `Main.Cp.Count`)."""
+    count_path = s.observables.get("FrameCount")
+    ptr_path = s.observables.get("FramePtr")
+    if not count_path:
+        return None
+    try:
+        cp = s.plc.read(count_path.rsplit(".", 1)[0])
+        frames, count = cp.FRAMES, int(cp.COUNT)
+    except Exception:        # noqa: BLE001 - a student's program need not have the shipped layout
+        return None
+    rows = []
+    for frame in frames[:max(0, min(count, len(frames)))]:
+        pause = getattr(frame, "PAUSE", None)
+        rows.append(([int(v) for v in frame.DATA], int(pause) if isinstance(pause, int) else None))
+    ptr = running = None
+    if ptr_path:
+        try:
+            seq = s.plc.read(ptr_path.rsplit(".", 1)[0])
+            ptr, running = int(seq.PTR), bool(getattr(seq, "RUNNING", False) or getattr(seq, "INFRAME", False))
+        except Exception:    # noqa: BLE001
+            pass
+    return rows, ptr, running
+
+
+def _pause_text(pause: Any) -> str:
+    return "1 s (fixed)" if pause is None else f"{pause / 1e9:g} s"
+
+
+def _frame_table(s: Session, columns: list[str], decode: Callable[[list[int]], list[str]]) -> Any:
+    raw = recorded_program(s)
+    if raw is None:
+        return None
+    rows, ptr, running = raw
+    return {"columns": ["frame", *columns, "pause"], "current": ptr if running else None, "next": ptr,
+            "rows": [[str(i), *decode(data), _pause_text(pause)] for i, (data, pause) in enumerate(rows, 1)]}
 
 
 # --------------------------------------------------------------------------- MP-9C
@@ -149,6 +228,18 @@ def _mp9c_mimic(s: Session) -> dict[str, Any]:
 _SQ_HINTS = ("arm up", "arm down", "gripper released", "rotated left", "rotated right", "arm forward",
              "arm backward")
 _L_HINTS = ("gripper clamp", "arm up", "arm down", "rotate left", "rotate right", "arm forward", "arm backward")
+
+
+def _bits(word: int, names: tuple[str, ...], prefix: str) -> str:
+    on = [f"{prefix}{i} {names[i - 1]}" for i in range(1, 8) if word >> (i - 1) & 1]
+    return ", ".join(on) or "none"
+
+
+def _mp9c_frames(s: Session) -> Any:
+    """Word 1 the valve byte (L1..L7 packed, bit 0 = L1), word 2 the sensor byte the frame
+    waits for (SQ1..SQ7): the coils energised and the position reached."""
+    return _frame_table(s, ["valves energised", "position (limit switches made)"],
+                        lambda d: [_bits(d[0], _L_HINTS, "L"), _bits(d[1], _SQ_HINTS, "SQ")])
 
 MP9C = derive_panel(stand_spec("mp9c"), Look(
     labels={"I07": "I0.7"},
@@ -171,6 +262,7 @@ MP9C = derive_panel(stand_spec("mp9c"), Look(
                   ("dead_coil", "coil"): (tuple(f"L{i}" for i in range(1, 8)), "L3")},
     trends=("SB1", "SA1", "SQ1", "SQ2", "L2", "L3", "HL1"),
     mimic=_mp9c_mimic,
+    frames=_mp9c_frames,
 ))
 
 
@@ -195,6 +287,11 @@ def _tur10_mimic(s: Session) -> dict[str, Any]:
 
 _AXIS = {1: "shoulder", 2: "raceme rotation", 3: "raceme inclination", 4: "platform rotation", 5: "hand"}
 
+
+def _tur10_frames(s: Session) -> Any:
+    """The five words: the link positions (sensor codes) the frame drives the links to."""
+    return _frame_table(s, [f"{k} {name}" for k, name in _AXIS.items()], lambda d: [str(v) for v in d])
+
 _WAYS = {"FWD": "forward", "BWD": "backward"}
 _AXES = ("1", "2", "3", "4", "5")
 
@@ -203,7 +300,8 @@ TUR10 = derive_panel(stand_spec("tur10"), Look(
     hints={**{f"SA{k}_{w}": f"drive {k} ({_AXIS[k]}) {way}" for k in _AXIS for w, way in _WAYS.items()},
            "SA6": "low speed", "SB1": "short: record / start / stop; hold 3 s: reset",
            "SA7": "mode: off manual, on automatic", "I15": "spare input (Tasks 2, 3)", "HL1": "reset indicator"},
-    buttons=frozenset({"SB1"}),
+    # the jog controls are push buttons on the stand: the link moves while one is held
+    buttons=frozenset({"SB1", *(f"SA{k}_{w}" for k in _AXIS for w in _WAYS)}),
     fault_texts={"dead_sensor": "a position sensor reads a constant", "stuck_drive": "a link does not move",
                  "slow_drive": "a link runs slower"},
     fault_params={("dead_sensor", "axis"): (_AXES, "1"), ("dead_sensor", "value"): ((), ""),
@@ -211,6 +309,7 @@ TUR10 = derive_panel(stand_spec("tur10"), Look(
                   ("slow_drive", "axis"): (_AXES, "1"), ("slow_drive", "factor"): ((), "0.5")},
     trends=("SB1", "SA7", "DRIVE1", "DRIVE2", "HL1"),
     mimic=_tur10_mimic,
+    frames=_tur10_frames,
 ))
 
 
@@ -229,7 +328,12 @@ THERMO = derive_panel(stand_spec("thermo"), Look(
     fault_texts={"sensor_open": "temperature sensor open circuit", "fan_stalled": "fan rotor jammed",
                  "heater_dead": "heater burnt out"},
     trends=("TEMP_ADC", "SETPOINT", "HEATER", "FAN", "DISTURBANCE"),
+    trend_window=600.0,
     mimic=_thermo_mimic,
 ))
 
-PANELS = {p.stand: p for p in (MP9C, TUR10, THERMO)}
+from plclab.lab.cncview import CNC_LOOK  # noqa: E402 - the CNC's look builds on the classes above
+
+CNC = derive_panel(stand_spec("cnc"), CNC_LOOK)
+
+PANELS = {p.stand: p for p in (MP9C, TUR10, THERMO, CNC)}

@@ -1,23 +1,37 @@
 """The virtual lab's web server (aiohttp): the page, its WebSocket and a few HTTP endpoints.
 
     GET  /                 the page (static/index.html, shipped in the package; no CDN)
-    GET  /ws               WebSocket: state pushed after every batch of scans; commands in
+    GET  /api/session      {"token", "session"}: what the page needs to send commands
+    GET  /ws?token=T       WebSocket: state pushed after every batch of scans; commands in
     POST /api/program      load ST files (multipart), checked first: `file:line:col: ...`
-    POST /api/reload       load the program again (re-read from disk when it came from there)
+    POST /api/reload       load the program again (the last upload, else the files it came from)
     POST /api/grade        {"task": "task1"}: the grader on the loaded program, as a table
     GET  /grade/RUN/FILE   a grade run's trace files
-    GET  /trace.csv|.vcd   the recorded trace so far
+    GET  /trace.csv|.vcd   the recorded trace (the last TRACE_KEEP_S of plant time)
 
 Every page sees the same stand: a console change from any of them is applied in arrival
 order (last writer wins) and every page shows the result. A page that goes away releases
 the push buttons it was holding. Bad requests get one line back; the server keeps running.
+
+Who may drive the lab (docs/reliability.md, "The virtual lab's origin rules"): the lab
+listens on loopback while its student browses the web, so any page the browser shows could
+send it requests. Every request must name the lab itself in its Host header (localhost, an
+IP address, or the name given to --bind, with the lab's port: a DNS-rebinding name is
+refused); a request a browser marks with another Origin, or as cross-site, is refused; and
+every request that changes state (the WebSocket, every POST) carries the per-run token the
+page reads from /api/session, which another site's script cannot read.
 """
 from __future__ import annotations
 
 import asyncio
+import hmac
 import io
+import ipaddress
 import json
+import math
+import secrets
 import threading
+from urllib.parse import urlsplit
 from pathlib import Path
 from typing import Any, Optional
 
@@ -52,6 +66,17 @@ def _merge(old: dict, new: dict) -> dict:
     for name, points in new.get("trends", {}).items():
         trends.setdefault(name, []).extend(points)
     out["trends"] = trends
+    old_path, new_mimic = old.get("mimic", {}).get("path"), new.get("mimic")
+    if old_path and isinstance(new_mimic, dict) and "path" in new_mimic:   # the CNC's tool path: new points only
+        out["mimic"] = dict(new_mimic, path=old_path + new_mimic["path"])
+    for key in ("frames",):                  # sent only when changed: the older one still counts
+        if key not in new and key in old:
+            out[key] = old[key]
+    if "monitor" in old:                     # values sent only when changed: keep the older ones
+        if "monitor" not in new:
+            out["monitor"] = old["monitor"]
+        elif (old["monitor"]["pou"], old["monitor"]["instance"]) == (new["monitor"]["pou"], new["monitor"]["instance"]):
+            out["monitor"] = dict(new["monitor"], values={**old["monitor"]["values"], **new["monitor"]["values"]})
     return out
 
 
@@ -72,11 +97,21 @@ class LabServer:
         self._grade_lock: Optional[asyncio.Lock] = None
         self._grade_runs = 0
         self.grade_files: dict[str, Path] = {}
+        self.token = secrets.token_urlsafe(24)       # what a state-changing request must carry
+        self.session_id = secrets.token_hex(6)       # a page that sees it change knows the lab restarted
 
     # ------------------------------------------------------------------ life cycle
     def app(self) -> web.Application:
-        app = web.Application(client_max_size=MAX_UPLOAD + 64 * 1024, middlewares=[_one_line_errors])
+        @web.middleware
+        async def guard(request: web.Request, handler):
+            why = self.refusal(request)
+            if why is not None:
+                return _refuse(why, status=403)
+            return await handler(request)
+
+        app = web.Application(client_max_size=MAX_UPLOAD + 64 * 1024, middlewares=[guard, _one_line_errors])
         app.router.add_get("/", self.index)
+        app.router.add_get("/api/session", self.session_info)
         app.router.add_get("/ws", self.websocket)
         app.router.add_post("/api/program", self.upload)
         app.router.add_post("/api/reload", self.reload)
@@ -116,7 +151,7 @@ class LabServer:
     def _start_modbus(self) -> None:
         from plclab.modbus.server import ModbusTcpServer
         try:
-            self.modbus = ModbusTcpServer(self.lab.twido_map(), self.bind, self.modbus_port, name="twido").start()
+            self.modbus = ModbusTcpServer(self.lab.twido_map(external=True), self.bind, self.modbus_port, name="twido").start()
         except (OSError, PlcLabError) as e:
             raise LabError(f"lab: the Twido Modbus face cannot listen on {self.bind}:{self.modbus_port} "
                            f"({getattr(e, 'strerror', None) or e}); choose another --modbus-port") from None
@@ -133,6 +168,52 @@ class LabServer:
             await self._runner.cleanup()
         self._stop_modbus()
         self.lab.stop()
+
+    # ------------------------------------------------------------------ who may drive the lab
+    def host_ok(self, host: str) -> bool:
+        """Whether a Host header names this lab: its port, and localhost, an IP address or
+        the --bind name (a DNS name an attacker controls never is one of them)."""
+        try:
+            parts = urlsplit("//" + host)
+            name, port = parts.hostname, parts.port
+        except ValueError:
+            return False
+        if not name or parts.username is not None or parts.path or parts.query or (port or 80) != self.port:
+            return False
+        if name in ("localhost", self.bind.lower().strip("[]")):
+            return True
+        try:
+            ipaddress.ip_address(name)
+        except ValueError:
+            return False
+        return True
+
+    def refusal(self, request: web.Request) -> Optional[str]:
+        """Why `request` is refused (one line), or None. Host first (DNS rebinding), then a
+        browser's Origin / Sec-Fetch-Site, then the token of state-changing requests."""
+        host = request.headers.get("Host", "")
+        if not self.host_ok(host):
+            named = not _is_ip(self.bind) and self.bind.lower() != "localhost"
+            names = "localhost or an IP address" + (f" or {self.bind}" if named else "")
+            return (f"refused: this lab answers to {names} on port {self.port}, not to the host "
+                    f"'{host[:80]}' (open the address `plclab lab` printed)")
+        origin = request.headers.get("Origin")
+        if origin is not None and not _same_origin(origin, host):
+            return f"refused: a request from another site's page ({origin[:80]}); only the lab's own page drives it"
+        changes = request.method not in ("GET", "HEAD") or request.path == "/ws"
+        if changes or request.path == "/api/session":
+            if request.headers.get("Sec-Fetch-Site", "same-origin") not in ("same-origin", "none"):
+                return "refused: a request from another site's page; only the lab's own page drives it"
+        if changes:
+            token = request.query.get("token") if request.path == "/ws" else request.headers.get("X-PLCLab-Token")
+            if not token or not hmac.compare_digest(token.encode(), self.token.encode()):
+                return ("refused: the lab's session token is missing or stale (reload the page; a script "
+                        "reads it from /api/session)")
+        return None
+
+    async def session_info(self, request: web.Request) -> web.Response:
+        return web.json_response({"token": self.token, "session": self.session_id},
+                                 headers={"Cache-Control": "no-store"})
 
     # ------------------------------------------------------------------ pushing state
     def _on_snapshot(self, snap: dict) -> None:
@@ -191,7 +272,7 @@ class LabServer:
             twido = f"{self.bind}:{self.modbus.port}"
         return {"type": "hello", "stand": lab.stand, "title": lab.module.STAND.title, "panel": lab.panel.describe(),
                 "speeds": list(SPEEDS), "tasks": grade_tasks, "checks": checks, "twido": twido, "pages": len(self.clients) + 1,
-                "trend_names": lab.trend_names, "can_reload": True}
+                "trend_names": lab.trend_names, "trend_window": lab.panel.trend_window, "can_reload": True, "session": self.session_id}
 
     async def websocket(self, request: web.Request) -> web.StreamResponse:
         ws = web.WebSocketResponse(heartbeat=20.0, max_msg_size=MAX_MESSAGE)
@@ -241,11 +322,17 @@ class LabServer:
         except ValueError:
             return {"type": "reply", "ok": False, "message": "not a command (a JSON object was expected)"}
         op, mid = msg.get("op"), msg.get("id")
+        if not isinstance(mid, (int, str)) or isinstance(mid, bool):
+            mid = None
         lab = self.lab
         try:
+            if op not in lab.ops():
+                if op in ALL_OPS:
+                    raise LabError(f"{lab.stand} has no '{op}' command (that is another stand's)")
+                raise LabError(f"unknown command '{str(op)[:40]}'")
             if op == "set":
-                await asyncio.wrap_future(lab.call(lambda: lab.set_control(str(msg["label"]), int(msg["value"])),
-                                                   console=True))
+                label, value = str(msg["label"]), _bit(msg.get("value"))
+                await asyncio.wrap_future(lab.call(lambda: lab.set_control(label, value), console=True))
             elif op in ("press", "release"):
                 label = str(msg["label"])
                 await asyncio.wrap_future(lab.call(lambda: lab.press(label, op == "press"), console=True))
@@ -273,15 +360,54 @@ class LabServer:
                 chosen = await asyncio.wrap_future(lab.call(lambda: lab.set_trends(names)))
                 full = await asyncio.wrap_future(lab.call(lambda: lab.snapshot(full=True)))
                 self._broadcast({"type": "trends", "names": chosen, "trends": full["trends"]})
+            elif op == "tree":
+                tree = await asyncio.wrap_future(lab.call(lab.variable_tree))
+                return {"type": "reply", "id": mid, "op": op, "ok": True, "tree": tree}
+            elif op == "watch":
+                paths = msg.get("paths")
+                if not isinstance(paths, list):
+                    raise LabError("watch: a list of variable paths was expected")
+                await asyncio.wrap_future(lab.call(lambda: lab.set_watch(paths)))
+            elif op == "force":
+                path, value = str(msg["path"]), msg.get("value")
+                if not isinstance(value, (str, int, float, bool)):
+                    raise LabError("force: a value (TRUE, 12, 1.5, T#2s) was expected")
+                await asyncio.wrap_future(lab.call(lambda: lab.force(path, value)))
+            elif op == "unforce":
+                path = msg.get("path")
+                await asyncio.wrap_future(lab.call(lambda: lab.unforce(None if path is None else str(path))))
+            elif op == "source":
+                pous = await asyncio.wrap_future(lab.call(lab.listing))
+                return {"type": "reply", "id": mid, "op": op, "ok": True, "pous": pous}
+            elif op == "monitor":
+                pou, instance = str(msg["pou"]), msg.get("instance")
+                await asyncio.wrap_future(lab.call(lambda: lab.select_monitor(pou, instance)))
+            elif op == "knob":
+                label, value = str(msg["label"]), _whole(msg.get("value"), "value", -(1 << 31), 1 << 31)
+                await asyncio.wrap_future(lab.call(lambda: lab.set_knob(label, value), console=True))
+            elif op == "part":
+                text, name, method = msg.get("text"), str(msg.get("name") or "part.nc")[:80], str(msg.get("method") or "evalfn")
+                if not isinstance(text, str) or len(text) > MAX_MESSAGE:
+                    raise LabError("part: the part program's text was expected (at most 64 KiB)")
+                done = await asyncio.wrap_future(lab.call(lambda: lab.load_part(text, name, method)))
+                self._broadcast({"type": "notice", "text": done})
+            elif op == "contour":
+                contour = await asyncio.wrap_future(lab.call(lab.contour))
+                return {"type": "reply", "id": mid, "op": op, "ok": True, **contour}
             elif op == "register":
-                await asyncio.wrap_future(lab.call(lambda: lab.write_register(int(msg["address"]), int(msg["value"]))))
-            else:
-                raise LabError(f"unknown command '{op}'")
+                address = _whole(msg.get("address"), "address", 0, 65535)
+                value = _whole(msg.get("value"), "value", -32768, 65535)
+                await asyncio.wrap_future(lab.call(lambda: lab.write_register(address, value)))
         except (LabError, PlcLabError) as e:
             return {"type": "reply", "id": mid, "op": op, "ok": False, "message": str(e)}
-        except (KeyError, TypeError, ValueError) as e:
+        except (KeyError, TypeError, ValueError, OverflowError) as e:
             return {"type": "reply", "id": mid, "op": op, "ok": False,
-                    "message": f"{op}: bad or missing value ({type(e).__name__}: {e})"}
+                    "message": f"{op}: bad or missing value ({type(e).__name__}: {str(e)[:80]})"}
+        except Exception as e:      # noqa: BLE001 - a bug of ours: one line to the page, the page stays
+            import logging
+            logging.getLogger("plclab.lab").exception("command %s failed", op)
+            return {"type": "reply", "id": mid, "op": op, "ok": False,
+                    "message": f"internal error of the lab ({type(e).__name__}); please report it"}
         return {"type": "reply", "id": mid, "op": op, "ok": True}
 
     # ------------------------------------------------------------------ program
@@ -290,7 +416,7 @@ class LabServer:
             return _refuse(f"upload too large ({request.content_length} bytes): at most {MAX_UPLOAD // 1024} KiB of ST")
         try:
             reader = await request.multipart()
-        except (AssertionError, ValueError, KeyError):
+        except Exception:            # noqa: BLE001 - not multipart, or a broken header
             return _refuse("upload: send the ST files as multipart/form-data (the page's file picker does)")
         files: list[tuple[str, str]] = []
         total = 0
@@ -316,24 +442,37 @@ class LabServer:
                 files.append((name, _decode(name, bytes(data))))
         except _NotText as e:
             return _refuse(str(e), errors=[{"text": str(e), "line": None, "source": None}])
-        except (ValueError, AssertionError) as e:
-            return _refuse(f"upload: the request could not be read ({e})")
+        except (asyncio.CancelledError, MemoryError):
+            raise
+        except Exception as e:       # noqa: BLE001 - any malformed body (aiohttp raises many kinds)
+            why = " ".join(str(e).split())[:120] or type(e).__name__
+            return _refuse(f"upload: the request could not be read as multipart/form-data ({why})", status=400)
         if not files:
             return _refuse("upload: no file in the request (choose one or more .st files)")
-        return await self._load(files, ", ".join(n for n, _ in files))
+        return await self._load(files, ", ".join(n for n, _ in files), upload=True)
 
-    async def _load(self, files: list[tuple[str, str]], name: str) -> web.Response:
+    async def _load(self, files: list[tuple[str, str]], name: str, upload: bool = False) -> web.Response:
         loop = asyncio.get_running_loop()
-        checked, errors = await loop.run_in_executor(None, check_program, files)
+        checked, errors = await loop.run_in_executor(None, lambda: check_program(files, trial=True))
         if errors:
             return _refuse(f"the program does not pass the check ({len(errors)} error(s)); the PLC keeps the "
                            f"program it runs", errors=[_located(e, files) for e in errors])
-        await asyncio.wrap_future(self.lab.call(lambda: self.lab.load_program(files, checked, name)))
+        try:
+            await asyncio.wrap_future(self.lab.call(lambda: self.lab.load_program(files, checked, name, upload)))
+        except LabError as e:
+            self._broadcast({"type": "notice", "text": str(e)})
+            return _refuse(str(e), errors=[{"text": str(e), "file": None, "line": None, "source": None}])
         self._broadcast({"type": "notice", "text": f"program loaded: {name}"})
         return web.json_response({"ok": True, "message": f"program loaded: {name}", "errors": []})
 
     async def reload(self, request: web.Request) -> web.Response:
+        """The program again: the last upload (the page's files are not on disk), else the
+        --program files read again, else the shipped variant read again."""
         lab = self.lab
+        if lab.uploaded is not None:
+            files = list(lab.uploaded)
+            name = ", ".join(Path(n).name for n, _ in files)
+            return await self._load(files, name, upload=True)
         if lab.program_files:
             from plclab.frontend import read_sources
             try:
@@ -352,6 +491,8 @@ class LabServer:
     # ------------------------------------------------------------------ grade
     async def grade(self, request: web.Request) -> web.Response:
         from plclab.grader import grade_sources
+        if request.content_type != "application/json":
+            return _refuse('grade: send {"task": "task1"} as application/json', status=415)
         try:
             body = await request.json()
             task = str(body["task"])
@@ -394,18 +535,44 @@ class LabServer:
     # ------------------------------------------------------------------ traces
     async def trace_csv(self, request: web.Request) -> web.Response:
         from plclab.trace import csv_text
-        text = await asyncio.wrap_future(self.lab.call(lambda: csv_text(self.lab.trace_for_download())))
-        return _attachment(text, f"{self.lab.stand}-lab.csv", "text/csv")
+        text, window = await asyncio.wrap_future(self.lab.call(
+            lambda: (csv_text(self.lab.trace_for_download()), self.lab.trace_window())))
+        return _attachment(text, self._trace_name(window, "csv"), "text/csv")
+
+    def _trace_name(self, window: tuple[float, float], ext: str) -> str:
+        """The download's name says which plant times it holds (the trace is a ring)."""
+        return f"{self.lab.stand}-lab-t{window[0]:.0f}-{window[1]:.0f}s.{ext}"
 
     async def trace_vcd(self, request: web.Request) -> web.Response:
         from plclab.trace import write_vcd
 
-        def vcd() -> str:
+        def vcd() -> tuple[str, tuple[float, float]]:
             buf = io.StringIO()
             write_vcd(self.lab.trace_for_download(), buf)
-            return buf.getvalue()
-        text = await asyncio.wrap_future(self.lab.call(vcd))
-        return _attachment(text, f"{self.lab.stand}-lab.vcd", "text/plain")
+            return buf.getvalue(), self.lab.trace_window()
+        text, window = await asyncio.wrap_future(self.lab.call(vcd))
+        return _attachment(text, self._trace_name(window, "vcd"), "text/plain")
+
+
+ALL_OPS = ("set", "press", "release", "speed", "pause", "run", "scan", "restart", "inject", "clear", "trends",
+           "tree", "watch", "force", "unforce", "source", "monitor", "register", "knob", "part", "contour")
+
+
+def _bit(value: Any) -> int:
+    """A switch position from a page: 0 or 1 (also false / true), nothing else."""
+    if isinstance(value, bool) or (isinstance(value, int) and value in (0, 1)):
+        return int(value)
+    raise LabError(f"set: a switch is 0 or 1, not {str(value)[:40]}")
+
+
+def _whole(value: Any, what: str, lo: int, hi: int) -> int:
+    """A whole number in lo..hi from a page (1e400, 1.5, "x" and 70000 are refused)."""
+    if isinstance(value, bool) or not isinstance(value, (int, float)) or \
+            (isinstance(value, float) and not (math.isfinite(value) and value.is_integer())):
+        raise LabError(f"{what} must be a whole number, not {str(value)[:40]}")
+    if not lo <= value <= hi:
+        raise LabError(f"{what} {value:g} is outside {lo}..{hi}")
+    return int(value)
 
 
 @web.middleware
@@ -418,7 +585,28 @@ async def _one_line_errors(request: web.Request, handler):
     except Exception as e:      # noqa: BLE001 - the page gets a line, the log the traceback
         import logging
         logging.getLogger("plclab.lab").exception("request %s failed", request.path)
-        return _refuse(f"internal error of the lab ({type(e).__name__}: {e}); please report it", status=500)
+        why = " ".join(str(e).split())[:200]
+        return _refuse(f"internal error of the lab ({type(e).__name__}: {why}); please report it", status=500)
+
+
+def _is_ip(name: str) -> bool:
+    try:
+        ipaddress.ip_address(name.strip("[]"))
+    except ValueError:
+        return False
+    return True
+
+
+def _same_origin(origin: str, host: str) -> bool:
+    """Whether a browser's Origin header is the page served under `host` (http or https)."""
+    try:
+        o, h = urlsplit(origin), urlsplit("//" + host)
+        if o.scheme not in ("http", "https") or not o.hostname or o.path:
+            return False
+        default = 443 if o.scheme == "https" else 80
+        return (o.hostname, o.port or default) == (h.hostname, h.port or 80)
+    except ValueError:
+        return False
 
 
 class _NotText(LabError):

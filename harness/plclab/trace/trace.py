@@ -72,6 +72,8 @@ class Trace:
         self._end_ns = 0
         self._prefixes: Optional[frozenset[str]] = None
         self.aliases: dict[str, str] = {}
+        self._dropped: list[int] = []        # entries `drop_before` removed, per signal
+        self.start_ns = 0                    # nothing before this instant is kept (drop_before)
 
     # ------------------------------------------------------------------ recording
     def declare(self, name: str, kind: str, initial: Any, time_ns: int = 0,
@@ -93,6 +95,7 @@ class Trace:
         self._index[name] = info.index
         self._times.append([time_ns])
         self._values.append([conv(initial)])
+        self._dropped.append(0)
         self._conv.append(conv)
         self._prefixes = None
         if time_ns > self._end_ns:
@@ -132,6 +135,27 @@ class Trace:
         if time_ns > self._end_ns:
             self._end_ns = time_ns
 
+    def drop_before(self, time_ns: int) -> int:
+        """Forget what happened before `time_ns` (a long-running recorder keeps a window,
+        as the virtual lab does): each signal keeps the value in effect then, stamped
+        `time_ns`, and what follows. `change_count` and `changes_from` go on counting every
+        entry ever recorded, so incremental readers are not disturbed. Returns the number of
+        entries dropped."""
+        if time_ns <= self.start_ns:
+            return 0
+        self.start_ns = time_ns
+        total = 0
+        for i, times in enumerate(self._times):
+            k = bisect_right(times, time_ns) - 1
+            if k > 0:
+                del times[:k]
+                del self._values[i][:k]
+                self._dropped[i] += k
+                total += k
+            if k >= 0 and times[0] < time_ns:
+                times[0] = time_ns
+        return total
+
     def alias(self, alias: str, name: str) -> None:
         """Let queries and predicates use a console label (`SQ2`) for an address (`%IX0.2`)."""
         self._resolve(name)
@@ -163,12 +187,16 @@ class Trace:
         return f"<Trace {len(self._infos)} signals, until t={format_seconds(self._end_ns)} s>"
 
     def change_count(self, name: str) -> int:
-        """How many entries `changes(name)` has (the initial value counts)."""
-        return len(self._times[self._resolve(name)])
+        """How many entries were recorded for `name` (the initial value counts): as many as
+        `changes(name)` has, plus what `drop_before` dropped."""
+        i = self._resolve(name)
+        return len(self._times[i]) + self._dropped[i]
 
     def changes_from(self, name: str, start: int) -> list[tuple[int, Any]]:
-        """`changes(name)[start:]` without copying the rest (for incremental readers)."""
+        """`changes(name)[start:]` without copying the rest (for incremental readers); `start`
+        counts every entry ever recorded (what `drop_before` dropped, too)."""
         i = self._resolve(name)
+        start = max(0, start - self._dropped[i])
         return list(zip(self._times[i][start:], self._values[i][start:]))
 
     def changes(self, name: str) -> list[tuple[int, Any]]:

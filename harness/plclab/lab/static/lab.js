@@ -14,17 +14,27 @@ const el = (tag, attrs = {}, ...children) => {
   return e;
 };
 
-const TREND_WINDOW = 60;
 const lab = {
   ws: null, hello: null, state: null, nextId: 1, pending: new Map(),
   trends: new Map(),          // name -> [[t, v], ...]
-  trendNames: [], events: [], actions: [], retry: 0,
+  trendNames: [], events: [], actions: [], retry: 0, trendWindow: 60, watched: [],
 };
 
 // ------------------------------------------------------------------ connection
-function connect() {
+// The lab answers only its own page: every command carries the token of this run of the
+// lab, read from /api/session (another site's page cannot read it). A restarted lab has a
+// new token and a new session: the page reads them again when it reconnects.
+async function connect() {
+  try {
+    const r = await fetch("/api/session", { cache: "no-store" });
+    const info = await r.json();
+    lab.token = info.token;
+  } catch (e) {
+    lab.token = null;
+  }
+  if (!lab.token) { lost(); return; }
   const proto = location.protocol === "https:" ? "wss" : "ws";
-  const ws = new WebSocket(`${proto}://${location.host}/ws`);
+  const ws = new WebSocket(`${proto}://${location.host}/ws?token=${encodeURIComponent(lab.token)}`);
   lab.ws = ws;
   ws.onopen = () => { lab.retry = 0; $("#conn").textContent = ""; };
   ws.onmessage = (ev) => {
@@ -37,13 +47,42 @@ function connect() {
     else if (msg.type === "pages") showPages(msg.pages);
     else if (msg.type === "trends") setTrends(msg.names, msg.trends);
   };
-  ws.onclose = () => {
-    $("#conn").textContent = "connection to the lab lost: reconnecting...";
-    for (const [, p] of lab.pending) p.reject(new Error("connection lost"));
-    lab.pending.clear();
-    const delay = Math.min(5000, 250 * 2 ** lab.retry++);
-    setTimeout(connect, delay);
-  };
+  ws.onclose = () => { if (lab.ws === ws) lost(); };
+}
+
+// Connection lost: the page says so everywhere (badge, clock, controls), and no control can be
+// used until the lab answers again; what it then shows starts afresh from the lab's state.
+function lost() {
+  lab.ws = null;
+  lab.state = null;
+  document.body.classList.add("offline");
+  const badge = $("#plc-state");
+  badge.textContent = "no connection";
+  badge.dataset.state = "OFFLINE";
+  $("#clock").textContent = "t = ? s";
+  $("#speed-shown").textContent = "";
+  setControlsEnabled(false);
+  for (const r of releasers) r();
+  $("#conn").textContent = "connection to the lab lost: reconnecting...";
+  for (const [, p] of lab.pending) p.reject(new Error("connection lost"));
+  lab.pending.clear();
+  const delay = Math.min(5000, 250 * 2 ** lab.retry++);
+  setTimeout(connect, delay);
+}
+
+// every control of the page, on or off (the Single scan button is on only while paused)
+function setControlsEnabled(on) {
+  for (const c of document.querySelectorAll("main button, main input, main select")) {
+    if (on) { if (c.dataset.offline) { c.disabled = false; delete c.dataset.offline; } }
+    else if (!c.disabled) { c.disabled = true; c.dataset.offline = "1"; }
+  }
+}
+
+// POST to the lab with this run's token (a JSON or multipart body)
+function post(url, body, json) {
+  const headers = { "X-PLCLab-Token": lab.token || "" };
+  if (json) headers["content-type"] = "application/json";
+  return fetch(url, { method: "POST", headers, body: json ? JSON.stringify(body) : body });
 }
 
 function send(op, fields = {}) {
@@ -80,7 +119,18 @@ function say(target, text, ok) {
 
 // ------------------------------------------------------------------ building the page
 function onHello(h) {
+  const restarted = lab.hello && lab.hello.session !== h.session;
   lab.hello = h;
+  document.body.classList.remove("offline");
+  setControlsEnabled(true);
+  // a fresh log: what the lab sends now is its whole history (a restarted lab: a new one)
+  lab.events = []; lab.actions = [];
+  renderEvents(); renderActions();
+  if (restarted) {
+    for (const id of ["#program-message", "#program-errors", "#grade-message", "#grade-result", "#fault-message",
+                      "#register-message"]) $(id).replaceChildren();
+    notice("the lab was restarted: a new session");
+  }
   document.title = `PLC Lab: ${h.title}`;
   $("#title").textContent = h.title;
   showPages(h.pages);
@@ -88,6 +138,8 @@ function onHello(h) {
   buildRun(h);
   buildFaults(h.panel);
   buildGrade(h);
+  buildWatch();
+  buildOnline();
   $("#registers").hidden = h.stand !== "thermo";
   $("#twido").textContent = h.twido ? `The Twido Modbus face answers at ${h.twido} (holding register n = %MWn) for an external SCADA client.` : "";
   Mimic.build($("#mimic"), h.stand, h.panel);
@@ -100,8 +152,9 @@ function onHello(h) {
       el("span", { class: "bulb" }), el("span", { text: lamp.label })));
   }
   lab.trends.clear();
+  lab.trendWindow = h.trend_window;
+  $("#h-trends").textContent = `Trends (last ${h.trend_window} s of plant time)`;
   lab.trendNames = h.trend_names.slice();
-  lab.events = []; lab.actions = [];
   buildTrendList();
 }
 
@@ -126,13 +179,42 @@ function buildControls(panel) {
     b.setAttribute("aria-describedby", hint.id);
     box.append(el("div", { class: "control" }, b, hint));
   }
+  $("#hold-note").hidden = !panel.controls.some((c) => c.kind === "button");
+  // settings that are not contacts (the CNC's feed override RP1 and backlash): a slider each
+  const knobs = $("#knobs");
+  knobs.replaceChildren();
+  for (const k of panel.knobs || []) {
+    const id = `knob-${k.label}`;
+    const out = el("output", { for: id, text: `${k.initial} ${k.unit}` });
+    const range = el("input", { id, type: "range", min: String(k.lo), max: String(k.hi), value: String(k.initial),
+      "aria-label": k.label, "data-knob": k.label });
+    range.oninput = () => { out.textContent = `${range.value} ${k.unit}`; };
+    range.onchange = () => send("knob", { label: k.label, value: Number(range.value) }).catch((e) => notice(e.message));
+    knobs.append(el("div", { class: "knob" }, el("label", { for: id, text: `${k.label}: ${k.hint}` }), range, out));
+  }
+  // the CNC's part program
+  const part = panel.part;
+  $("#part").hidden = !part;
+  if (part) {
+    $("#part-text").value = part.example;
+    $("#part-method").replaceChildren(...part.methods.map((m) => el("option", { value: m, text: m })));
+    $("#part-load").onclick = () => send("part", { text: $("#part-text").value, name: "part.nc", method: $("#part-method").value })
+      .then(() => say("#part-message", "part program loaded: press SB1 to run it", true))
+      .catch((e) => say("#part-message", e.message, false));
+  }
 }
 
-// A push button stays pressed while the pointer or the space / enter key holds it.
+// A push button stays pressed while the pointer (mouse, finger, pen) or the space / enter key
+// holds it, as on the stand: it is let go on pointerup, when the pointer leaves it, when the
+// touch is cancelled, when it loses the focus and when the window does.
+const releasers = new Set();
+window.addEventListener("blur", () => { for (const r of releasers) r(); });
+document.addEventListener("visibilitychange", () => { if (document.hidden) for (const r of releasers) r(); });
+
 function pushButton(b, label) {
   let down = false;
   const press = () => {
-    if (down) return;
+    if (down || b.disabled) return;
     down = true;
     b.classList.add("held");
     b.setAttribute("aria-pressed", "true");
@@ -145,10 +227,12 @@ function pushButton(b, label) {
     b.setAttribute("aria-pressed", "false");
     send("release", { label }).catch((e) => notice(e.message));
   };
-  b.addEventListener("pointerdown", (e) => { b.setPointerCapture(e.pointerId); press(); e.preventDefault(); });
+  releasers.add(release);
+  b.addEventListener("pointerdown", (e) => { if (e.button === 0) { press(); e.preventDefault(); } });
   b.addEventListener("pointerup", release);
+  b.addEventListener("pointerleave", release);
   b.addEventListener("pointercancel", release);
-  b.addEventListener("lostpointercapture", release);
+  b.addEventListener("contextmenu", (e) => e.preventDefault());      // a long touch is a hold, not a menu
   b.addEventListener("keydown", (e) => {
     if ((e.key === " " || e.key === "Enter") && !e.repeat) { press(); e.preventDefault(); }
   });
@@ -191,7 +275,7 @@ async function postProgram(url, body) {
   $("#program-errors").replaceChildren();
   let answer;
   try {
-    const r = await fetch(url, { method: "POST", body });
+    const r = await post(url, body, false);
     answer = r.headers.get("content-type")?.includes("json") ? await r.json()
       : { ok: false, message: `${r.status} ${r.statusText}: ${(await r.text()).slice(0, 200)}` };
   } catch (e) {
@@ -242,7 +326,7 @@ function buildFaults(panel) {
 function buildGrade(h) {
   const box = $("#grade-buttons");
   box.replaceChildren();
-  if (!h.tasks.length) box.append(el("span", { text: "no graded tasks for this stand (its SCADA tasks are done in the registers table)" }));
+  if (!h.tasks.length) box.append(el("span", { text: "no task of this stand is graded in the lab: try the SCADA tasks on the registers below, then grade them with plclab grade thermo scada1 (or scada2)" }));
   for (const task of h.tasks) {
     box.append(el("button", { type: "button", text: `Grade ${task}`, onclick: () => grade(task) }));
   }
@@ -263,13 +347,13 @@ async function grade(task) {
   $("#grade-result").replaceChildren();
   let r;
   try {
-    const resp = await fetch("/api/grade", { method: "POST", headers: { "content-type": "application/json" }, body: JSON.stringify({ task }) });
+    const resp = await post("/api/grade", { task }, true);
     r = await resp.json();
   } catch (e) {
     r = { ok: false, message: `the lab did not answer (${e.message})` };
   }
   if (!r.ok) { say("#grade-message", r.message, false); return; }
-  say("#grade-message", `${r.title}: ${r.summary}`, r.passed);
+  say("#grade-message", `${r.title.replace(/[.:\s]+$/, "")}: ${r.summary}`, r.passed);
   const out = $("#grade-result");
   if (r.errors.length) {
     out.append(el("ol", {}, ...r.errors.map((e) => el("li", { class: "bad", text: e }))));
@@ -287,8 +371,14 @@ async function grade(task) {
     if (row.result === "FAIL") {
       for (const t of row.traces) links.append(el("a", { href: t.url, download: t.name, text: t.name }), " ");
     }
+    const whyCell = el("td", { text: why });
+    const where = /(<[^>]+>|[^\s:]+\.st):(\d+)/.exec(`${row.observed || ""} ${row.expected || ""} ${row.text}`);
+    if (where) {
+      whyCell.append(" ", el("button", { type: "button", class: "link", text: `open ${where[1].split("/").pop()}:${where[2]}`,
+        onclick: () => openSource(where[1].trim(), Number(where[2])) }));
+    }
     body.append(el("tr", {}, el("td", { text: row.id }), el("td", { text: row.text }),
-      el("td", { class: row.result, text: row.result }), el("td", { text: why }), links));
+      el("td", { class: row.result, text: row.result }), whyCell, links));
   }
   table.append(body);
   out.append(table);
@@ -299,6 +389,12 @@ async function grade(task) {
 let drawScheduled = false;
 function onState(s) {
   lab.state = s;
+  if ("frames" in s) { lab.frames = s.frames; lab.dirtyFrames = true; }
+  if (s.monitor) {                           // changes only: kept until drawn (several may come per frame)
+    const p = lab.pendingMonitor;
+    lab.pendingMonitor = p && p.pou === s.monitor.pou && p.instance === s.monitor.instance
+      ? { ...s.monitor, values: { ...p.values, ...s.monitor.values } } : s.monitor;
+  }
   if (s.events.length) lab.events.push(...s.events);
   if (s.actions.length) lab.actions.push(...s.actions);
   for (const [name, points] of Object.entries(s.trends)) addPoints(name, points);
@@ -306,7 +402,7 @@ function onState(s) {
   lab.dirtyActions ||= s.actions.length > 0;
   if (!drawScheduled) {
     drawScheduled = true;
-    requestAnimationFrame(() => { drawScheduled = false; render(lab.state); });
+    requestAnimationFrame(() => { drawScheduled = false; if (lab.state) render(lab.state); });
   }
 }
 
@@ -320,16 +416,32 @@ function render(s) {
     fd.textContent = s.plc.fault;
   } else fd.hidden = true;
   $("#clock").textContent = `t = ${s.t.toFixed(2)} s`;
-  $("#speed-shown").textContent = s.paused ? "paused" : `x${s.speed}` + (s.actual_speed && s.actual_speed < s.speed * 0.9 ? ` (reaching x${s.actual_speed})` : "");
+  $("#speed-shown").textContent = s.paused ? "paused"
+    : s.held && s.held.length ? `x1 while ${s.held.join(", ")} held (then x${s.speed})`
+    : `x${s.speed}` + (s.actual_speed && s.actual_speed < s.speed * 0.9 ? ` (reaching x${s.actual_speed})` : "");
   $("#pause").textContent = s.paused ? "Run" : "Pause";
   $("#pause").setAttribute("aria-pressed", s.paused ? "true" : "false");
   $("#scan").disabled = !s.paused;
   const speed = $("#speed");
-  if (document.activeElement !== speed) speed.value = String(s.speed);
+  if (document.activeElement !== speed) {
+    if (![...speed.options].some((o) => o.value === String(s.speed)))      // --speed 0.5: shown too
+      speed.append(el("option", { value: String(s.speed), text: `x${s.speed}` }));
+    speed.value = String(s.speed);
+  }
   $("#program-name").textContent = s.program;
+  if (s.loads !== lab.loads) {               // another program: the online listing is read again
+    const shown = lab.pous !== null && lab.pous !== undefined;
+    lab.loads = s.loads;
+    buildOnline();
+    if (shown) loadSource().catch((e) => notice(e.message));
+  }
+  $("#trace-window").textContent = `The trace downloads hold t = ${s.trace_from.toFixed(0)} .. ${s.t.toFixed(0)} s ` +
+    `(the lab keeps the last ${Math.round(s.trace_keep / 60)} min of plant time).`;
   for (const [label, v] of Object.entries(s.io)) {
     for (const node of document.querySelectorAll(`[aria-label="${CSS.escape(label)}"]`)) {
-      if (node.getAttribute("role") === "switch") node.setAttribute("aria-checked", v ? "true" : "false");
+      if (node.dataset.knob !== undefined) {
+        if (document.activeElement !== node && node.value !== String(v)) { node.value = String(v); node.oninput(); }
+      } else if (node.getAttribute("role") === "switch") node.setAttribute("aria-checked", v ? "true" : "false");
       else if (node.dataset.state !== undefined) node.dataset.state = v ? "on" : "off";
     }
   }
@@ -338,6 +450,11 @@ function render(s) {
   if (lab.dirtyActions) { lab.dirtyActions = false; renderActions(); }
   for (const [name, why] of Object.entries(s.trend_errors || {})) say("#trend-message", why, false);
   if (s.registers) renderRegisters(s.registers);
+  if (lab.dirtyFrames) { lab.dirtyFrames = false; renderFrames(lab.frames); }
+  renderWatch(s.watch || []);
+  if (lab.pendingMonitor) { renderMonitor(lab.pendingMonitor); lab.pendingMonitor = null; }
+  markFaultLine();
+  markForced(s);
   drawTrends();
 }
 
@@ -356,6 +473,228 @@ function renderActions() {
   lab.actions = lab.actions.slice(-200);
   list.replaceChildren(...lab.actions.map((a) => el("li", { text: `t=${a.t.toFixed(2)} s ${a.text}` })));
   list.scrollTop = list.scrollHeight;
+}
+
+// ------------------------------------------------------------------ program online
+// The ST of the running program, one POU at a time, with the live value of each variable use
+// of the chosen instance beside it; the line a fault stopped on is marked; a fault (or a grade
+// row naming file:line) opens the source there.
+function buildOnline() {
+  lab.pous = null;
+  $("#source").replaceChildren();
+  $("#pou").replaceChildren(); $("#instance").replaceChildren();
+  $("#pou").disabled = $("#instance").disabled = true;
+  $("#source-open").onclick = () => loadSource();
+  $("#pou").onchange = () => showPou($("#pou").value, null);
+  $("#instance").onchange = () => showPou($("#pou").value, $("#instance").value);
+  $("#fault-detail").onclick = () => { const f = lab.state && lab.state.plc; if (f && f.file) openSource(f.file, f.line); };
+}
+
+async function loadSource() {
+  if (lab.pous) return lab.pous;
+  const r = await send("source");
+  lab.pous = r.pous;
+  const sel = $("#pou");
+  sel.replaceChildren(...lab.pous.map((p) => el("option", { value: p.name, text: `${p.name} (${p.kind.toLowerCase().replace("_", " ")}, ${p.display})` })));
+  sel.disabled = false;
+  if (lab.pous.length) await showPou(lab.pous[0].name, null);
+  return lab.pous;
+}
+
+async function showPou(name, instance) {
+  const pou = lab.pous.find((p) => p.name === name);
+  if (!pou) return;
+  $("#pou").value = name;
+  const inst = $("#instance");
+  inst.replaceChildren(...pou.instances.map((i) => el("option", { value: i, text: i })));
+  inst.disabled = pou.instances.length < 2;
+  instance = instance || pou.instances[0] || null;
+  if (instance) inst.value = instance;
+  lab.shownPou = pou;
+  lab.monitorValues = {};
+  const byLine = new Map();
+  for (const ref of pou.refs) { if (!byLine.has(ref[0])) byLine.set(ref[0], []); byLine.get(ref[0]).push(ref); }
+  $("#source").replaceChildren(...pou.lines.map((text, i) => {
+    const n = pou.line + i;
+    const li = el("li", { value: String(n), id: `src-${n}`, "data-line": String(n), "data-text": text });
+    let at = 0;
+    for (const [, c0, c1, chain, scope] of byLine.get(n) || []) {
+      const path = scope === "global" || !instance ? chain : `${instance}.${chain}`;
+      li.append(text.slice(at, c1), el("span", { class: "val", "data-chain": chain, "data-path": path, "aria-label": `value of ${chain}` }));
+      at = c1;
+    }
+    li.append(text.slice(at) || (at ? "" : " "));
+    return li;
+  }));
+  markFaultLine();
+  await send("monitor", { pou: name, instance }).catch((e) => notice(e.message));
+}
+
+function openSource(file, line) {
+  loadSource().then((pous) => {
+    const pou = pous.find((p) => p.file === file && line >= p.line && line < p.line + p.lines.length)
+      || pous.find((p) => p.display === file.split("/").pop() && line >= p.line && line < p.line + p.lines.length);
+    if (!pou) { notice(`${file}:${line} is not in a POU of the running program`); return; }
+    return showPou(pou.name, null).then(() => {
+      const li = $(`#src-${line}`);
+      if (!li) return;
+      for (const x of document.querySelectorAll("#source li.target-line")) x.classList.remove("target-line");
+      li.classList.add("target-line");
+      li.scrollIntoView({ block: "center" });
+    });
+  }).catch((e) => notice(e.message));
+}
+
+function renderMonitor(m) {
+  if (!lab.shownPou || m.pou !== lab.shownPou.name) return;
+  for (const [chain, value] of Object.entries(m.values)) {
+    for (const span of document.querySelectorAll(`#source .val[data-chain="${CSS.escape(chain)}"]`)) span.textContent = String(value);
+  }
+}
+
+function markFaultLine() {
+  const f = lab.state && lab.state.plc;
+  const pou = lab.shownPou;
+  const want = f && f.fault && pou && f.file === pou.file ? f.line : null;
+  if (want === lab.faultLine && (want === null || $(`#src-${want}.fault-line`))) return;
+  for (const x of document.querySelectorAll("#source li.fault-line")) x.classList.remove("fault-line");
+  lab.faultLine = want;
+  const li = want !== null ? $(`#src-${want}`) : null;
+  if (li) li.classList.add("fault-line");
+}
+
+// ------------------------------------------------------------------ watch and force
+// The program's variables as a tree to pick from (no path to type); the watched ones live,
+// each with a force box: Force holds the value in the PLC's I/O stage every scan until
+// Release. A forced variable is marked wherever the page shows it.
+function buildWatch() {
+  const open = $("#tree-open");
+  open.onclick = async () => {
+    const tree = $("#tree");
+    if (!tree.hidden) { tree.hidden = true; open.setAttribute("aria-expanded", "false"); return; }
+    try {
+      const r = await send("tree");
+      tree.replaceChildren(...r.tree.map(treeNode));
+      tree.hidden = false;
+      open.setAttribute("aria-expanded", "true");
+    } catch (e) { say("#watch-message", e.message, false); }
+  };
+  $("#unforce-all").onclick = () => send("unforce").then(() => say("#watch-message", "all forces released", true))
+    .catch((e) => say("#watch-message", e.message, false));
+}
+
+function treeNode(n) {
+  if (n.children) {
+    const d = el("details", {}, el("summary", { text: n.type ? `${n.name} : ${n.type}` : n.name }));
+    d.addEventListener("toggle", () => {          // children built when opened (big arrays)
+      if (d.open && d.children.length === 1) {
+        d.append(el("ul", {}, ...n.children.map((c) => el("li", {}, treeNode(c)))));
+        if (n.more) d.append(el("p", { class: "note", text: "more elements: watch them by index" }));
+      }
+    });
+    return d;
+  }
+  return el("button", { type: "button", class: "leaf", "aria-label": `watch ${n.path}`, title: n.path,
+    onclick: () => watch(lab.watched.concat([n.path])) }, `${n.name} : ${n.type}`);
+}
+
+// the list asked for is the page's until the lab answers (two quick picks both count)
+function watch(paths) {
+  lab.watched = paths;
+  lab.watchPending = (lab.watchPending || 0) + 1;
+  return send("watch", { paths }).then(() => say("#watch-message", "", true))
+    .catch((e) => say("#watch-message", e.message, false))
+    .finally(() => { lab.watchPending--; });
+}
+
+function watchRow(path) {
+  const input = el("input", { type: "text", size: "7", "aria-label": `force value of ${path}`, "data-force-of": path });
+  const force = el("button", { type: "button", text: "Force", "aria-label": `force ${path}`,
+    onclick: () => send("force", { path, value: input.value })
+      .then(() => say("#watch-message", `${path} forced`, true)).catch((e) => say("#watch-message", e.message, false)) });
+  const release = el("button", { type: "button", text: "Release", "aria-label": `release ${path}`, disabled: "",
+    onclick: () => send("unforce", { path }).then(() => say("#watch-message", `${path} released`, true))
+      .catch((e) => say("#watch-message", e.message, false)) });
+  const remove = el("button", { type: "button", text: "x", "aria-label": `stop watching ${path}`,
+    onclick: () => watch(lab.watched.filter((p) => p !== path)) });
+  return el("tr", { "data-path": path }, el("td", { text: path }),
+    el("td", { "aria-label": `value of ${path}` }), el("td", {}, input, force, release), el("td", {}, remove));
+}
+
+// Rows are kept while their variable is watched (what is typed in a force box, the focus and
+// a click in progress survive another variable being added or removed); new ones are added.
+function renderWatch(rows) {
+  if (!lab.watchPending) lab.watched = rows.map((r) => r[0]);
+  const body = $("#watch-table tbody");
+  const want = rows.map((r) => r[0]);
+  const have = [...body.children].map((tr) => tr.dataset.path);
+  if (want.join("\n") !== have.join("\n")) {
+    const wanted = new Set(want);
+    for (const tr of [...body.children]) if (!wanted.has(tr.dataset.path)) tr.remove();
+    const kept = [...body.children].map((tr) => tr.dataset.path);
+    if (kept.join("\n") === want.slice(0, kept.length).join("\n")) {
+      for (const path of want.slice(kept.length)) body.append(watchRow(path));
+    } else {                                  // reordered: rebuilt, the rows reused
+      const byPath = new Map([...body.children].map((tr) => [tr.dataset.path, tr]));
+      body.replaceChildren(...want.map((path) => byPath.get(path) || watchRow(path)));
+    }
+  }
+  rows.forEach(([path, value, forced], i) => {
+    const row = body.children[i];
+    if (!row) return;
+    const text = (value === null ? "?" : String(value)) + (forced ? " (forced)" : "");
+    if (row.children[1].textContent !== text) row.children[1].textContent = text;
+    row.classList.toggle("forced", forced);
+    const release = row.querySelector(`[aria-label="release ${CSS.escape(path)}"]`);
+    if (release && release.disabled === forced && !document.body.classList.contains("offline")) release.disabled = !forced;
+  });
+}
+
+function markForced(s) {
+  const labels = new Set(s.forced_labels || []);
+  for (const node of document.querySelectorAll("[data-label], #lamps [aria-label], #mimic [aria-label][data-state]")) {
+    const label = node.dataset.label || node.getAttribute("aria-label");
+    const forced = labels.has(label);
+    if (forced !== node.classList.contains("forced")) {
+      node.classList.toggle("forced", forced);
+      if (forced) node.setAttribute("data-forced", "true"); else node.removeAttribute("data-forced");
+    }
+  }
+  const forcedNames = new Set(Object.keys(s.forced || {}).map((p) => p.toUpperCase()));
+  for (const name of document.querySelectorAll("#trend-list .name")) {
+    const forced = forcedNames.has(name.title.toUpperCase()) || labels.has(name.title);
+    name.classList.toggle("forced", forced);
+  }
+  for (const v of document.querySelectorAll("#source .val[data-path]")) {       // the program online too
+    const forced = forcedNames.has(v.dataset.path.toUpperCase());
+    if (forced !== (v.dataset.forced === "true")) { if (forced) v.dataset.forced = "true"; else delete v.dataset.forced; }
+  }
+  const n = Object.keys(s.forced || {}).length;
+  $("#unforce-all").disabled = n === 0;
+  $("#forces").textContent = n ? `${n} forced` : "";
+}
+
+// ------------------------------------------------------------------ the recorded program
+// The frames in the PLC's frame memory, decoded (MP-9C: valves and position; TUR-10: the five
+// link positions), with their pauses; the frame being executed is highlighted.
+function renderFrames(f) {
+  const section = $("#frames");
+  section.hidden = !lab.hello || (lab.hello.stand !== "mp9c" && lab.hello.stand !== "tur10");
+  const head = $("#frame-table thead"), body = $("#frame-table tbody");
+  if (!f) {
+    head.replaceChildren(); body.replaceChildren();
+    $("#frames-status").textContent = "this program keeps no frame memory where the shipped ones do (Main.Cp)";
+    return;
+  }
+  head.replaceChildren(...(f.rows.length ? [el("tr", {}, ...f.columns.map((c) => el("th", { text: c })))] : []));
+  body.replaceChildren(...f.rows.map((r, i) => {
+    const tr = el("tr", {}, ...r.map((c) => el("td", { text: c })));
+    if (f.current === i + 1) { tr.className = "current"; tr.setAttribute("aria-current", "true"); }
+    return tr;
+  }));
+  $("#frames-status").textContent = !f.rows.length ? "no frame recorded (a short SB1 press in manual mode records one)"
+    : f.current ? `${f.rows.length} frame(s); executing frame ${f.current}`
+    : `${f.rows.length} frame(s); stopped (next: frame ${f.next})`;
 }
 
 // ------------------------------------------------------------------ trends
@@ -399,25 +738,31 @@ function addPoints(name, points) {
   }
   const now = lab.state ? lab.state.t : 0;
   let cut = 0;
-  while (cut < arr.length - 1 && arr[cut + 1][0] < now - TREND_WINDOW) cut++;
+  while (cut < arr.length - 1 && arr[cut + 1][0] < now - lab.trendWindow) cut++;
   if (cut) arr.splice(0, cut);
 }
 
+// Each trend is drawn at the canvas's size on screen (a phone's narrow column included), the
+// plot on the left, the current value in a margin of its own on the right.
 function drawTrends() {
   if (!lab.state) return;
-  const now = lab.state.t, from = now - TREND_WINDOW;
+  const span = lab.trendWindow, now = lab.state.t, from = now - span;
+  const dpr = window.devicePixelRatio || 1;
   for (const canvas of document.querySelectorAll("canvas[data-trend]")) {
+    const cw = Math.max(60, Math.round(canvas.clientWidth * dpr)), ch = Math.round(44 * dpr);
+    if (canvas.width !== cw || canvas.height !== ch) { canvas.width = cw; canvas.height = ch; }
     const name = canvas.dataset.trend;
     const pts = lab.trends.get(name) || [];
     const ctx = canvas.getContext("2d");
-    const w = canvas.width, h = canvas.height;
+    ctx.setTransform(dpr, 0, 0, dpr, 0, 0);
+    const w = cw / dpr, h = ch / dpr, plot = w - 64;
     ctx.clearRect(0, 0, w, h);
     if (!pts.length) continue;
     const nums = pts.map((p) => Number(p[1])).filter((v) => Number.isFinite(v));
     let lo = Math.min(...nums), hi = Math.max(...nums);
     if (nums.every((v) => v === 0 || v === 1)) { lo = 0; hi = 1; }      // a bit: low and high
     else if (hi - lo < 1e-9) { lo -= 1; hi += 1; }
-    const x = (t) => ((Math.max(t, from) - from) / TREND_WINDOW) * w;
+    const x = (t) => ((Math.max(t, from) - from) / span) * plot;
     const y = (v) => h - 4 - ((v - lo) / (hi - lo)) * (h - 8);
     ctx.strokeStyle = "#1d4ed8";
     ctx.lineWidth = 1.5;
@@ -429,13 +774,17 @@ function drawTrends() {
       else { ctx.lineTo(x(t), last); ctx.lineTo(x(t), vy); }
       last = vy;
     }
-    ctx.lineTo(w, last);
+    ctx.lineTo(plot, last);
     ctx.stroke();
+    ctx.strokeStyle = "#e5e7eb";
+    ctx.beginPath(); ctx.moveTo(plot + 2, 0); ctx.lineTo(plot + 2, h); ctx.stroke();
     ctx.fillStyle = "#111";
-    ctx.font = "11px sans-serif";
+    ctx.font = "12px sans-serif";
     const current = pts[pts.length - 1][1];
-    ctx.fillText(`${current}`, w - 60, h / 2 + 4);
+    const text = typeof current === "number" && !Number.isInteger(current) ? current.toFixed(2) : `${current}`;
+    ctx.fillText(text, plot + 6, h / 2 + 4, 58);
     ctx.fillStyle = "#6b7280";
+    ctx.font = "10px sans-serif";
     ctx.fillText(`${hi}`, 2, 10);
     ctx.fillText(`${lo}`, 2, h - 2);
   }
@@ -449,11 +798,21 @@ function renderRegisters(regs) {
     for (const r of regs) {
       const write = el("td");
       if (r.access === "read/write") {
-        const input = el("input", { type: "number", "aria-label": `new value of %MW${r.address}` });
+        const input = el("input", { type: "text", inputmode: "numeric", "aria-label": `new value of %MW${r.address}` });
         const b = el("button", { type: "button", text: "Write", "aria-label": `write %MW${r.address}` });
-        b.onclick = () => send("register", { address: r.address, value: Number(input.value) })
-          .then(() => say("#register-message", `%MW${r.address} = ${input.value} written`, true))
-          .catch((e) => say("#register-message", e.message, false));
+        b.onclick = () => {
+          const text = input.value.trim();
+          // a register holds a whole number: nothing is written for an empty box or 1.5
+          if (!/^[-+]?\d+$/.test(text)) {
+            say("#register-message", text === "" ? `%MW${r.address}: enter a value to write (a whole number)`
+              : `%MW${r.address}: '${text}' is not a whole number; nothing written`, false);
+            return;
+          }
+          const value = Number(text);
+          send("register", { address: r.address, value })
+            .then(() => say("#register-message", `%MW${r.address} = ${value} written`, true))
+            .catch((e) => say("#register-message", e.message, false));
+        };
         input.onkeydown = (e) => { if (e.key === "Enter") b.click(); };
         write.append(input, b);
       }
@@ -468,4 +827,5 @@ function renderRegisters(regs) {
   }
 }
 
+Mimic.askContour = () => send("contour");
 connect();

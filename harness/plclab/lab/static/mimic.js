@@ -34,10 +34,12 @@ const Mimic = (() => {
     svg.replaceChildren();
     const hints = {};
     for (const l of panel.lamps) hints[l.label] = l.hint;
+    svg.setAttribute("viewBox", stand === "tur10" ? "0 0 640 545" : "0 0 640 320");
     if (stand === "mp9c") buildMp9c(hints);
     else if (stand === "tur10") buildTur10();
     else if (stand === "thermo") buildThermo();
-    parts.faults = s("text", { class: "fault-mark", x: 10, y: 312, text: "" });
+    else if (stand === "cnc") buildCnc();
+    parts.faults = s("text", { class: "fault-mark", x: 10, y: stand === "tur10" ? 540 : 312, text: "" });
   }
 
   // ---------------------------------------------------------------- MP-9C
@@ -106,12 +108,13 @@ const Mimic = (() => {
     s("text", { class: "mimic-text", x: 10, y: 18, text: "links: position code (sensor), target of the frame (triangle), DAC reference (bar)" });
     parts.links = [];
     for (let k = 0; k < 5; k++) {
-      const y0 = 40 + k * 52;
+      const y0 = 30 + k * 52;
       const g = s("g", { transform: `translate(0,${y0})` });
       s("text", { class: "mimic-text", x: 10, y: 14, text: `${k + 1} ${AXES[k]}` }, g);
       const track = s("rect", { x: 150, y: 4, width: 360, height: 14, fill: "#e5e7eb", stroke: "#9ca3af" }, g);
       const working = s("rect", { x: 150, y: 4, width: 0, height: 14, fill: "#d1fae5" }, g);
-      const target = s("path", { d: "M0,0 l-6,-8 h12 z", fill: "#7c3aed", visibility: "hidden" }, g);
+      const target = s("path", { id: `target-${k + 1}`, d: "M0,0 l-6,-8 h12 z", fill: "#7c3aed", visibility: "hidden",
+        role: "img", "aria-label": `target of link ${k + 1}` }, g);
       const marker = s("rect", { x: 150, y: 0, width: 4, height: 22, fill: "#1d4ed8" }, g);
       const code = s("text", { id: `code-${k + 1}`, class: "mimic-small", x: 520, y: 15, text: "" }, g);
       const bus = s("text", { class: "mimic-small", x: 150, y: 46, text: "" }, g);
@@ -121,7 +124,83 @@ const Mimic = (() => {
       const refText = s("text", { id: `dac-${k + 1}`, class: "mimic-small", x: 520, y: 34, text: "" }, g);
       parts.links.push({ track, working, target, marker, code, ref, refText, bus });
     }
-    parts.busLine = s("text", { class: "mimic-text", x: 10, y: 300, text: "" });
+    parts.busLine = s("text", { class: "mimic-text", x: 10, y: 298, text: "" });
+    buildRobot();
+  }
+
+  // The robot itself, side view, below the gauges: platform rotation (a dial seen from above),
+  // shoulder, raceme inclination and rotation, hand; the target of the frame as a dashed ghost.
+  // Each joint's angle follows its position code over the travel between the stops.
+  const JOINTS = {      // axis: [angle at the lower stop, angle at the upper stop] (degrees)
+    1: [-60, 60],         // shoulder: the upper arm from the vertical
+    3: [-100, 100],       // raceme inclination: the forearm against the upper arm
+    2: [-180, 180],       // raceme rotation: about the forearm's own axis
+    4: [-135, 135],       // platform rotation: about the vertical
+  };
+  function arm(cls, ghost) {
+    const g = s("g", { class: cls, transform: "translate(400,522)" });
+    const dash = ghost ? { "stroke-dasharray": "5 4", fill: "none", stroke: "#7c3aed", "stroke-width": 2 } : { class: "metal" };
+    const shoulder = s("g", {}, g);
+    s("rect", { x: -9, y: -80, width: 18, height: 80, rx: 6, ...dash }, shoulder);
+    const elbow = s("g", { transform: "translate(0,-80)" }, shoulder);
+    s("circle", { r: 10, ...dash }, elbow);
+    s("rect", { x: -7, y: -65, width: 14, height: 65, rx: 5, ...dash }, elbow);
+    const wrist = s("g", { transform: "translate(0,-65)" }, elbow);
+    const roll = s("ellipse", { rx: 12, ry: 5, ...dash }, wrist);
+    const rollMark = s("line", { x1: 0, y1: 0, x2: 12, y2: 0, stroke: ghost ? "#7c3aed" : "#1d4ed8", "stroke-width": 2 }, wrist);
+    const jawL = s("rect", { x: -10, y: -22, width: 5, height: 16, ...dash }, wrist);
+    const jawR = s("rect", { x: 5, y: -22, width: 5, height: 16, ...dash }, wrist);
+    return { g, shoulder, elbow, wrist, roll, rollMark, jawL, jawR };
+  }
+  function buildRobot() {
+    s("line", { x1: 0, x2: 640, y1: 322, y2: 322, stroke: "#e5e7eb" });
+    s("text", { class: "mimic-text", x: 10, y: 342, text: "robot: side view, target dashed" });
+    s("rect", { class: "metal", x: 360, y: 522, width: 80, height: 12 });                 // base
+    parts.robotTarget = arm("robot-target", true);
+    parts.robotTarget.g.setAttribute("id", "robot-target");
+    parts.robotTarget.g.setAttribute("visibility", "hidden");
+    parts.robot = arm("robot", false);
+    parts.robot.shoulder.setAttribute("id", "robot-shoulder");
+    parts.robot.elbow.setAttribute("id", "robot-elbow");
+    parts.robot.rollMark.setAttribute("id", "robot-roll");
+    parts.robot.jawL.setAttribute("id", "robot-hand");
+    s("text", { class: "mimic-small", x: 30, y: 370, text: "platform rotation (4)" });
+    s("circle", { cx: 80, cy: 440, r: 44, fill: "#f1f5f9", stroke: "#94a3b8" });
+    parts.dialTarget = s("line", { x1: 80, y1: 440, x2: 80, y2: 400, stroke: "#7c3aed", "stroke-width": 2, "stroke-dasharray": "4 3", visibility: "hidden" });
+    parts.dial = s("line", { id: "robot-platform", x1: 80, y1: 440, x2: 80, y2: 400, stroke: "#1d4ed8", "stroke-width": 4 });
+  }
+  function frac(code, lo, hi) { return Math.max(0, Math.min(1, (code - lo) / (hi - lo))); }
+  function angle(axis, code, lo, hi) { const [a, b] = JOINTS[axis]; return a + (b - a) * frac(code, lo, hi); }
+  function pose(p, codes, lo, hi) {
+    const a1 = angle(1, codes[0], lo, hi), a3 = angle(3, codes[2], lo, hi), a2 = angle(2, codes[1], lo, hi);
+    p.shoulder.setAttribute("transform", `rotate(${a1.toFixed(2)})`);
+    p.shoulder.dataset.angle = a1.toFixed(2);
+    p.elbow.setAttribute("transform", `translate(0,-80) rotate(${a3.toFixed(2)})`);
+    p.elbow.dataset.angle = a3.toFixed(2);
+    const c = Math.cos((a2 * Math.PI) / 180);         // a roll seen from the side: the mark swings
+    p.rollMark.setAttribute("x2", (12 * c).toFixed(2));
+    p.rollMark.dataset.angle = a2.toFixed(2);
+    const open = 4 + 10 * frac(codes[4], lo, hi);     // hand: the jaws open with its code
+    p.jawL.setAttribute("x", (-open - 5).toFixed(2));
+    p.jawR.setAttribute("x", open.toFixed(2));
+    p.jawL.dataset.open = frac(codes[4], lo, hi).toFixed(3);
+  }
+  function dial(line, code, lo, hi) {
+    const a = (angle(4, code, lo, hi) * Math.PI) / 180;
+    line.setAttribute("x2", (80 + 40 * Math.sin(a)).toFixed(2));
+    line.setAttribute("y2", (440 - 40 * Math.cos(a)).toFixed(2));
+    line.dataset.angle = angle(4, code, lo, hi).toFixed(2);
+  }
+  function updateRobot(m) {
+    const [lo, hi] = m.stops;
+    const codes = m.links.map((l) => l.code);
+    pose(parts.robot, codes, lo, hi);
+    dial(parts.dial, codes[3], lo, hi);
+    const targets = m.links.map((l) => l.target);
+    const shown = targets.every((t) => t !== null && t !== undefined && t >= lo && t <= hi);
+    parts.robotTarget.g.setAttribute("visibility", shown ? "visible" : "hidden");
+    parts.dialTarget.setAttribute("visibility", shown ? "visible" : "hidden");
+    if (shown) { pose(parts.robotTarget, targets, lo, hi); dial(parts.dialTarget, targets[3], lo, hi); }
   }
 
   function updateTur10(m) {
@@ -153,6 +232,7 @@ const Mimic = (() => {
     });
     const sel = m.selected.length ? m.selected.join(", ") : "none";
     parts.busLine.textContent = `sensor bus: ${m.bus} (enabled: ${sel})` + (m.selected.length > 1 ? "  BUS CONTENTION" : "");
+    updateRobot(m);
   }
 
   // ---------------------------------------------------------------- thermo
@@ -187,15 +267,78 @@ const Mimic = (() => {
     parts.fanText.textContent = `fan ${Math.round(m.fan_rpm)} rpm (command ${m.fan_command})` + (m.faults.includes("fan_stalled") ? " STALLED" : "");
   }
 
+  // ---------------------------------------------------------------- CNC
+  // The X-Y table seen from above: the contour (as the PLC runs it) grey, the tool path as it
+  // is cut blue, the tool a dot; beside it the frame, the contour error against its bound,
+  // the drives' step counters and missed steps.
+  function buildCnc() {
+    s("text", { class: "mimic-text", x: 10, y: 18, text: "X-Y table from above: contour (grey), tool path as cut (blue)" });
+    s("rect", { x: 10, y: 26, width: 380, height: 284, fill: "#fff", stroke: "#e5e7eb" });
+    parts.contour = s("polyline", { id: "cnc-contour", fill: "none", stroke: "#9ca3af", "stroke-width": 3 });
+    parts.path = s("polyline", { id: "cnc-path", fill: "none", stroke: "#1d4ed8", "stroke-width": 1.2 });
+    parts.tool = s("circle", { id: "cnc-tool", r: 4, fill: "#b91c1c" });
+    const lines = ["frame", "error", "bound", "steps", "missed", "override", "state"];
+    parts.cncText = {};
+    lines.forEach((k, i) => { parts.cncText[k] = s("text", { id: `cnc-${k}`, class: "mimic-text", x: 400, y: 50 + i * 22, text: "" }); });
+    parts.pathPts = []; parts.contourId = -1; parts.view = null;
+  }
+  function cncView(points) {
+    let x0 = Infinity, y0 = Infinity, x1 = -Infinity, y1 = -Infinity;
+    for (const [x, y] of points) { x0 = Math.min(x0, x); x1 = Math.max(x1, x); y0 = Math.min(y0, y); y1 = Math.max(y1, y); }
+    if (!Number.isFinite(x0)) { x0 = -10; x1 = 10; y0 = -10; y1 = 10; }
+    const pad = Math.max(1, 0.1 * Math.max(x1 - x0, y1 - y0));
+    x0 -= pad; x1 += pad; y0 -= pad; y1 += pad;
+    const k = Math.min(360 / (x1 - x0), 264 / (y1 - y0));
+    return { k, x: (x) => 20 + (x - x0) * k, y: (y) => 300 - (y - y0) * k };
+  }
+  function setContour(c) {
+    parts.contourId = c.contour_id;
+    parts.view = cncView(c.contour);
+    const v = parts.view;
+    parts.contour.setAttribute("points", c.contour.map(([x, y]) => `${v.x(x).toFixed(1)},${v.y(y).toFixed(1)}`).join(" "));
+    parts.contour.dataset.points = String(c.contour.length);
+    parts.pathPts = [];
+    parts.path.setAttribute("points", "");
+  }
+  function updateCnc(m) {
+    if (m.contour_id !== parts.contourId && !parts.asking) {        // a new part (or its executed form)
+      parts.asking = true;
+      Mimic.askContour().then(setContour).catch(() => {}).finally(() => { parts.asking = false; });
+    }
+    const v = parts.view || cncView([[m.x, m.y]]);
+    if (m.path.length) {
+      for (const p of m.path) parts.pathPts.push(`${v.x(p[0]).toFixed(1)},${v.y(p[1]).toFixed(1)}`);
+      if (parts.pathPts.length > 20000) parts.pathPts.splice(0, parts.pathPts.length - 20000);
+      parts.path.setAttribute("points", parts.pathPts.join(" "));
+      parts.path.dataset.points = String(parts.pathPts.length);
+    }
+    parts.tool.setAttribute("cx", v.x(m.x).toFixed(1));
+    parts.tool.setAttribute("cy", v.y(m.y).toFixed(1));
+    const t = parts.cncText;
+    t.frame.textContent = m.part ? `frame ${m.frame} of ${m.frames} (${m.part}, ${m.method})` : "no part program loaded";
+    const over = m.bound_mm !== null && m.error_mm > m.bound_mm + 1e-9;
+    t.error.textContent = `contour error ${m.error_now_mm === null ? "-" : m.error_now_mm.toFixed(4)} mm, max ${m.error_mm.toFixed(4)} mm`;
+    t.error.setAttribute("fill", over ? "#b91c1c" : "#111");
+    t.bound.textContent = m.bound_mm === null ? "bound: -" : `bound ${m.bound_mm.toFixed(4)} mm (frame ${m.error_frame})` + (over ? "  OUT OF BOUND" : "  ok");
+    t.steps.textContent = `steps X ${m.steps.X}  Y ${m.steps.Y}  Z ${m.steps.Z}`;
+    const missed = m.missed.X + m.missed.Y + m.missed.Z;
+    t.missed.textContent = `missed steps X ${m.missed.X}  Y ${m.missed.Y}  Z ${m.missed.Z}`;
+    t.missed.setAttribute("fill", missed ? "#b91c1c" : "#111");
+    t.override.textContent = `feed override ${m.override} %`;
+    t.state.textContent = m.end ? "program end" : m.frame ? "running" : "";
+  }
+
   function update(state) {
     if (!svg) return;
     const m = state.mimic;
     if (stand === "mp9c") updateMp9c(m);
     else if (stand === "tur10") updateTur10(m);
     else if (stand === "thermo") updateThermo(m, state.t);
+    else if (stand === "cnc") updateCnc(m);
     lastT = state.t;
     parts.faults.textContent = m.faults && m.faults.length ? `injected: ${m.faults.join(", ")}` : "";
   }
 
-  return { build, update, placed: () => placedLabels };
+  const api = { build, update, placed: () => placedLabels, askContour: () => Promise.reject(new Error("no lab")) };
+  return api;
 })();

@@ -1,0 +1,172 @@
+"""Online monitoring for the lab's page: the program's ST, POU by POU, with where each
+variable is used (so the page can show its live value beside it, as CODESYS's online mode
+does), and the live values of one POU instance.
+
+The listing comes from the checked program (each POU's file and lines, its symbols); the uses
+are found by a small scanner that skips comments and strings and takes dotted chains
+(`Robot.Sequencer.Ptr`) whose first name is one of the POU's variables or a global. Values
+are read through paths resolved once per PLC (a restart or a load re-resolves them).
+"""
+from __future__ import annotations
+
+import re
+from pathlib import Path
+from typing import Any, Optional
+
+from plclab.errors import PlcLabError
+from plclab.iec import types as T
+
+MAX_REFS = 2000           # variable uses listed per POU (a longer POU: the first ones)
+_TOKENS = re.compile(r"\(\*[\s\S]*?\*\)|//[^\n]*|'(?:\$.|[^'$])*'|\"(?:\$.|[^\"$])*\"|"
+                     r"(?<![\w#.])([A-Za-z_]\w*(?:[ \t]*\.[ \t]*[A-Za-z_]\w*)*)(?![\w#])")
+
+
+def display_name(file: str) -> str:
+    """A source's name as a student recognises it (`FB_Mp9cManual.st`, `mp9c.st`)."""
+    if file.startswith("<") and file.endswith(">"):
+        return file[1:-1].split(": ", 1)[-1]
+    return Path(file).name
+
+
+def listing(plc: Any, sources: list[tuple[str, str]]) -> list[dict]:
+    """Every POU of the program with a body in the sources: its lines, the variables it uses
+    where (line, first column, last column, the chain as written, 'local' or 'global') and
+    the instance paths whose values can be shown beside it."""
+    texts = dict(sources)
+    instances = fb_instances(plc)
+    out = []
+    for key, pou in plc.checked.pous.items():
+        if not hasattr(pou, "decls") or pou.file not in texts:
+            continue
+        lines = texts[pou.file].splitlines()
+        first, last = pou.line, pou.end_line or len(lines)
+        if pou.kind == "PROGRAM":
+            paths = [i.name for i in plc.instances if type(i.obj)._ST_NAME.upper() == key]
+        else:
+            paths = instances.get(key, [])
+        out.append({"name": pou.name, "kind": pou.kind, "file": pou.file, "display": display_name(pou.file),
+                    "line": first, "lines": lines[first - 1:last], "instances": paths,
+                    "refs": _refs(pou, plc.checked.globals, lines, first, last)})
+    out.sort(key=lambda p: (p["kind"] != "PROGRAM", p["kind"] != "FUNCTION_BLOCK", p["name"].upper()))
+    return out
+
+
+def _refs(pou: Any, globals_: dict, lines: list[str], first: int, last: int) -> list[list]:
+    text = "\n".join(lines[first - 1:last])
+    starts = [0]
+    for line in lines[first - 1:last]:
+        starts.append(starts[-1] + len(line) + 1)
+    symbols = pou.symbols or {}
+    refs: list[list] = []
+    for m in _TOKENS.finditer(text):
+        chain = m.group(1)
+        if not chain:
+            continue
+        head = chain.split(".", 1)[0].strip().upper()
+        decl = symbols.get(head)
+        if decl is not None and decl.section != "VAR_EXTERNAL":
+            scope = "local"
+        elif head in globals_:
+            scope = "global"
+        else:
+            continue
+        pos = m.start(1)
+        line = _line_of(starts, pos)
+        refs.append([first + line, pos - starts[line], m.end(1) - starts[line], re.sub(r"\s+", "", chain), scope])
+        if len(refs) >= MAX_REFS:
+            break
+    return refs
+
+
+def _line_of(starts: list[int], pos: int) -> int:
+    lo, hi = 0, len(starts) - 1
+    while lo < hi - 1:
+        mid = (lo + hi) // 2
+        if starts[mid] <= pos:
+            lo = mid
+        else:
+            hi = mid
+    return lo
+
+
+def fb_instances(plc: Any) -> dict[str, list[str]]:
+    """FB type (upper case) -> the paths of its instances, program by program."""
+    out: dict[str, list[str]] = {}
+
+    def walk(pou: Any, prefix: str, depth: int) -> None:
+        if depth > 32 or not hasattr(pou, "decls"):
+            return
+        for d in pou.decls:
+            base = T.base_of(d.ty) if d.ty is not None else None
+            if isinstance(base, T.FBType) and d.section not in ("VAR_EXTERNAL", "VAR_IN_OUT"):
+                name = getattr(base.pou, "name", base.name).upper()
+                path = f"{prefix}.{d.name}"
+                out.setdefault(name, []).append(path)
+                walk(base.pou, path, depth + 1)
+    for inst in plc.instances:
+        walk(plc.checked.pous.get(type(inst.obj)._ST_NAME.upper()), inst.name, 0)
+    return out
+
+
+class Monitor:
+    """The values of one POU instance's variable uses, read every snapshot (changes only)."""
+
+    def __init__(self) -> None:
+        self.pou: Optional[str] = None
+        self.instance: Optional[str] = None
+        self.chains: list[tuple[str, str]] = []       # (chain as the page keys it, path to read)
+        self._targets: list[tuple[str, Any, Any, bool]] = []
+        self._plc: Any = None
+        self._sent: dict[str, Any] = {}
+
+    def select(self, plc: Any, pou: dict, instance: Optional[str]) -> None:
+        if instance is not None and instance not in pou["instances"]:
+            raise PlcLabError(f"{pou['name']} has no instance '{str(instance)[:80]}'")
+        self.pou, self.instance = pou["name"], instance
+        chains: dict[str, str] = {}
+        for _line, _c0, _c1, chain, scope in pou["refs"]:
+            if scope == "global":
+                chains[chain] = chain
+            elif instance is not None:
+                chains[chain] = f"{instance}.{chain}"
+        self.chains = list(chains.items())
+        self._plc = None
+        self._sent = {}
+
+    def values(self, plc: Any, full: bool) -> Optional[dict]:
+        """{chain: value} of what changed (everything when `full`); None: nothing selected."""
+        if self.pou is None:
+            return None
+        if plc is not self._plc:
+            self._resolve(plc)
+            full = True
+        out = {}
+        for chain, container, key, is_time in self._targets:
+            value = container[key] if isinstance(container, list) else getattr(container, key)
+            if is_time:
+                value = f"T#{value / 1e6:g}ms" if abs(value) < 1e9 else f"T#{value / 1e9:g}s"
+            elif isinstance(value, bool):
+                value = "TRUE" if value else "FALSE"
+            elif isinstance(value, float):
+                value = round(value, 4)
+            if full or self._sent.get(chain, _NONE) != value:
+                out[chain] = value
+                self._sent[chain] = value
+        return out
+
+    def _resolve(self, plc: Any) -> None:
+        self._plc = plc
+        targets = []
+        for chain, path in self.chains:
+            try:
+                container, key, ty = plc.resolve_typed(path)
+            except PlcLabError:
+                continue
+            base = T.base_of(ty)
+            if isinstance(base, T.ElementaryType):
+                targets.append((chain, container, key, base.kind == "time"))
+        self._targets = targets
+        self._sent = {}
+
+
+_NONE = object()

@@ -1,0 +1,142 @@
+"""The PLC's side in the page (issue 22, "Beyond"): the recorded program (the frames in the
+PLC's frame memory, decoded, the frame being executed highlighted); the watch and force table;
+online monitoring (the ST with live values beside each use, a fault's statement)."""
+from __future__ import annotations
+
+import re
+
+from playwright.sync_api import expect
+from test_page import WAIT, flip, lamp, off, on, tap_sb1
+
+
+def test_mp9c_recorded_program_table_decodes_the_frames_and_follows_playback(lab_page, shots):
+    lp = lab_page("mp9c", speed=2)
+    page = lp.page
+    status = page.locator("#frames-status")
+    expect(status).to_have_text("no frame recorded (a short SB1 press in manual mode records one)", timeout=WAIT)
+    flip(page, "SA5", True)
+    on(lamp(page, "SQ2"))
+    tap_sb1(page)                                     # frame 1: arm down (I0.7 off: 0.5 s pause)
+    flip(page, "SA5", False)
+    on(lamp(page, "SQ1"))
+    flip(page, "I0.7", True)
+    tap_sb1(page)                                     # frame 2: arm up (I0.7 on: 3 s pause)
+    table = page.get_by_role("table", name="recorded frames")
+    expect(status).to_have_text("2 frame(s); stopped (next: frame 1)", timeout=WAIT)
+    cells = table.locator("tbody tr").evaluate_all("rows => rows.map(r => [...r.cells].map(c => c.textContent))")
+    assert cells == [
+        ["1", "L3 arm down, L4 rotate left, L7 arm backward",
+         "SQ2 arm down, SQ3 gripper released, SQ4 rotated left, SQ7 arm backward", "0.5 s"],
+        ["2", "L2 arm up, L4 rotate left, L7 arm backward",
+         "SQ1 arm up, SQ3 gripper released, SQ4 rotated left, SQ7 arm backward", "3 s"]], cells
+    # the same words the PLC holds (Main.Cp.Frames[i].Data[1] = the valve byte, [2] the sensor byte)
+    plc = lp.lab.session.plc
+    assert [plc.read(f"Main.Cp.Frames[{i}].Data[{w}]") for i in (1, 2) for w in (1, 2)] == [76, 78, 74, 77]
+    flip(page, "SA1", True)                           # automatic: start
+    tap_sb1(page)
+    current = table.locator("tr[aria-current='true']")
+    expect(current).to_contain_text("L3 arm down", timeout=WAIT)          # frame 1 executing
+    expect(status).to_have_text("2 frame(s); executing frame 1")
+    on(lamp(page, "SQ2"))
+    expect(current).to_contain_text("L2 arm up", timeout=WAIT)            # then frame 2
+    expect(status).to_have_text("2 frame(s); executing frame 2")
+    page.screenshot(path=str(shots / "lab-mp9c-frames.png"), full_page=True)
+
+
+def test_watch_and_force_from_the_program_tree(lab_page, shots):
+    lp = lab_page("mp9c", speed=2)
+    page = lp.page
+    page.get_by_role("button", name="Pick variables from the program").click()
+    tree = page.get_by_label("program variables")
+    tree.get_by_text("Main : PRG_Mp9cBaseline", exact=True).click()
+    tree.get_by_text("Cp : ST_ControlProgram", exact=True).click()
+    tree.get_by_role("button", name="watch Main.Cp.Count").click()
+    tree.get_by_text("globals", exact=True).click()
+    tree.get_by_role("button", name="watch SA5", exact=True).click()
+    tree.get_by_role("button", name="watch L7", exact=True).click()
+    table = page.get_by_role("table", name="watched variables")
+    count = table.get_by_label("value of Main.Cp.Count", exact=True)
+    expect(count).to_have_text("0", timeout=WAIT)
+    expect(table.get_by_label("value of SA5", exact=True)).to_have_text("FALSE")
+    # force an input: the program sees it (manual mode: the arm goes down), the console switch
+    # stays where it is, and SA5 is marked forced on the console and in the table
+    page.get_by_label("force value of SA5").fill("TRUE")
+    page.get_by_role("button", name="force SA5", exact=True).click()
+    expect(table.get_by_label("value of SA5", exact=True)).to_have_text("TRUE (forced)", timeout=WAIT)
+    on(lamp(page, "L3"))
+    on(lamp(page, "SQ2"))
+    expect(switch_(page, "SA5")).to_have_attribute("aria-checked", "false")
+    expect(switch_(page, "SA5")).to_have_attribute("data-forced", "true")
+    expect(page.get_by_label("forces")).to_have_text("1 forced")
+    expect(page.locator("#actions")).to_contain_text("FORCE SA5 := TRUE")
+    page.get_by_role("button", name="Show the program").click()          # the program online marks it too
+    page.get_by_label("POU", exact=True).select_option("FB_Mp9cManual")
+    use = page.get_by_label("program source").locator('li[data-text^="L3 := SA5;"]').get_by_label("value of SA5")
+    expect(use).to_have_text("TRUE", timeout=WAIT)
+    expect(use).to_have_attribute("data-forced", "true")
+    # force an output: the valve coil stays off whatever the program says
+    on(lamp(page, "L7"))
+    page.get_by_label("force value of L7").fill("FALSE")
+    page.get_by_role("button", name="force L7", exact=True).click()
+    off(lamp(page, "L7"))
+    expect(lamp(page, "L7")).to_have_attribute("data-forced", "true")
+    expect(page.get_by_label("forces")).to_have_text("2 forced")
+    page.screenshot(path=str(shots / "lab-mp9c-force.png"), full_page=True)
+    # a value the type does not take: one line, nothing forced
+    page.get_by_label("force value of Main.Cp.Count").fill("70000")
+    page.get_by_role("button", name="force Main.Cp.Count", exact=True).click()
+    expect(page.locator("#watch-message")).to_have_text("70000 is outside INT (-32768..32767)")
+    expect(count).to_have_text("0")
+    # release: the program has its inputs and outputs back
+    page.get_by_role("button", name="release SA5", exact=True).click()
+    expect(table.get_by_label("value of SA5", exact=True)).to_have_text("FALSE", timeout=WAIT)
+    on(lamp(page, "SQ1"))
+    expect(switch_(page, "SA5")).not_to_have_attribute("data-forced", "true")
+    page.get_by_role("button", name="Release all forces").click()
+    on(lamp(page, "L7"))
+    expect(page.get_by_label("forces")).to_have_text("")
+    assert lp.lab.forces.values == {}
+
+
+def switch_(page, label: str):
+    return page.get_by_role("switch", name=label, exact=True)
+
+
+def test_online_monitoring_shows_values_beside_their_use_and_a_fault_opens_its_statement(lab_page, shots):
+    from test_page import FAULTY
+
+    lp = lab_page("mp9c", speed=2)
+    page = lp.page
+    page.get_by_role("button", name="Show the program").click()
+    page.get_by_label("POU", exact=True).select_option("FB_Mp9cManual")
+    expect(page.get_by_label("instance", exact=True)).to_have_value("Main.Manual")
+    source = page.get_by_label("program source")
+    lift = source.locator('li[data-text^="L3 := SA5;"]')                  # the line as written ...
+    expect(lift).to_have_count(1)
+    sa5 = lift.get_by_label("value of SA5")                                # ... a value beside each use
+    expect(sa5).to_have_text("FALSE", timeout=WAIT)
+    flip(page, "SA5", True)
+    expect(sa5).to_have_text("TRUE", timeout=WAIT)                         # live
+    expect(lift.get_by_label("value of L3")).to_have_text("TRUE")
+    expect(source.get_by_label("value of Cp.Count").first).to_have_text("0")
+    page.screenshot(path=str(shots / "lab-mp9c-online.png"), full_page=True)
+    # a program that faults: the fault opens its statement, the values as they were then
+    page.get_by_label("Load ST files").set_input_files(
+        files=[{"name": "faulty.st", "mimeType": "text/plain", "buffer": FAULTY.encode()}])
+    expect(page.locator("#plc-state")).to_have_text("FAULT", timeout=WAIT)
+    page.locator("#fault-detail").click()
+    expect(page.get_by_label("POU", exact=True)).to_have_value("Faulty", timeout=WAIT)
+    line = source.locator("#src-4")
+    expect(line).to_have_class(re.compile(r"\bfault-line\b"))
+    expect(line).to_have_class(re.compile(r"\btarget-line\b"))
+    expect(line).to_have_attribute("data-text", "IF n > 20 THEN n := 10 / d; END_IF;")
+    expect(line.get_by_label("value of n").first).to_have_text("21", timeout=WAIT)
+    expect(line.get_by_label("value of d")).to_have_text("0")
+    # a grade row naming the statement opens it too
+    source.locator("#src-3").click()
+    page.get_by_role("button", name="Grade task1").click()
+    opener = page.get_by_role("button", name="open faulty.st:4")
+    expect(opener).to_be_visible(timeout=120_000)
+    page.get_by_label("POU", exact=True).select_option("Faulty")
+    opener.click()
+    expect(line).to_have_class(re.compile(r"\btarget-line\b"), timeout=WAIT)
