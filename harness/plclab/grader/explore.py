@@ -21,6 +21,7 @@ closely two stands must agree are the stand's (plclab.stands.exploration).
 from __future__ import annotations
 
 import hashlib
+import os
 import random
 import re
 import sys
@@ -547,6 +548,13 @@ class Exploration_:
     finding: Optional[Finding] = None
 
 
+def _fast_tmp() -> Optional[str]:
+    """A folder in memory for the retain files (/dev/shm where there is one): the PLC saves its
+    retained memory every few scans, and thousands of scripts must not wait for a disk."""
+    shm = Path("/dev/shm")
+    return str(shm) if shm.is_dir() and os.access(shm, os.W_OK) else None
+
+
 def seed_of(stand: str, task: str, sources: Sequence[tuple[str, str]]) -> int:
     """The seed: the submission's content (file texts, not names or paths), stand and task."""
     h = hashlib.sha256(f"{stand}\0{task}".encode())
@@ -562,7 +570,7 @@ def explore(expl: Exploration, stand: str, task: str, make_session: Callable, st
     the first confirmed divergence is shrunk and explained."""
     episodes = expl.episodes if episodes is None else episodes
     seed = seed_of(stand, task, student.sources) if seed is None else seed
-    with tempfile.TemporaryDirectory(prefix="plclab-explore-") as tmp:
+    with tempfile.TemporaryDirectory(prefix="plclab-explore-", dir=_fast_tmp()) as tmp:
         ex = Explorer(expl, task, make_session, student, model, Path(tmp))
         result = Exploration_(0, 0.0, 0, seed)
         for n in range(episodes):
@@ -676,7 +684,7 @@ def exploration_rows(req: Any, sources: Sequence[tuple[str, str]], checked: Any,
         base.mkdir(parents=True, exist_ok=True)
         (base / script_name).write_text(f.script.csv_text(), encoding="utf-8")
         files.append(base / script_name)
-        with compiled_once(checked, share=student.cache), tempfile.TemporaryDirectory() as tmp:
+        with compiled_once(checked, share=student.cache), tempfile.TemporaryDirectory(dir=_fast_tmp()) as tmp:
             ex = Explorer(expl, req.task, req.make_session, student, model, Path(tmp))
             s, _ = ex.run(student, "trace", f.script, expl=False)
         names = req.trace_names(s) if req.trace_names else None
@@ -731,7 +739,7 @@ def replay(spec: Any, s: Session, inputs: str, against: Optional[str], reference
     srcs = list(student_sources) if student_sources is not None else s.sources
     student = Program(srcs, checked if checked is not None else s.checked)
     play(s, script)
-    with tempfile.TemporaryDirectory(prefix="plclab-replay-") as tmp:
+    with tempfile.TemporaryDirectory(prefix="plclab-replay-", dir=_fast_tmp()) as tmp:
         ex = Explorer(expl, against, req.make_session, student, model, Path(tmp))
         out = ex.outcome(script)
     if out.divergence is None:
