@@ -745,3 +745,46 @@ def replay(spec: Any, s: Session, inputs: str, against: Optional[str], reference
     if out.divergence is None:
         return None
     return out.divergence.text(expl.tick_s)
+
+
+# --------------------------------------------------------------------------- plclab bench
+
+EXPLORE_GOAL_S = 20.0      # s of one core per task and program for the default budget
+
+
+def bench_explore(stand: str, task: str, episodes: int = 4) -> Optional[dict]:
+    """The CPU cost of exploration: `episodes` scripts of the model answer against itself (both
+    programs played, as for a student), seconds per script, scripts per second, and what the
+    stand's default budget costs (the goal: at most EXPLORE_GOAL_S). None where the model answers
+    are not available (an installed package)."""
+    import time
+
+    from plclab.grader.registry import requirement_set
+    from plclab.stands.base import stand_spec
+    expl = stand_spec(stand).explore
+    model, _why = model_answer(stand, task, None) if expl is not None else (None, "")
+    if model is None or expl is None:
+        return None
+    req = requirement_set(stand, task)
+    start = time.process_time()
+    result = explore(expl, stand, task, req.make_session, model, model, episodes, seed=0)
+    spent = time.process_time() - start
+    per = spent / max(result.episodes, 1)
+    return {"stand": stand, "task": task, "episodes": result.episodes, "plant_s": result.plant_seconds,
+            "s_per_episode": per, "episodes_per_s": 1 / per if per else 0.0, "budget": expl.episodes,
+            "budget_s": per * expl.episodes, "goal_s": EXPLORE_GOAL_S}
+
+
+def report_explore(report: Callable[[str], None], quick: bool = False) -> list[dict]:
+    """`plclab bench`'s exploration lines, one per robot."""
+    out = []
+    for stand in ("mp9c", "tur10"):
+        r = bench_explore(stand, "task3", 2 if quick else 4)
+        if r is None:
+            report(f"explore: {stand}: no model answer here (a checkout has them)")
+            continue
+        out.append(r)
+        report(f"explore: {stand} {r['task']}: {r['s_per_episode']:.2f} s CPU per random script "
+               f"({r['plant_s'] / r['episodes']:.0f} s of plant time, both programs), {r['episodes_per_s']:.2f} "
+               f"scripts/s; default budget {r['budget']} scripts = {r['budget_s']:.1f} s (goal <= {r['goal_s']:g} s)")
+    return out
