@@ -54,7 +54,9 @@ WATCHDOG_COUNTER = (
     ("VAR\n    Timer : TON;\nEND_VAR\nTimer(IN := Watch AND NOT Fault, PT := Timeout);\nTripped := Timer.Q AND NOT Fault;\n",
      "VAR\n    Scans : DINT;               (* scans the frame has been watched *)\nEND_VAR\n"
      "IF Watch AND NOT Fault THEN\n    Scans := Scans + 1;\nELSE\n    Scans := 0;\nEND_IF;\n"
-     "Tripped := Scans >= TIME_TO_DINT(Timeout) / {scan_ms} AND NOT Fault;\n"),
+     "Tripped := Scans >= TIMEOUT_SCANS AND NOT Fault;\n"),
+    ("VAR_OUTPUT\n    Fault : BOOL;\n", "VAR CONSTANT\n    TIMEOUT_SCANS : DINT := 1000;   (* the timeout in {scan_ms} ms scans *)\nEND_VAR\n"
+     "VAR_OUTPUT\n    Fault : BOOL;\n"),
 )
 
 
@@ -150,11 +152,6 @@ TUR10 = (
             "a stop press while the spare input is off: SB1 stops only with I1.5 = 1.",
             (("        IF Press THEN\n            Sequencer.State := STOPPED;\n",
               "        IF Press AND Enable THEN\n            Sequencer.State := STOPPED;\n", 2),)),
-    Fixture("tur10", "task2_manual_keeps_running", "task2", False,
-            "leaving automatic mode in the middle of a frame: manual mode no longer stops playback "
-            "(State := STOPPED dropped), so the frame watchdog runs on in manual mode.",
-            (("IF NOT Active THEN\n    Sequencer.State := STOPPED;\n    Sequencer.Ptr := 1;\n",
-              "IF NOT Active THEN\n    Sequencer.Ptr := 1;\n"),)),
     Fixture("tur10", "task2_playback_retained", "task2", False,
             "a restart in the middle of a pause: the automatic subroutine is RETAIN with the program.",
             (("VAR RETAIN\n    Cp : ST_ControlProgram;         (* the recorded program survives a PLC restart *)\n",

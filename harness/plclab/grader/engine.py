@@ -14,6 +14,7 @@ or a check (anything but ScenarioFailure) turns that scenario's unfinished requi
 """
 from __future__ import annotations
 
+import dataclasses
 import tempfile
 from pathlib import Path
 from typing import Optional, Sequence
@@ -98,7 +99,15 @@ def grade_sources(stand: str, task: str, sources: Sequence[tuple[str, str]],
                 report.traces[scenario.name] = _write_traces(s, req, scenario.name, Path(out_dir))
     report.rows = _rows(req, checks)
     rows, notes, files = exploration_rows(req, sources, checked, reference, explore, out_dir)
-    report.rows += rows
+    if rows:
+        e1, named = rows[0], rows[1] if len(rows) > 1 else None
+        at = next((i for i, r in enumerate(report.rows) if named and r.id == named.id), None)
+        if named is not None and at is not None and report.rows[at].passed:
+            # the difference is named by the requirement it breaks; E1 points there
+            report.rows[at] = named
+            e1 = dataclasses.replace(e1, expected="", observed=f"the difference breaks {named.id}: see its row",
+                                     steps=())
+        report.rows.append(e1)
     report.notes += notes
     report.traces.update(files)
     return report

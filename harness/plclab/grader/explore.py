@@ -36,6 +36,7 @@ from plclab.stands.operators import (END, FAULT, POWER, Event, Exploration, Obse
                                      script_from_rows)
 
 SUSPECT_MARGIN = 0.1       # s: an action this close to where two drifted programs differ is ambiguous
+DRIFT_SPAN = 0.5          # s: changes this close are one program a little behind the other, not two stories
 MOVE_SUSPECT = 0.35        # s: an ambiguous action is moved this much later and the script played again
 SHRINK_RUNS = 120          # default budget of the shrinker, in script plays (both programs)
 
@@ -272,9 +273,9 @@ def suspects(script: Script, div: Divergence, model: dict, student: dict, observ
         spans.append((div.time - abs(div.drift) - SUSPECT_MARGIN, div.time + SUSPECT_MARGIN))
     for o in observed:
         for (tm, _vm), (ts, _vs) in zip(model[o.name][1:], student[o.name][1:]):
-            if min(tm, ts) > div.time:
+            if max(tm, ts) >= div.time:
                 break
-            if abs(ts - tm) >= tick / 2:
+            if tick / 2 <= abs(ts - tm) <= DRIFT_SPAN:          # two programs a little apart in time
                 spans.append((min(tm, ts) - SUSPECT_MARGIN, max(tm, ts) + SUSPECT_MARGIN))
     out = set()
     for n, e in enumerate(script.events):
@@ -534,6 +535,7 @@ class Finding:
     output_time: float
     model_output: Any = None
     student_output: Any = None
+    blinking: str = ""            # 'model' / 'student': whose HL1 blinks at the divergence
 
 
 @dataclass
@@ -603,7 +605,48 @@ def explain(ex: Explorer, script: Script, div: Divergence) -> Finding:
             mv = out.model.trace.value_at(output, t_out)
             sv = out.student.trace.value_at(output, t_out)
             line = last_writer(ex, script, output, t_out, div.since)
-    return Finding(script, div, steps, div.text(ex.expl.tick_s), line, output, t_out, mv, sv)
+    blinking = ""
+    if div.signal.name == "HL1" and out.model is not None and out.student is not None:
+        for who, s in (("student", out.student), ("model", out.model)):
+            if "HL1" in s.trace and len([t for t, _v in s.trace.changes("HL1")
+                                          if div.time - 0.1 <= t / 1e9 <= div.time + 1.2]) >= 3:
+                blinking = who
+                break
+    return Finding(script, div, steps, div.text(ex.expl.tick_s), line, output, t_out, mv, sv, blinking)
+
+
+# The requirement a divergence breaks, where one plainly matches (else it is E1's own):
+# a mechanism not following its switch in manual mode before any automatic mode (Task 1's
+# rows), HL1 blinking on one side only: the frame watchdog's fault (automatic mode) or the
+# memory-full blink (manual mode). Requirement ids are the grader's (plclab.grader.<stand>).
+_MANUAL_ROWS = {("mp9c", "task1"): {"gripper": "T1.1", "rotation": "T1.2", "extension": "T1.3", "lift": "T1.4"}}
+_BLINK_ROWS = {"mp9c": {1: "G10", 0: "G11"}, "tur10": {1: "G11"}}
+
+
+def _mode_at(script: Script, switch: str, t: float) -> tuple[int, bool]:
+    """The mode switch's value at `t` and whether it was ever 1 before."""
+    value, ever = 0, False
+    for e in script.events:
+        if e.time > t:
+            break
+        if e.name == switch and not e.is_press:
+            value = int(float(e.value))
+            ever = ever or value == 1
+    return value, ever
+
+
+def requirement_of(stand: str, task: str, f: Finding, expl: Exploration) -> Optional[str]:
+    """The id of the requirement `f` breaks, where one plainly matches; None: E1's own."""
+    mode_switch = next((k for k, v in expl.meaning.items() if v == ("manual", "automatic")), None)
+    if mode_switch is None:
+        return None
+    mode, was_auto = _mode_at(f.script, mode_switch, f.divergence.time)
+    name = f.divergence.signal.name
+    if name == "HL1" and f.blinking:
+        return _BLINK_ROWS.get(stand, {}).get(mode)
+    if mode == 0 and not was_auto:
+        return _MANUAL_ROWS.get((stand, task), {}).get(name)
+    return None
 
 
 __all__ = ["Divergence", "Exploration_", "Explorer", "Finding", "Program", "compare", "explain", "explore",
@@ -651,7 +694,9 @@ def exploration_rows(req: Any, sources: Sequence[tuple[str, str]], checked: Any,
                      reference: Optional[Sequence[str]] = None, episodes: Optional[int] = None,
                      out_dir: Optional[str] = None) -> tuple[list[Any], list[str], dict[str, list[Path]]]:
     """The exploration row (E1) of a grade, the report's notes about it and the files written
-    (the shrunk script and the student's traces under it, in `out_dir`)."""
+    (the shrunk script and the student's traces under it, in `out_dir`). A difference that
+    plainly breaks one of the task's requirements comes with that requirement's row too, after
+    E1's (the engine puts it in place of the scenarios' row if they passed it)."""
     from plclab.stands.base import stand_spec
     from plclab.trace import write_csv, write_vcd
 
@@ -711,11 +756,16 @@ def exploration_rows(req: Any, sources: Sequence[tuple[str, str]], checked: Any,
     steps = tuple(f.steps) + (f"-> {f.first_difference}",)
     replay = (f"replay: plclab run {req.stand} --program {' '.join(n for n, _ in sources)} --inputs "
               f"{files[0] if files else script_name} --against {req.task}")
-    row = Row(EXPLORE_ID, text, False,
-              expected, observed, d.time, "explore", steps=steps)
+    rid = requirement_of(req.stand, req.task, f, expl)
+    rows = [Row(EXPLORE_ID, text, False, expected, observed, d.time, "explore", steps=steps)]
+    if rid is not None and any(r.id == rid for r in req.requirements):
+        # named by the requirement it breaks: that row carries it where the scenarios passed it
+        # (the engine decides), and E1 points there
+        r = next(r for r in req.requirements if r.id == rid)
+        rows.append(Row(rid, r.text, False, expected, observed, d.time, "explore", steps=steps))
     notes = [f"exploration: {amount}: a difference in script {result.episodes}, shrunk to "
              f"{len(f.script.events)} console step{'s' if len(f.script.events) != 1 else ''}", replay]
-    return [row], notes, {"explore": files}
+    return rows, notes, {"explore": files}
 
 
 def replay(spec: Any, s: Session, inputs: str, against: Optional[str], reference: Optional[Sequence[str]],
