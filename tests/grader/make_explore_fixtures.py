@@ -94,13 +94,17 @@ MP9C = (
               "LastSA2 := SA2;\nLastSA3 := SA3;\nLastSA4 := SA4;\nLastSA5 := SA5;\n"),
              ("    MAX_FRAMES : INT := 32;\nEND_VAR\n",
               "    MAX_FRAMES : INT := 32;\nEND_VAR\nVAR\n    LastSA2, LastSA3, LastSA4, LastSA5 : BOOL;\nEND_VAR\n"))),
-    Fixture("mp9c", "task2_playback_retained", "task2", False,
-            "a restart in the middle of a pause: the automatic subroutine is declared RETAIN with the "
-            "program, so after a power cycle playback goes on by itself where it was.",
+    Fixture("mp9c", "task2_resume_after_power_cycle", "task2", False,
+            "a restart in the middle of a pause: a RETAIN flag restarts playback by itself after a power "
+            "cycle (\"resume after a power failure\"), where the model answer stays stopped until SB1.",
             (("VAR RETAIN\n    Cp : ST_ControlProgram;         (* the recorded program survives a PLC restart *)\n",
               "VAR RETAIN\n    Cp : ST_ControlProgram;         (* the recorded program survives a PLC restart *)\n"
-              "    Robot : FB_Mp9cAutomatic;       (* automatic work mode subroutine *)\n"),
-             ("    Robot : FB_Mp9cAutomatic;       (* automatic work mode subroutine *)\n    Indicator", "    Indicator"))),
+              "    Resume : BOOL;                  (* playback was running when the power went *)\n"),
+             ("    Sensors : INT;                  (* the sensor byte SQ1..SQ7 of Fig. 5 *)\n",
+              "    Sensors : INT;                  (* the sensor byte SQ1..SQ7 of Fig. 5 *)\n    FirstScan : BOOL := TRUE;\n"),
+             ("Robot(Active := SA1, StepMode := SA6, Press := Button.Press, Sensors := Sensors, Cp := Cp);\n",
+              "Robot(Active := SA1, StepMode := SA6, Press := Button.Press OR (FirstScan AND Resume AND SA1),\n"
+              "      Sensors := Sensors, Cp := Cp);\nFirstScan := FALSE;\nResume := Robot.Sequencer.Running;\n"))),
     # ------------------------------------------------------------------ correct alternatives
     Fixture("mp9c", "task1_alt_if_valves", "task1", True,
             "other structure: the manual valves set in IF/ELSE blocks, one per mechanism.",
@@ -152,12 +156,16 @@ TUR10 = (
             "a stop press while the spare input is off: SB1 stops only with I1.5 = 1.",
             (("        IF Press THEN\n            Sequencer.State := STOPPED;\n",
               "        IF Press AND Enable THEN\n            Sequencer.State := STOPPED;\n", 2),)),
-    Fixture("tur10", "task2_playback_retained", "task2", False,
-            "a restart in the middle of a pause: the automatic subroutine is RETAIN with the program.",
+    Fixture("tur10", "task2_resume_after_power_cycle", "task2", False,
+            "a restart in the middle of a pause: a RETAIN flag restarts playback by itself after a power cycle.",
             (("VAR RETAIN\n    Cp : ST_ControlProgram;         (* the recorded program survives a PLC restart *)\n",
               "VAR RETAIN\n    Cp : ST_ControlProgram;         (* the recorded program survives a PLC restart *)\n"
-              "    Robot : FB_Tur10Automatic;      (* automatic work mode subroutine *)\n"),
-             ("    Robot : FB_Tur10Automatic;      (* automatic work mode subroutine *)\n    Indicator", "    Indicator"))),
+              "    Resume : BOOL;                  (* playback was running when the power went *)\n"),
+             ("    Indicator : FB_ResetIndicator;\nEND_VAR\n",
+              "    Indicator : FB_ResetIndicator;\n    FirstScan : BOOL := TRUE;\nEND_VAR\n"),
+             ("Robot(Active := SA7, Press := Button.Press, Cp := Cp);\n",
+              "Robot(Active := SA7, Press := Button.Press OR (FirstScan AND Resume AND SA7), Cp := Cp);\n"
+              "FirstScan := FALSE;\nResume := Robot.Sequencer.Running;\n"))),
     # ------------------------------------------------------------------ correct alternatives
     Fixture("tur10", "task1_alt_jog_case", "task1", True,
             "other structure: the jog reference from a CASE on the two buttons.",

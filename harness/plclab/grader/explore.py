@@ -38,7 +38,7 @@ from plclab.stands.operators import (END, FAULT, POWER, Event, Exploration, Obse
 SUSPECT_MARGIN = 0.1       # s: an action this close to where two drifted programs differ is ambiguous
 DRIFT_SPAN = 0.5          # s: changes this close are one program a little behind the other, not two stories
 MOVE_SUSPECT = 0.35        # s: an ambiguous action is moved this much later and the script played again
-SHRINK_RUNS = 120          # default budget of the shrinker, in script plays (both programs)
+SHRINK_RUNS = 200          # default budget of the shrinker, in script plays (both programs)
 
 
 # --------------------------------------------------------------------------- playing a script
@@ -47,13 +47,13 @@ class _Probe:
     """Samples what the stand shows at every scan (a step hook after the plant's own) and keeps
     only the changes: signal -> [(t, value)], the first entry the power-up value."""
 
-    def __init__(self, plant: Any, observe: Callable[[Any, Any], dict[str, Any]]):
-        self.plant, self.observe = plant, observe
+    def __init__(self, plant: Any, observe: Callable[[Any, Any], dict[str, Any]], clock: Callable[[], float]):
+        self.plant, self.observe, self.clock = plant, observe, clock
         self.last: Optional[dict[str, Any]] = None
         self.changes: dict[str, list[tuple[float, Any]]] = {}
 
     def step(self, _dt: float) -> None:
-        now = round(self.plant.time, 6)
+        now = round(self.clock(), 6)         # the session's time of the scan about to run
         v = self.observe(self.plant, self.last)
         last = self.last
         if last is None:
@@ -87,7 +87,7 @@ def play(s: Session, script: Script, expl: Optional[Exploration] = None, until: 
     """Play `script` on session `s` up to `until` (default: its end), logging each action so the
     timeline shows it. With `expl`, a probe records what the stand shows; returns it.
     `split = (t, fn)`: fn() is called once when plant time t is reached (a line tracer starts)."""
-    probe = _Probe(s.plant, expl.observe) if expl is not None else None
+    probe = _Probe(s.plant, expl.observe, lambda: s.now) if expl is not None else None
 
     def attach() -> None:
         if probe is not None and probe not in s.sim.plants:
@@ -388,23 +388,16 @@ def shrink(ex: Explorer, script: Script, div: Divergence, budget: int = SHRINK_R
 
     if ex.diverges(best) is None:                    # truncation changed the outcome: keep the whole
         best = script
-    # 1. fewest actions: chunks, halving (delta debugging), then one by one
-    n = 2
-    while len(best.events) >= 1 and left():
-        size = max(1, len(best.events) // n)
-        removed = False
-        for i in range(len(best.events) - size, -1, -size):
+    # 1. fewest actions: chunks of 16, 8, 4, 2 then single actions removed, from the end back
+    for size in (16, 8, 4, 2, 1):
+        i = len(best.events) - size
+        while i >= 0 and left():
             drop = set(range(i, min(i + size, len(best.events))))
             cand = Script(tuple(e for k, e in enumerate(best.events) if k not in drop), best.duration)
-            if accept(cand):
-                removed = True
-                break
-        if removed:
-            n = max(n - 1, 2)
-        elif size == 1:
+            accept(cand)
+            i = min(i, len(best.events)) - size
+        if size > 1 and not left():
             break
-        else:
-            n = min(n * 2, len(best.events))
     # 2. shortest holds
     for i in range(len(best.events)):
         if not left() or i >= len(best.events):
