@@ -158,3 +158,22 @@ def test_an_operator_script_file_round_trips(tmp_path):
     assert again.csv_text() == script.csv_text()
     kinds = {e.name for e in script.events}
     assert "SB1" in kinds and "SA1" in kinds
+
+
+def test_a_retain_function_block_with_external_variables_survives_a_power_cycle(tmp_path):
+    """A student may declare a block instance RETAIN (a 'resume after power failure' idea):
+    its VAR_EXTERNAL names are the globals', not variables of the instance, and a restart
+    must neither fail nor lose the instance's own retained values."""
+    from plclab.scenario import Session
+    from plclab.stands import bundle
+    from plclab.stands.mp9c import STAND, labels
+    text = bundle(STAND, "task2").replace(
+        "VAR RETAIN\n    Cp : ST_ControlProgram;", "VAR RETAIN\n    Robot : FB_Mp9cAutomatic;\n    Cp : ST_ControlProgram;", 1)
+    text = text.replace("    Robot : FB_Mp9cAutomatic;       (* automatic work mode subroutine *)\n", "", 1)
+    s = Session([("robot.st", text)], STAND.make_plant(), labels(), retain_path=tmp_path / "r.json")
+    s.run(0.2)
+    s.plc.write("Main.Robot.Valves", 77)
+    s.restart_plc(off_time=0.5)
+    s.run(0.05)
+    assert s.fault is None
+    assert s.value("Main.Robot.Valves") == 77
