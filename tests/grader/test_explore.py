@@ -56,7 +56,7 @@ def test_a_mistake_only_a_console_history_shows_is_found_with_its_script_and_lin
     f = result.finding
     assert f is not None, f"{fixture.name}: no divergence in {result.episodes} scripts"
     # shrunk: a handful of console steps, not the random script's dozens
-    assert 1 <= len(f.script.events) <= 12, f.steps
+    assert 1 <= len(f.script.events) <= 16, f.steps
     assert f.steps[0].startswith("1. ") and " s " in f.steps[0]
     assert "the model answer has" in f.first_difference and "your program" in f.first_difference
     # the student's line: in the student's file, a statement writing the differing output
@@ -68,11 +68,22 @@ def test_a_mistake_only_a_console_history_shows_is_found_with_its_script_and_lin
 
 
 @pytest.mark.parametrize("stand,path", WATCHDOG_WHOLE_RUN, ids=lambda x: str(x).split("/")[-1])
-def test_a_watchdog_that_times_the_whole_run_is_found(stand, path):
-    f = _explore(stand, "task2", path).finding
+def test_a_watchdog_that_times_the_whole_run_is_found_with_a_one_minimal_script(stand, path, tmp_path):
+    from plclab.grader.explore import Explorer
+    from plclab.stands.operators import without
+    model, _ = model_answer(stand, "task2", None)
+    student = _program(path)
+    expl = stand_spec(stand).explore
+    result = explore(expl, stand, "task2", requirement_set(stand, "task2").make_session, student, model)
+    f = result.finding
     assert f is not None
     assert f.divergence.signal.name == "HL1"          # the fault's blinking: a stop the model answer has not
     assert Path(f.line[0]).name == path.name
+    # shrunk to 1-minimal: without any one of its steps the script shows no difference
+    ex = Explorer(expl, "task2", requirement_set(stand, "task2").make_session, student, model, tmp_path)
+    assert ex.diverges(f.script) is not None
+    for k in range(len(f.script.events)):
+        assert ex.diverges(without(f.script, {k})) is None, f"step {k + 1} of {f.steps} is not needed"
 
 
 @pytest.mark.parametrize("fixture", ALTERNATIVES, ids=lambda f: f"{f.stand}-{f.name}")

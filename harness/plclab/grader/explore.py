@@ -388,43 +388,48 @@ def shrink(ex: Explorer, script: Script, div: Divergence, budget: int = SHRINK_R
 
     if ex.diverges(best) is None:                    # truncation changed the outcome: keep the whole
         best = script
-    # 1. fewest actions: chunks of 16, 8, 4, 2 then single actions removed, from the end back
-    for size in (16, 8, 4, 2, 1):
-        i = len(best.events) - size
-        while i >= 0 and left():
-            drop = set(range(i, min(i + size, len(best.events))))
-            cand = Script(tuple(e for k, e in enumerate(best.events) if k not in drop), best.duration)
-            accept(cand)
-            i = min(i, len(best.events)) - size
-        if size > 1 and not left():
-            break
-    # 2. shortest holds
-    for i in range(len(best.events)):
-        if not left() or i >= len(best.events):
-            break
-        e = best.events[i]
-        if e.is_press:
-            for hold in ((3.3,) if e.hold >= 3.3 else (0.2,) if e.hold > 0.2 else ()):
-                events = list(best.events)
-                events[i] = Event(e.time, e.name, e.value, hold)
-                if accept(Script(tuple(events), best.duration)):
-                    break
-    # 3. earliest times: the gap before each action shrunk (the later ones move with it), the
-    #    first action to 0 s, every gap to 0.3 s, else to half
-    for _ in range(2):
+    # rounds of: fewer actions, shorter holds, earlier times, while one of them gains
+    for _round in range(3):
+        before = (len(best.events), best.duration, sum(e.hold for e in best.events))
+        # 1. fewest actions: chunks of 16, 8, 4, 2 then single actions removed, from the end back
+        for size in ((16, 8, 4, 2, 1) if _round == 0 else (2, 1)):
+            i = len(best.events) - size
+            while i >= 0 and left():
+                drop = set(range(i, min(i + size, len(best.events))))
+                cand = Script(tuple(e for k, e in enumerate(best.events) if k not in drop), best.duration)
+                accept(cand)
+                i = min(i, len(best.events)) - size
+            if size > 1 and not left():
+                break
+        # 2. shortest holds
         for i in range(len(best.events)):
             if not left() or i >= len(best.events):
                 break
-            prev = best.events[i - 1].time + best.events[i - 1].hold if i else 0.0
-            gap = best.events[i].time - prev
-            for new_gap in ((0.0 if i == 0 else 0.3), round(gap / 2, 2)):
-                if gap - new_gap < 0.1:
-                    continue
-                shift = round(gap - new_gap, 2)
-                events = list(best.events[:i]) + [Event(round(e.time - shift, 3), e.name, e.value, e.hold)
-                                                   for e in best.events[i:]]
-                if accept(Script(tuple(events), round(best.duration - shift, 3))):
+            e = best.events[i]
+            if e.is_press:
+                for hold in ((3.3,) if e.hold >= 3.3 else (0.2,) if e.hold > 0.2 else ()):
+                    events = list(best.events)
+                    events[i] = Event(e.time, e.name, e.value, hold)
+                    if accept(Script(tuple(events), best.duration)):
+                        break
+        # 3. earliest times: the gap before each action shrunk (the later ones move with it), the
+        #    first action to 0 s, every gap to 0.3 s, else to half
+        for _ in range(2):
+            for i in range(len(best.events)):
+                if not left() or i >= len(best.events):
                     break
+                prev = best.events[i - 1].time + best.events[i - 1].hold if i else 0.0
+                gap = best.events[i].time - prev
+                for new_gap in ((0.0 if i == 0 else 0.3), round(gap / 2, 2)):
+                    if gap - new_gap < 0.1:
+                        continue
+                    shift = round(gap - new_gap, 2)
+                    events = list(best.events[:i]) + [Event(round(e.time - shift, 3), e.name, e.value, e.hold)
+                                                       for e in best.events[i:]]
+                    if accept(Script(tuple(events), round(best.duration - shift, 3))):
+                        break
+        if (len(best.events), best.duration, sum(e.hold for e in best.events)) == before or not left():
+            break
     return best, best_div
 
 
