@@ -32,7 +32,7 @@ from typing import Any, Callable, Optional, Sequence
 
 from plclab.errors import PlcLabError
 from plclab.scenario import Session, compiled_once
-from plclab.stands.operators import (END, FAULT, POWER, Event, Exploration, Observed, Script, fault_params,
+from plclab.stands.operators import (FAULT, POWER, Event, Exploration, Observed, Script, fault_params,
                                      script_from_rows)
 
 SUSPECT_MARGIN = 0.1       # s: an action this close to where two drifted programs differ is ambiguous
@@ -537,7 +537,7 @@ class Finding:
 
 
 @dataclass
-class Exploration_:
+class ExploreResult:
     """The result of exploring one task for one program."""
 
     episodes: int
@@ -565,14 +565,14 @@ def seed_of(stand: str, task: str, sources: Sequence[tuple[str, str]]) -> int:
 
 
 def explore(expl: Exploration, stand: str, task: str, make_session: Callable, student: Program, model: Program,
-            episodes: Optional[int] = None, shrink_runs: int = SHRINK_RUNS, seed: Optional[int] = None) -> Exploration_:
+            episodes: Optional[int] = None, shrink_runs: int = SHRINK_RUNS, seed: Optional[int] = None) -> ExploreResult:
     """Up to `episodes` seeded random scripts (default: the stand's budget) on both programs;
     the first confirmed divergence is shrunk and explained."""
     episodes = expl.episodes if episodes is None else episodes
     seed = seed_of(stand, task, student.sources) if seed is None else seed
     with tempfile.TemporaryDirectory(prefix="plclab-explore-", dir=_fast_tmp()) as tmp:
         ex = Explorer(expl, task, make_session, student, model, Path(tmp))
-        result = Exploration_(0, 0.0, 0, seed)
+        result = ExploreResult(0, 0.0, 0, seed)
         for n in range(episodes):
             rng = random.Random(f"{seed}:{n}")
             script = expl.generate(rng, task, expl.episode_s)
@@ -647,7 +647,7 @@ def requirement_of(stand: str, task: str, f: Finding, expl: Exploration) -> Opti
     return None
 
 
-__all__ = ["Divergence", "Exploration_", "Explorer", "Finding", "Program", "compare", "explain", "explore",
+__all__ = ["Divergence", "ExploreResult", "Explorer", "Finding", "Program", "compare", "explain", "explore",
            "play", "read_script", "seed_of", "shrink"]
 
 
