@@ -188,3 +188,19 @@ def test_a_retain_function_block_with_external_variables_survives_a_power_cycle(
     s.run(0.05)
     assert s.fault is None
     assert s.value("Main.Robot.Valves") == 77
+
+
+@pytest.mark.parametrize("rows,says", [
+    ("0.1,SA9,1", "'SA9' is no console input of mp9c"),
+    ("0.1,SA5,2", "SA5 takes 0 or 1"),
+    ("0.1,PLC,soon", "PLC takes the seconds the PLC stays off"),
+    ("0.1,FAULT,nope x=1", "unknown fault 'nope'"),
+    ("0.1,FAULT,jammed mechanism=foo", "unknown mechanism 'foo'"),
+])
+def test_a_bad_operator_script_is_one_clear_line(tmp_path, capsys, rows, says):
+    from plclab.cli import main
+    script = tmp_path / "s.csv"
+    script.write_text(f"time_s,name,value\n{rows}\n1.0,END,0\n")
+    assert main(["run", "mp9c", "--variant", "task2", "--inputs", str(script), "--csv", str(tmp_path / "t.csv")]) != 0
+    err = capsys.readouterr().err
+    assert says in err and str(script) in err and "Traceback" not in err and len(err.strip().splitlines()) == 1

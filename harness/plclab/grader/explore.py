@@ -766,6 +766,35 @@ def exploration_rows(req: Any, sources: Sequence[tuple[str, str]], checked: Any,
     return rows, notes, {"explore": files}
 
 
+def check_script(spec: Any, script: Script, where: str) -> None:
+    """Every action of `script` is one the stand's console (or its plant) can take: one clear
+    line naming the file otherwise, before anything runs."""
+    for e in script.events:
+        at = f"{where}: at {e.time:g} s"
+        if e.name == POWER:
+            try:
+                ok = float(e.value) >= 0
+            except ValueError:
+                ok = False
+            if not ok:
+                raise PlcLabError(f"{at}: {POWER} takes the seconds the PLC stays off (>= 0), not {e.value!r}")
+        elif e.name == FAULT:
+            name, params = fault_params(e.value)
+            try:
+                fault = spec.fault(name)
+            except PlcLabError as err:
+                raise PlcLabError(f"{at}: {err}") from None
+            known = {p.name for p in fault.params}
+            for k in params:
+                if k not in known:
+                    raise PlcLabError(f"{at}: fault {name} has no parameter {k!r} (it has: {', '.join(sorted(known))})")
+        elif e.name not in spec.console:
+            raise PlcLabError(f"{at}: {e.name!r} is no console input of {spec.name} (one of "
+                              f"{', '.join(spec.console)}, {POWER}, {FAULT}, END)")
+        elif not e.is_press and e.value.strip() not in ("0", "1"):
+            raise PlcLabError(f"{at}: {e.name} takes 0 or 1, not {e.value!r}")
+
+
 def replay(spec: Any, s: Session, inputs: str, against: Optional[str], reference: Optional[Sequence[str]],
            student_sources: Optional[Sequence[tuple[str, str]]], checked: Any) -> Optional[str]:
     """`plclab run STAND --program FILE.st --inputs SCRIPT.csv [--against TASK]`: play the
@@ -777,8 +806,13 @@ def replay(spec: Any, s: Session, inputs: str, against: Optional[str], reference
     if expl is None:
         raise PlcLabError(f"run: {spec.name} has no operator scripts (--inputs is for the robots)")
     script = read_script(inputs, expl.buttons)
-    if against is None:
+    check_script(spec, script, inputs)
+    from plclab.plants.base import PlantError
+    try:
         play(s, script)
+    except PlantError as e:                              # a fault parameter the plant refuses
+        raise PlcLabError(f"{inputs}: {e}") from None
+    if against is None:
         return None
     req = requirement_set(spec.name, against)
     model, why = model_answer(spec.name, against, reference)
@@ -786,7 +820,6 @@ def replay(spec: Any, s: Session, inputs: str, against: Optional[str], reference
         raise PlcLabError(f"run: --against {against}: {why}")
     srcs = list(student_sources) if student_sources is not None else s.sources
     student = Program(srcs, checked if checked is not None else s.checked)
-    play(s, script)
     with tempfile.TemporaryDirectory(prefix="plclab-replay-", dir=_fast_tmp()) as tmp:
         ex = Explorer(expl, against, req.make_session, student, model, Path(tmp))
         out = ex.outcome(script)
