@@ -28,7 +28,7 @@ ALTERNATIVES = [f for f in mf.ALL if f.passes]
 # the scripted scenarios' own fixtures of the same kind: exploration finds them too
 WATCHDOG_WHOLE_RUN = [("mp9c", FIXTURES / "mp9c" / "task2_watchdog_whole_run.st"),
                       ("tur10", FIXTURES / "tur10" / "task2_watchdog_whole_run.st")]
-ALT_EPISODES = {"mp9c": 8, "tur10": 3}     # enough to play every phrase kind; the default budget is larger
+ALT_EPISODES = {"mp9c": 8, "tur10": 4}     # enough to play every phrase kind; the default budget is larger
 
 
 def _program(path: Path) -> Program:

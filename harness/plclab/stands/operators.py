@@ -261,7 +261,7 @@ def generate(console: Console, rng: random.Random, task: str, seconds: float) ->
     while w.t < seconds:
         r = rng.random()
         manual = not w.switches.get(console.mode)
-        if r < 0.30:                                   # teach 1..4 frames
+        if r < 0.28:                                   # teach 1..4 frames
             if not manual:
                 w.set(console.mode, 0)
                 w.wait(rng.uniform(0.1, 0.6))
@@ -270,6 +270,12 @@ def generate(console: Console, rng: random.Random, task: str, seconds: float) ->
                 if rng.random() < 0.5:
                     w.set(console.spare, rng.randint(0, 1))
                 w.press(console.button, rng.uniform(0.1, 0.4), rng.uniform(0.2, 0.7))
+        elif r < 0.36:                                 # a long playback: longer than the watchdog
+            if manual:
+                w.set(console.mode, 1)
+                w.wait(rng.uniform(0.1, 0.5))
+            w.press(console.button, rng.uniform(0.1, 0.35), 0.0)
+            w.wait(rng.uniform(1.2, 2.0) * console.watchdog)
         elif r < 0.55:                                 # play back, with actions during it
             if console.step and rng.random() < 0.4:
                 w.set(console.step, rng.randint(0, 1))
