@@ -204,3 +204,20 @@ def test_a_bad_operator_script_is_one_clear_line(tmp_path, capsys, rows, says):
     assert main(["run", "mp9c", "--variant", "task2", "--inputs", str(script), "--csv", str(tmp_path / "t.csv")]) != 0
     err = capsys.readouterr().err
     assert says in err and str(script) in err and "Traceback" not in err and len(err.strip().splitlines()) == 1
+
+
+def test_a_difference_is_named_by_the_requirement_it_plainly_breaks():
+    from plclab.grader.explore import Divergence, Finding, requirement_of
+    from plclab.stands.operators import Event, Script
+    expl = stand_spec("mp9c").explore
+    rotation = next(o for o in expl.compared("task1") if o.name == "rotation")
+    div = Divergence(0.5, rotation, 1, 0, "missing", 0.0, 0.0)
+
+    def finding(*events):
+        return Finding(Script(tuple(events), 3.0), div, [], "", None, None, 0.5)
+    # manual mode from power-up: the rotation not following SA3 is Task 1's rotation row
+    assert requirement_of("mp9c", "task1", finding(Event(0.3, "SA3", "1")), expl) == "T1.2"
+    # after automatic mode the same difference has other causes: E1's own
+    assert requirement_of("mp9c", "task1", finding(Event(0.1, "SA1", "1"), Event(0.2, "SA1", "0"),
+                                                   Event(0.3, "SA3", "1")), expl) is None
+    assert requirement_of("mp9c", "task2", finding(Event(0.3, "SA3", "1")), expl) is None

@@ -533,7 +533,6 @@ class Finding:
     output_time: float
     model_output: Any = None
     student_output: Any = None
-    blinking: str = ""            # 'model' / 'student': whose HL1 blinks at the divergence
 
 
 @dataclass
@@ -603,22 +602,15 @@ def explain(ex: Explorer, script: Script, div: Divergence) -> Finding:
             mv = out.model.trace.value_at(output, t_out)
             sv = out.student.trace.value_at(output, t_out)
             line = last_writer(ex, script, output, t_out, div.since)
-    blinking = ""
-    if div.signal.name == "HL1" and out.model is not None and out.student is not None:
-        for who, s in (("student", out.student), ("model", out.model)):
-            if "HL1" in s.trace and len([t for t, _v in s.trace.changes("HL1")
-                                          if div.time - 0.1 <= t / 1e9 <= div.time + 1.2]) >= 3:
-                blinking = who
-                break
-    return Finding(script, div, steps, div.text(ex.expl.tick_s), line, output, t_out, mv, sv, blinking)
+    return Finding(script, div, steps, div.text(ex.expl.tick_s), line, output, t_out, mv, sv)
 
 
-# The requirement a divergence breaks, where one plainly matches (else it is E1's own):
-# a mechanism not following its switch in manual mode before any automatic mode (Task 1's
-# rows), HL1 blinking on one side only: the frame watchdog's fault (automatic mode) or the
-# memory-full blink (manual mode). Requirement ids are the grader's (plclab.grader.<stand>).
+# The requirement a divergence breaks, where one plainly matches (else it is E1's own): a
+# mechanism not following its switch in manual mode before any automatic mode (Task 1's rows).
+# A lamp or a playback difference has too many causes to name one requirement for it (a
+# watchdog fault may be the symptom of a playback that should never have resumed): those stay
+# E1's, with the history that shows them. Requirement ids are the grader's (plclab.grader.<stand>).
 _MANUAL_ROWS = {("mp9c", "task1"): {"gripper": "T1.1", "rotation": "T1.2", "extension": "T1.3", "lift": "T1.4"}}
-_BLINK_ROWS = {"mp9c": {1: "G10", 0: "G11"}, "tur10": {1: "G11"}}
 
 
 def _mode_at(script: Script, switch: str, t: float) -> tuple[int, bool]:
@@ -640,8 +632,6 @@ def requirement_of(stand: str, task: str, f: Finding, expl: Exploration) -> Opti
         return None
     mode, was_auto = _mode_at(f.script, mode_switch, f.divergence.time)
     name = f.divergence.signal.name
-    if name == "HL1" and f.blinking:
-        return _BLINK_ROWS.get(stand, {}).get(mode)
     if mode == 0 and not was_auto:
         return _MANUAL_ROWS.get((stand, task), {}).get(name)
     return None
