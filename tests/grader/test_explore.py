@@ -221,3 +221,16 @@ def test_a_difference_is_named_by_the_requirement_it_plainly_breaks():
     assert requirement_of("mp9c", "task1", finding(Event(0.1, "SA1", "1"), Event(0.2, "SA1", "0"),
                                                    Event(0.3, "SA3", "1")), expl) is None
     assert requirement_of("mp9c", "task2", finding(Event(0.3, "SA3", "1")), expl) is None
+
+
+def test_a_too_long_pause_is_measured_not_only_missed(tmp_path):
+    """Issue 21's poor message: a too-long pause was "every reference stayed 0" without the
+    pause measured. The row now says when the next frame came."""
+    from plclab.stands import bundle
+    path = tmp_path / "long_pause.st"
+    path.write_text(bundle(get_stand("tur10"), "task2").replace("LONG_PAUSE : TIME := T#3s;",
+                                                                  "LONG_PAUSE : TIME := T#6s;", 1))
+    row = engine.grade("tur10", "task2", [str(path)]).row("T2.2")
+    assert not row.passed
+    assert "every reference stayed 0" in row.observed and "the next nonzero reference came at t = " in row.observed
+    assert "6.0" in row.observed.split("came at t = ")[1]           # 6.0x s after the frame was reached
