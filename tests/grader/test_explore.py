@@ -234,3 +234,19 @@ def test_a_too_long_pause_is_measured_not_only_missed(tmp_path):
     assert not row.passed
     assert "every reference stayed 0" in row.observed and "the next nonzero reference came at t = " in row.observed
     assert "6.0" in row.observed.split("came at t = ")[1]           # 6.0x s after the frame was reached
+
+
+def test_a_pause_stored_on_every_manual_scan_is_named_as_a_possible_cause(tmp_path):
+    """Issue 21's poor message: a pause stored on every manual scan was reported only as "off
+    by one". The row names that cause beside the index one."""
+    from plclab.stands import bundle
+    text = bundle(get_stand("mp9c"), "task2")
+    store = "        Cp.Frames[Cp.Count].Pause := SEL(G := I07, IN0 := SHORT_PAUSE, IN1 := LONG_PAUSE);\n"
+    text = text.replace(store, "").replace(
+        "(* SB1: CP frame saving, program reset *)\n",
+        "(* SB1: CP frame saving, program reset *)\nIF Cp.Count > 0 THEN\n    Cp.Frames[Cp.Count].Pause := "
+        "SEL(G := I07, IN0 := SHORT_PAUSE, IN1 := LONG_PAUSE);\nEND_IF;\n", 1)
+    path = tmp_path / "every_scan.st"
+    path.write_text(text)
+    row = engine.grade("mp9c", "task2", [str(path)]).row("T2.2")
+    assert not row.passed and "stored on every manual scan instead of at the SB1 press" in row.observed
