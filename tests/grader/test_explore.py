@@ -250,3 +250,17 @@ def test_a_pause_stored_on_every_manual_scan_is_named_as_a_possible_cause(tmp_pa
     path.write_text(text)
     row = engine.grade("mp9c", "task2", [str(path)]).row("T2.2")
     assert not row.passed and "stored on every manual scan instead of at the SB1 press" in row.observed
+
+
+def test_an_extension_interlocked_with_the_lift_fails_its_own_row(tmp_path):
+    """Issue 21's poor message: an extension interlocked with the lift was reported only as a
+    playback difference of frame 3. The manual row checks each switch with the others at 1 too."""
+    from plclab.stands import bundle
+    text = bundle(get_stand("mp9c"), "task1").replace(
+        "L6 := SA4;                          (* arm forward *)\nL7 := NOT SA4;                      (* arm backward *)\n",
+        "L6 := SA4 AND NOT SA5;              (* arm forward, only while the arm is up *)\nL7 := NOT L6;\n", 1)
+    path = tmp_path / "interlock.st"
+    path.write_text(text)
+    row = engine.grade("mp9c", "task1", [str(path)]).row("T1.3")
+    assert not row.passed
+    assert "after SA4 := 1 (with SA2=1 SA3=1 SA5=1): L6=1 L7=0" in row.expected and row.observed == "L6=0 L7=1"
