@@ -251,6 +251,8 @@ def _cmd_grade(args: argparse.Namespace) -> int:
                           "(plclab grade thermo scada1|scada2)")
     if not args.files:
         raise PlcLabError("grade: give the program's ST files (plclab grade STAND TASK FILE.st...)")
+    if args.explore is not None and args.explore < 0:
+        raise PlcLabError(f"grade: --explore takes a number of scripts >= 0, not {args.explore}")
     report = grade(args.stand, args.task, args.files, out_dir=args.out, reference=args.reference,
                    explore=args.explore)
     print(report.text(), end="")
