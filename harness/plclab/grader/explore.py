@@ -338,20 +338,21 @@ class Explorer:
         sus = suspects(script, div, mp.changes, sp.changes, self.observed, self.expl.tick_s) if div else set()
         return Outcome(div, sus, ms if keep else None, ss if keep else None)
 
-    def confirmed(self, script: Script, tries: int = 3) -> tuple[Script, Optional[Divergence]]:
+    def confirmed(self, script: Script, tries: int = 3) -> tuple[Script, Optional[Divergence], bool]:
         """A divergence not owed to an ambiguous action: such actions are moved a little later
-        and the script played again (at most `tries` times; still ambiguous: no divergence)."""
+        and the script played again (at most `tries` times; still ambiguous: no divergence, and
+        the third value is True)."""
         for _ in range(tries):
             out = self.outcome(script)
             if out.divergence is None:
-                return script, None
+                return script, None, False
             if not out.suspect:
-                return script, out.divergence
+                return script, out.divergence, False
             events = [Event(round(e.time + MOVE_SUSPECT, 3), e.name, e.value, e.hold) if n in out.suspect else e
                       for n, e in enumerate(script.events)]
             script = Script(tuple(sorted(events, key=lambda e: e.time)),
                             round(max(script.duration, max(e.time + e.hold for e in events) + 1.0), 3))
-        return script, None
+        return script, None, True
 
     def diverges(self, script: Script) -> Optional[Divergence]:
         out = self.outcome(script)
@@ -577,10 +578,9 @@ def explore(expl: Exploration, stand: str, task: str, make_session: Callable, st
             script = expl.generate(rng, task, expl.episode_s)
             result.episodes += 1
             result.plant_seconds += script.duration
-            played, div = ex.confirmed(script)
+            played, div, ambiguous = ex.confirmed(script)
             if div is None:
-                if ex.outcome(played).divergence is not None:      # still ambiguous after moving
-                    result.inconclusive += 1
+                result.inconclusive += ambiguous                    # still ambiguous after moving
                 continue
             small, sdiv = shrink(ex, played, div, shrink_runs)
             result.finding = explain(ex, small, sdiv)
