@@ -322,6 +322,8 @@ def _cmd_grade_scada(args: argparse.Namespace) -> int:
 
 
 def _cmd_grade_class(args: argparse.Namespace) -> int:
+    if args.explore is not None and args.explore < 0:
+        raise PlcLabError(f"grade-class: --explore takes a number of scripts >= 0, not {args.explore}")
     from plclab.grader.classroom import ClassInterrupted, grade_class, write_class_outputs, write_partial_results
 
     def progress(result, done: int, total: int) -> None:
@@ -330,7 +332,8 @@ def _cmd_grade_class(args: argparse.Namespace) -> int:
     try:
         report = grade_class(args.stand, args.task, args.folder, args.out, jobs=args.jobs,
                              time_limit_s=args.time_limit, on_result=progress,
-                             memory_limit_mib=args.memory_limit or None, scheduler=args.scheduler)
+                             memory_limit_mib=args.memory_limit or None, scheduler=args.scheduler,
+                             explore=args.explore, reference=args.reference)
     except ClassInterrupted as e:       # the verdicts so far apart from a previous run's results
         print(f"plclab: {e}", file=sys.stderr)
         if e.report.results:
@@ -339,6 +342,8 @@ def _cmd_grade_class(args: argparse.Namespace) -> int:
         return 128 + e.signum
     for path in report.ignored:
         print(f"ignored {path}: not a {report.suffix} file or a folder")
+    for note in report.notes:
+        print(note)
     counts = {s: sum(r.status == s for r in report.results) for s in ("PASS", "FAIL", "ERROR")}
     print(f"{len(report.results)} submissions: {counts['PASS']} pass, {counts['FAIL']} fail, "
           f"{counts['ERROR']} not graded")
@@ -479,6 +484,10 @@ def build_parser() -> argparse.ArgumentParser:
                         "the student FAILs 'memory limit of N MiB exceeded' (default 1024; 0: no limit)")
     c.add_argument("--scheduler", metavar="ADDRESS",
                    help="grade on a Dask distributed cluster (e.g. tcp://host:8786) instead of this machine")
+    c.add_argument("--explore", type=int, metavar="N", help="random operator scripts each robot program is explored "
+                   "with against the model answer, as plclab grade does (default: the stand's budget; 0: none)")
+    c.add_argument("--reference", nargs="+", metavar="FILE.st", help="the course's own model answer to explore "
+                   "against (default: the checkout's solutions/)")
     c.set_defaults(func=_cmd_grade_class)
 
     c = sub.add_parser("serve", help="real time: soft PLC + plant + Modbus face until Ctrl-C")

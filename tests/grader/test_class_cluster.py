@@ -14,7 +14,7 @@ from pathlib import Path
 import pytest
 from lxml import etree
 
-from plclab.grader.classroom import grade_class, grade_on_worker, write_class_outputs
+from plclab.grader.classroom import cells, grade_class, grade_on_worker, write_class_outputs
 from plclab.stands import get_stand, sources
 from grader_helpers import FIXTURES_DIR
 
@@ -28,7 +28,7 @@ from plclab.cli import main
 with LocalCluster(n_workers=1, threads_per_worker=2, processes=False, protocol="tcp://", host="127.0.0.1",
                   scheduler_port=0, dashboard_address=None) as cluster:
     code = main(["grade-class", "mp9c", "task1", sys.argv[1], "--out", sys.argv[2],
-                 "--scheduler", cluster.scheduler_address])
+                 "--scheduler", cluster.scheduler_address, "--explore", "2"])
 sys.exit(code)
 """
 
@@ -58,7 +58,8 @@ def test_a_class_on_a_dask_cluster_gets_the_outputs_of_grading_it_here(tmp_path)
     (folder / "eve.st").symlink_to(FIXTURES_DIR / "mp9c" / "task1_hl1_inverted.st")   # refused
     (folder / "dave").mkdir()                                              # nothing to grade
     here, there = tmp_path / "here", tmp_path / "there"
-    local = grade_class("mp9c", "task1", folder, here, jobs=2)
+    local = grade_class("mp9c", "task1", folder, here, jobs=2, explore=2)   # explored against the model answer
+                                                                             # (sent to the workers from here)
     write_class_outputs(local, here)
     remote = _plclab(["-c", ON_A_CLUSTER, str(folder), str(there)])
     assert remote.returncode == 0, remote.stderr[-3000:]
@@ -68,6 +69,7 @@ def test_a_class_on_a_dask_cluster_gets_the_outputs_of_grading_it_here(tmp_path)
     assert (there / "results.csv").read_text(encoding="utf-8") == (here / "results.csv").read_text(encoding="utf-8")
     assert _junit_without_clock(there / "junit.xml") == _junit_without_clock(here / "junit.xml")
     assert {r.status for r in local.results} == {"FAIL"}
+    assert ("E1", "FAIL") in {(c.requirement, c.result) for r in local.results for c in cells(r, local.requirements)}
     traces_here = sorted(p.relative_to(here) for p in (here / "traces").rglob("*.csv"))
     traces_there = sorted(p.relative_to(there) for p in (there / "traces").rglob("*.csv"))
     assert traces_there == traces_here and len(traces_here) >= 2

@@ -542,3 +542,38 @@ def test_two_entries_for_one_student_are_refused(tmp_path):
     (tmp_path / "amy.st").write_text(BROKEN, encoding="utf-8")
     with pytest.raises(Exception, match="are both student 'amy': rename one"):
         find_submissions(tmp_path)
+
+
+EXPLORE_FIXTURES = Path(__file__).resolve().parent / "fixtures" / "explore" / "mp9c"
+
+
+def test_grade_class_explores_every_program_against_the_model_answer(tmp_path):
+    """`plclab grade-class` explores as `plclab grade` does: a mistake only an unscripted console
+    history shows (a stop press needs the spare input) fails the class's E1 column with the
+    shortest console history and the student's line; a correct program written differently
+    passes it; the shrunk script is among the student's traces."""
+    folder, out = tmp_path / "class", tmp_path / "out"
+    for student, name in (("alice", "task3_alt_enable_flag.st"), ("bob", "task3_stop_needs_enable.st")):
+        (folder / student).mkdir(parents=True)
+        shutil.copy(EXPLORE_FIXTURES / name, folder / student / name)
+    assert main(["grade-class", "mp9c", "task3", str(folder), "--out", str(out), "--jobs", "2"]) == 0
+    rows = {(r["student"], r["requirement"]): r for r in read_csv(out / "results.csv")}
+    assert rows[("alice", "E1")]["result"] == "PASS"
+    bob = rows[("bob", "E1")]
+    assert bob["result"] == "FAIL"
+    assert "the model answer has" in bob["message"] and "console steps: 1. 0.00 s" in bob["message"]
+    assert "task3_stop_needs_enable.st:" in bob["message"]            # the student's statement
+    assert (out / "traces" / "bob" / "mp9c-task3-explore.csv").is_file()
+    assert not (out / "traces" / "alice" / "mp9c-task3-explore.csv").exists()
+
+
+def test_grade_class_says_in_one_line_why_it_did_not_explore(tmp_path, capsys):
+    """A course's model answer that does not compile: no E1 column, one line saying why."""
+    folder, out = tmp_path / "class", tmp_path / "out"
+    folder.mkdir()
+    shutil.copy(EXPLORE_FIXTURES / "task3_alt_enable_flag.st", folder / "alice.st")
+    bad = tmp_path / "ref.st"
+    bad.write_text("PROGRAM p\nx := ;\nEND_PROGRAM\n", encoding="utf-8")
+    assert main(["grade-class", "mp9c", "task3", str(folder), "--out", str(out), "--reference", str(bad)]) == 0
+    assert "exploration not run: the reference does not compile" in capsys.readouterr().out
+    assert "E1" not in {r["requirement"] for r in read_csv(out / "results.csv")}

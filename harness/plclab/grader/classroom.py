@@ -29,11 +29,13 @@ from __future__ import annotations
 
 import contextlib
 import csv
+import functools
 import html
 import io
 import multiprocessing
 import os
 import pickle
+import re
 import resource
 import shutil
 import signal
@@ -129,6 +131,7 @@ class ClassReport:
     suffix: str = ".st"                         # the files a submission is made of (thermo: .csv)
     staging: Optional[Path] = None              # the traces until write_class_outputs moves them to OUT
     total: int = 0                              # submissions found (more than `results` if interrupted)
+    notes: list[str] = field(default_factory=list)   # e.g. why exploration was not run
 
     @property
     def complete(self) -> bool:
@@ -244,13 +247,16 @@ def grade_class(stand: str, task: str, folder: str | Path, out_dir: str | Path,
                 on_result: Optional[Callable[[StudentResult, int, int], None]] = None,
                 grade_one: GradeOne = grade, start_method: Optional[str] = None,
                 memory_limit_mib: Optional[int] = DEFAULT_MEMORY_LIMIT_MIB,
-                scheduler: Optional[str] = None) -> ClassReport:
+                scheduler: Optional[str] = None, explore: Optional[int] = 0,
+                reference: Optional[Sequence[str]] = None) -> ClassReport:
     """Grade every submission in `folder` on `task` of `stand`. `on_result(result, done,
     total)` is called as each student finishes (progress). `grade_one` is `grade` (tests
     substitute one that crashes or hangs); `start_method` forces how grading processes start
     (default: see `_context`). Each student is graded in a process of its own, held to
     `time_limit_s` and `memory_limit_mib` (None: no memory limit); `scheduler` (a Dask
     distributed scheduler's address) sends that work to a cluster instead of this machine.
+    `explore` and `reference` are `grade`'s: each student's program is also explored against
+    the task's model answer (None: the stand's budget, as `plclab grade-class` does; 0: not).
 
     Writes nothing in `out_dir` (it only checks it can): the traces wait in a temporary
     folder; `write_class_outputs` writes the three result files, then moves the traces. A
@@ -258,6 +264,10 @@ def grade_class(stand: str, task: str, folder: str | Path, out_dir: str | Path,
     raises ClassInterrupted holding the students graded so far.
     """
     requirements = requirement_table(stand, task)         # unknown stand / task: one line, before any work
+    column, note = _exploration_column(stand, task, explore, reference)
+    if column is None and explore != 0:
+        explore = 0                                       # nothing to explore against: the note says why
+    requirements += [column] if column else []
     kind = requirement_set(stand, task).submission
     if jobs is not None and jobs < 1:
         raise PlcLabError(f"grade-class: --jobs must be at least 1 (got {jobs})")
@@ -273,20 +283,26 @@ def grade_class(stand: str, task: str, folder: str | Path, out_dir: str | Path,
     title = task_title(stand, task)
     staging = Path(tempfile.mkdtemp(prefix="plclab-class-"))
     report = ClassReport(stand, task, title, requirements, [], ignored, started, kind.suffix, staging,
-                         len(submissions))
+                         len(submissions), [note] if note else [])
     cleanup = weakref.finalize(report, shutil.rmtree, str(staging), True)   # if never written out
     limits = _Limits(time_limit_s, memory_limit_mib)
+    real_grader = grade_one is grade
+    if real_grader and (explore != 0 or reference):
+        grade_one = functools.partial(grade, reference=list(reference or ()) or None, explore=explore)
     with _stop_signals_raise() as stopped:      # a second signal is ignored until the cleanup is done
         try:
             try:
                 if scheduler is None:
-                    if grade_one is grade:        # builds the parser once, before forking
+                    if real_grader:               # builds the parser once, before forking
                         grade_sources(stand, task, [("warm-up.st", "")])
                     _run_parallel(stand, task, submissions, out, staging, jobs or os.cpu_count() or 1, limits,
                                   on_result, grade_one, _context(start_method), kind, report.results)
                 else:
+                    if not real_grader:
+                        raise PlcLabError("grade-class: a cluster grades with the real grader only "
+                                          "(grade_one is for tests)")
                     _run_on_cluster(scheduler, stand, task, submissions, out, staging, limits, on_result,
-                                    grade_one, kind, report.results)
+                                    kind, report.results, explore, _reference_sources(stand, task, explore, reference))
             except _Stop:
                 report.results.sort(key=lambda r: r.student)
                 raise ClassInterrupted(stopped[0], report) from None
@@ -540,6 +556,11 @@ def _record(results: list[StudentResult], sub: Submission, kind: str, value, tra
         for scenario, files in report.traces.items():
             staged += [((traces or Path()) / p.name, final / p.name) for p in files]
             report.traces[scenario] = [final / p.name for p in files]
+        # a note naming a trace file (exploration's replay line) names it where OUT will hold it,
+        # not in the grading process's scratch folder (here or on a cluster's worker)
+        for name in {dst.name for _src, dst in staged}:
+            where = re.compile(r"\S*/" + re.escape(name) + r"(?=\s|$)")
+            report.notes = [where.sub(str(final / name).replace("\\", "\\\\"), note) for note in report.notes]
     elif kind == "memory":
         report = memory_report(stand, task, sub.files, limits.memory_mib)
     elif kind == "nothing":
@@ -568,15 +589,15 @@ def _died(process) -> str:
 
 # ----------------------------------------------------------------- a Dask cluster
 def _run_on_cluster(address: str, stand: str, task: str, submissions: list[Submission], out: Path,
-                    staging: Path, limits: _Limits, on_result, grade_one: GradeOne,
-                    handed_in: SubmissionKind, results: list[StudentResult]) -> None:
+                    staging: Path, limits: _Limits, on_result, handed_in: SubmissionKind,
+                    results: list[StudentResult], explore: Optional[int] = 0,
+                    reference: Optional[list[tuple[str, str]]] = None) -> None:
     """Each submission is one task on the Dask cluster at `address`: a worker grades it in a
     process of its own (`grade_on_worker`: the same isolation and limits as on this machine)
     and returns the report with the trace files' bytes, staged here as local grading stages
     them. The program is read here (the workers need not see the class folder) under the names
-    it has here, so a cluster's report is the report of grading on this machine."""
-    if grade_one is not grade:
-        raise PlcLabError("grade-class: a cluster grades with the real grader only (grade_one is for tests)")
+    it has here, so a cluster's report is the report of grading on this machine. So is the
+    model answer exploration plays against (`reference`, read here as (name, text) pairs)."""
     try:
         from dask.distributed import Client, as_completed
     except ImportError:                             # pragma: no cover - dask is a dependency
@@ -600,6 +621,7 @@ def _run_on_cluster(address: str, stand: str, task: str, submissions: list[Submi
                         handed_in, stand, task, 0.0, on_result, len(submissions))
                 continue
             future = client.submit(grade_on_worker, stand, task, sources, limits.time_s, limits.memory_mib,
+                                   explore, reference,
                                    key=f"plclab-grade-{n}-{uuid.uuid4().hex}", pure=False)
             futures[future] = (n, sub)
             started[n] = time.monotonic()
@@ -624,8 +646,53 @@ def _run_on_cluster(address: str, stand: str, task: str, submissions: list[Submi
             client.close(timeout=5)
 
 
+def _exploration_column(stand: str, task: str, explore: Optional[int],
+                        reference: Optional[Sequence[str]]) -> tuple[Optional[tuple[str, str]], str]:
+    """The exploration row's column (E1, its requirement) when every student is explored, or
+    None and, where exploration was asked for but cannot run, the one line saying why (the
+    same reason `plclab grade` gives: no model answer in an installed package)."""
+    from plclab.grader.explore import EXPLORE_ID, model_answer, row_text
+    from plclab.stands.base import stand_spec
+    expl = stand_spec(stand).explore
+    if explore == 0 or expl is None or task not in expl.references:
+        return None, ""
+    model, why = model_answer(stand, task, reference)
+    if model is None:
+        return None, f"exploration not run: {why}"
+    return (EXPLORE_ID, row_text(expl, task)), ""
+
+
+def _reference_sources(stand: str, task: str, explore: Optional[int],
+                       reference: Optional[Sequence[str]]) -> Optional[list[tuple[str, str]]]:
+    """The model answer exploration plays against, read on this machine for a cluster's workers
+    (a worker installed from the wheel has no solutions/): the course's `reference` files, else
+    the checkout's model answer; None when nothing is explored or there is none here (the
+    worker's report then says why exploration did not run)."""
+    if explore == 0 and not reference:
+        return None
+    if reference:
+        return read_sources(reference)
+    from plclab.grader.explore import model_answer
+    model, _why = model_answer(stand, task, None)
+    return list(model.sources) if model is not None else None
+
+
+def _write_reference(reference: list[tuple[str, str]], folder: Path) -> list[str]:
+    """The model answer's (name, text) pairs as files for `grade`'s `reference` (numbered: two
+    pairs may share a name such as a generated configuration's)."""
+    folder.mkdir(parents=True, exist_ok=True)
+    paths = []
+    for n, (name, text) in enumerate(reference):
+        stem = "".join(c if c.isalnum() or c in "._-" else "_" for c in Path(name.strip("<>")).name) or "part.st"
+        path = folder / f"{n:02d}_{stem if stem.endswith('.st') else stem + '.st'}"
+        path.write_text(text, encoding="utf-8")
+        paths.append(str(path))
+    return paths
+
+
 def grade_on_worker(stand: str, task: str, sources: list[tuple[str, str]], time_limit_s: float,
-                    memory_limit_mib: Optional[int]) -> tuple[str, object, dict[str, bytes]]:
+                    memory_limit_mib: Optional[int], explore: Optional[int] = 0,
+                    reference: Optional[list[tuple[str, str]]] = None) -> tuple[str, object, dict[str, bytes]]:
     """A Dask task: grade one program in a fresh process of its own on this worker (a Dask
     worker may not fork children of its own, and runs tasks in threads), held to the time and
     memory limits; returns (kind, value, trace files by name)."""
@@ -633,7 +700,7 @@ def grade_on_worker(stand: str, task: str, sources: list[tuple[str, str]], time_
     try:
         (work / "tmp").mkdir()
         payload = pickle.dumps((stand, task, sources, str(work / "traces"), str(work / "tmp"), memory_limit_mib,
-                                os.getpid()))
+                                os.getpid(), explore, reference))
         env = {**os.environ, "PYTHONPATH": os.pathsep.join(p for p in sys.path if p), "TMPDIR": str(work / "tmp")}
         child = subprocess.Popen([sys.executable, "-c", "from plclab.grader.classroom import _worker_child; "
                                   "_worker_child()"], stdin=subprocess.PIPE, stdout=subprocess.PIPE,
@@ -663,12 +730,14 @@ def grade_on_worker(stand: str, task: str, sources: list[tuple[str, str]], time_
 def _worker_child() -> None:
     """The grading process a Dask worker starts: the arguments pickled on stdin, the outcome
     pickled on stdout (a report of our own grader: trusted data between our processes)."""
-    stand, task, sources, traces, scratch, memory_limit_mib, parent = pickle.loads(sys.stdin.buffer.read())
+    (stand, task, sources, traces, scratch, memory_limit_mib, parent, explore,
+     reference) = pickle.loads(sys.stdin.buffer.read())
     out = sys.stdout.buffer
     _isolate(scratch, memory_limit_mib, parent)
+    reference_files = _write_reference(reference, Path(scratch) / "reference") if reference else None
 
     def grade_read(stand: str, task: str, _files, out_dir) -> GradeReport:
-        return grade_sources(stand, task, sources, out_dir)
+        return grade_sources(stand, task, sources, out_dir, reference_files, explore)
 
     result = _grade_isolated(grade_read, stand, task, [name for name, _ in sources], traces)
     out.write(pickle.dumps(result))
@@ -696,6 +765,8 @@ def row_message(row: Row) -> str:
         parts.append(f"at t = {row.time:.2f} s")
     if row.scenario:
         parts.append(f"scenario '{row.scenario}'")
+    if row.steps:                  # exploration: the shortest console history that shows it
+        parts.append("console steps: " + " ".join(step.strip() for step in row.steps))
     return "; ".join(parts)
 
 
