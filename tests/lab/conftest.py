@@ -62,6 +62,7 @@ class LabPage:
         self.context = browser.new_context(viewport=viewport or {"width": 1400, "height": 1000}, is_mobile=mobile,
                                            has_touch=mobile, device_scale_factor=2 if mobile else 1)
         self.page = self.open()
+        self.closed = False
 
     def open(self):
         page = self.context.new_page()
@@ -75,6 +76,9 @@ class LabPage:
         return self.server.lab
 
     def close(self) -> None:
+        if self.closed:            # a test may close its page before the fixture does
+            return
+        self.closed = True
         self.context.close()
         self.thread.stop()
 

@@ -151,11 +151,9 @@ PHONE = """() => {
 }"""
 
 
-def test_a_390x844_phone_gets_one_column_without_sideways_scroll(browser, shots):
-    from conftest import LabPage
-
+def test_a_390x844_phone_gets_one_column_without_sideways_scroll(lab_page, shots):
     for stand in ("mp9c", "tur10", "thermo", "cnc"):
-        lp = LabPage(browser, stand, 2.0, variant="full", viewport={"width": 390, "height": 844}, mobile=True)
+        lp = lab_page(stand, 2.0, variant="full", viewport={"width": 390, "height": 844}, mobile=True)
         try:
             page = lp.page
             page.wait_for_function("document.querySelectorAll('canvas[data-trend]').length > 0")
