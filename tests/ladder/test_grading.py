@@ -52,3 +52,16 @@ def test_grade_class_takes_plc_xml_submissions(tmp_path):
     verdicts = {r.student: r.status for r in report.results}
     assert verdicts == {"alice": "PASS", "bob": "FAIL"}
     assert report.ignored == []
+
+
+def test_exploration_names_the_rung_and_element_that_last_wrote_the_output(tmp_path):
+    """The grader's row names the student's statement that last wrote the first differing
+    output; in a ladder POU that is the rung and the coil, never a line of generated ST."""
+    path = tmp_path / "plc.xml"
+    path.write_bytes(handout_with_ladder_manual(every_mechanism=False))
+    report = grade("mp9c", "task1", [str(path)], explore=2)
+    [e1] = [r for r in report.rows if r.id == "E1"]
+    assert not e1.passed
+    assert "last written in plc.xml: FB_Mp9cManual (LD), rung " in e1.observed, e1.observed
+    assert ", coil L" in e1.observed and "localId" in e1.observed
+    assert "plc.xml:" not in e1.observed.replace("plc.xml: FB_", "")    # no generated line number

@@ -685,6 +685,7 @@ def exploration_rows(req: Any, sources: Sequence[tuple[str, str]], checked: Any,
     (the shrunk script and the student's traces under it, in `out_dir`). A difference that
     plainly breaks one of the task's requirements comes with that requirement's row too, after
     E1's (the engine puts it in place of the scenarios' row if they passed it)."""
+    from plclab.plcopen.graphical import drawing_location
     from plclab.stands.base import stand_spec
     from plclab.trace import write_csv, write_vcd
 
@@ -740,7 +741,11 @@ def exploration_rows(req: Any, sources: Sequence[tuple[str, str]], checked: Any,
                      " in the model answer")
     if f.line is not None:
         file, line, stmt = f.line
-        observed += f"; {f.output} last written by {Path(file).name}:{line}" + (f" `{stmt}`" if stmt else "")
+        drawn = drawing_location(sources, file, line)   # a plc.xml: the rung and element, not generated ST
+        if drawn is not None:
+            observed += f"; {f.output} last written in {Path(file).name}: {drawn}"
+        else:
+            observed += f"; {f.output} last written by {Path(file).name}:{line}" + (f" `{stmt}`" if stmt else "")
     steps = tuple(f.steps) + (f"-> {f.first_difference}",)
     replay = (f"replay: plclab run {req.stand} --program {' '.join(n for n, _ in sources)} --inputs "
               f"{files[0] if files else script_name} --against {req.task}")
