@@ -291,10 +291,25 @@ class Lab:
             if p["name"].upper() == str(pou).upper():
                 self.monitor.select(self.session.plc, p, instance if instance else None)
                 self._monitor_at = 0.0
+                self._power = None
+                if "ladder" in p:                  # an LD POU: its power flow, from the same instance
+                    from plclab.lab.ladder import PowerFlow, pou_elements
+                    elements = pou_elements(self.session.sources, p["name"])
+                    if elements is not None:
+                        self._power = (PowerFlow, elements, self.monitor.instance or next(iter(p["instances"]), None))
                 return
         raise LabError(f"the program has no POU '{str(pou)[:80]}'")
 
     _monitor_at = 0.0
+    _power: Any = None
+
+    def _power_flow(self) -> Optional[dict]:
+        """The shown LD POU's power on every element output (plclab.lab.ladder), or None."""
+        if self._power is None:
+            return None
+        from plclab.lab.ladder import time_aware
+        flow, elements, instance = self._power
+        return flow(elements, instance, time_aware(self.session.plc)).state()
 
     def _monitor_values(self, full: bool) -> Any:
         now = time.monotonic()
@@ -372,6 +387,7 @@ class Lab:
             s.log(f"force released: {path} (not in the program loaded)")
         self.watched = [p for p in self.watched if _has(s.plc, p)]
         self.monitor.pou = None                        # the page picks a POU of the new program
+        self._power = None
         self.program_name = name
         self.loads += 1
         if upload:                         # Reload loads it again (the browser's files are not on disk)
@@ -610,6 +626,9 @@ class Lab:
         values = self._monitor_values(full)
         if values is not _SAME and values is not None:
             snap["monitor"] = {"pou": self.monitor.pou, "instance": self.monitor.instance, "values": values}
+            power = self._power_flow()
+            if power is not None:
+                snap["monitor"]["power"] = power
         frames = self._frames(full)
         if frames is not _SAME:
             snap["frames"] = frames
@@ -791,11 +810,45 @@ def _why(e: BaseException) -> str:
     return f"{type(e).__name__}: {str(e)[:200]}"
 
 
+def read_upload(files: Sequence[tuple[str, Any]]) -> tuple[list[tuple[str, str]], list[str]]:
+    """A page's upload as the program's sources: ST files as they are, an OpenPLC Editor
+    project (`.xml`, bytes) turned into its ST as every command reads it (its ST files'
+    blocks may be boxes in its drawing); or the diagnostics, which name the POU, rung and
+    element of a drawing. Held to the memory limit of a program run (plclab.limits)."""
+    from plclab.frontend import is_project_file
+    from plclab.limits import memory_limited
+    from plclab.plcopen.project import source_from_xml
+    st_texts = [(n, t) for n, t in files if not is_project_file(n)]
+    out: list[tuple[str, str]] = []
+    errors: list[str] = []
+    for name, data in files:
+        if not is_project_file(name):
+            out.append((name, data))
+            continue
+        try:
+            with memory_limited():
+                out.append((name, source_from_xml(name, data, st_texts)))
+        except CompileError as e:
+            errors.extend(str(d) for d in e.diagnostics)
+        except PlcLabError as e:
+            text = str(e)
+            errors.append(text if text.startswith(name) else f"{name}: {text}")
+        except (Exception, RecursionError, MemoryError) as e:     # noqa: BLE001 - a student's file
+            errors.append(f"{name}: project: the project cannot be read ({_why(e)})")
+    return out, errors
+
+
 def check_program(sources: Sequence[tuple[str, str]], trial: bool = False):
     """The front end's verdict on an uploaded program: (checked, []) or (None, diagnostics).
     With `trial`, the program is also compiled and instantiated once (no retain, no scan)
     off the running PLC, so what fails there fails before the PLC stops. Whatever goes
     wrong (even a RecursionError or a MemoryError) is one line, never an exception."""
+    from plclab.limits import memory_limited
+    with memory_limited():              # a student's file: the check and the trial load held to the limit
+        return _check_program(sources, trial)
+
+
+def _check_program(sources: Sequence[tuple[str, str]], trial: bool):
     from plclab.frontend import check_sources
     where = f"{sources[-1][0]}:1:1: error: " if sources else "<upload>:1:1: error: "
     try:

@@ -3,7 +3,8 @@
     GET  /                 the page (static/index.html, shipped in the package; no CDN)
     GET  /api/session      {"token", "session"}: what the page needs to send commands
     GET  /ws?token=T       WebSocket: state pushed after every batch of scans; commands in
-    POST /api/program      load ST files (multipart), checked first: `file:line:col: ...`
+    POST /api/program      load ST files and/or a plc.xml (multipart), checked first: `file:line:col: ...`
+                           (a drawing's errors name its POU, rung and element)
     POST /api/reload       load the program again (the last upload, else the files it came from)
     POST /api/grade        {"task": "task1"}: the grader on the loaded program, as a table
     GET  /grade/RUN/FILE   a grade run's trace files
@@ -38,10 +39,11 @@ from typing import Any, Optional
 from aiohttp import BodyPartReader, WSMsgType, web
 
 from plclab.errors import PlcLabError
-from plclab.lab.engine import SPEEDS, Lab, LabError, check_program
+from plclab.frontend import is_project_file
+from plclab.lab.engine import SPEEDS, Lab, LabError, check_program, read_upload
 
 STATIC = Path(__file__).resolve().parent / "static"
-MAX_UPLOAD = 1024 * 1024          # bytes of ST per upload: a lab program is a few tens of kB
+MAX_UPLOAD = 4 * 1024 * 1024      # bytes per upload: a lab program is a few tens of kB of ST (a plc.xml, ten times that)
 MAX_FILES = 32
 MAX_MESSAGE = 64 * 1024           # bytes of one WebSocket message from a page
 
@@ -413,7 +415,7 @@ class LabServer:
     # ------------------------------------------------------------------ program
     async def upload(self, request: web.Request) -> web.Response:
         if request.content_length is not None and request.content_length > MAX_UPLOAD + 64 * 1024:
-            return _refuse(f"upload too large ({request.content_length} bytes): at most {MAX_UPLOAD // 1024} KiB of ST")
+            return _refuse(f"upload too large ({request.content_length} bytes): at most {MAX_UPLOAD // 1024} KiB")
         try:
             reader = await request.multipart()
         except Exception:            # noqa: BLE001 - not multipart, or a broken header
@@ -435,11 +437,11 @@ class LabServer:
                         break
                     total += len(chunk)
                     if total > MAX_UPLOAD:
-                        return _refuse(f"upload too large: at most {MAX_UPLOAD // 1024} KiB of ST in one load")
+                        return _refuse(f"upload too large: at most {MAX_UPLOAD // 1024} KiB in one load")
                     data += chunk
                 if len(files) >= MAX_FILES:
                     return _refuse(f"upload: at most {MAX_FILES} files in one load")
-                files.append((name, _decode(name, bytes(data))))
+                files.append((name, bytes(data) if is_project_file(name) else _decode(name, bytes(data))))
         except _NotText as e:
             return _refuse(str(e), errors=[{"text": str(e), "line": None, "source": None}])
         except (asyncio.CancelledError, MemoryError):
@@ -448,8 +450,15 @@ class LabServer:
             why = " ".join(str(e).split())[:120] or type(e).__name__
             return _refuse(f"upload: the request could not be read as multipart/form-data ({why})", status=400)
         if not files:
-            return _refuse("upload: no file in the request (choose one or more .st files)")
-        return await self._load(files, ", ".join(n for n, _ in files), upload=True)
+            return _refuse("upload: no file in the request (choose one or more .st files or a plc.xml)")
+        if sum(is_project_file(n) for n, _ in files) > 1:
+            return _refuse("upload: one OpenPLC Editor project (plc.xml) at a time (with .st files if you like)")
+        loop = asyncio.get_running_loop()
+        sources, errors = await loop.run_in_executor(None, read_upload, files)
+        if errors:
+            return _refuse(f"the program does not pass the check ({len(errors)} error(s)); the PLC keeps the "
+                           f"program it runs", errors=[_located(e, sources) for e in errors])
+        return await self._load(sources, ", ".join(n for n, _ in files), upload=True)
 
     async def _load(self, files: list[tuple[str, str]], name: str, upload: bool = False) -> web.Response:
         loop = asyncio.get_running_loop()
