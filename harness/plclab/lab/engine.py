@@ -69,13 +69,8 @@ class Lab:
         srcs = list(sources) if sources is not None else variant_sources(self.module.STAND, variant)
         self.program_name = ", ".join(Path(n).name for n, _t in srcs if not n.startswith("<")) \
             if sources is not None else f"{variant} (shipped)"
-        self.session: Session = self.module.session(variant, program=list(sources) if sources is not None else None,
-                                                    retain_path=self.retain_path, watch_internals=False)
-        # the stand's observables (TUR-10's Target1..5, ...) are read by name where the program
-        # has them, for the drawing and the trends; not recorded (the trace stays the I/O's)
-        from plclab.stands.base import stand_spec
-        self.session.observables = stand_spec(stand).observables_for(variant if sources is None else None)
-        self._refine_tick()
+        self.shipped = sources is None                # the shipped variant runs (no program loaded)
+        self.session: Session = self._new_session(list(sources) if sources is not None else None)
         from plclab.lab.variables import Forces
         self.forces = Forces()                         # the watch and force table's forces
         self.forces.attach(self.session.plc)
@@ -106,6 +101,99 @@ class Lab:
         self.seq = 0
         self.scans_run = 0
         self._pace = (0.0, 1.0, 0.0)                 # (wall, speed, virtual): where the pacing stands
+
+    def _new_session(self, program: Optional[list[tuple[str, str]]], checked: Any = None) -> Session:
+        """The stand at power-up running `program` (None: the shipped variant)."""
+        s = self.module.session(self.variant, program=program, checked=checked,
+                                retain_path=self.retain_path, watch_internals=False)
+        # the stand's observables (TUR-10's Target1..5, ...) are read by name where the program
+        # has them, for the drawing and the trends; not recorded (the trace stays the I/O's)
+        from plclab.stands.base import stand_spec
+        s.observables = stand_spec(self.stand).observables_for(self.variant if program is None else None)
+        self.session = s
+        self._refine_tick()
+        return s
+
+    # ------------------------------------------------------------------ input scripts
+    script: Any = None             # (name, steps, index of the next step) while a script replays
+    epoch = 0                      # stand resets so far: a page clears its trends and logs on a new one
+
+    def start_script(self, steps: list, name: str) -> None:
+        """Replay an input script (plclab.lab.script): the stand is reset (a fresh plant at
+        power-up, the PLC cold with no retained values, the trace started again at t = 0) and
+        each step is applied before the first scan at or after its plant time."""
+        old = self.session
+        old.plc.stop()
+        self.retain_path.unlink(missing_ok=True)
+        s = self._new_session(None if self.shipped else list(old.sources), None if self.shipped else old.checked)
+        for path in self.forces.attach(s.plc):
+            s.log(f"force released: {path} (not in the program)")
+        self.held.clear()
+        self.console_levels.clear()
+        self.extras = Trace()
+        self._extra_unknown.clear()
+        self._trend_sent, self._events_sent, self._actions_sent = {}, 0, 0
+        self._trimmed_at = 0.0
+        self.epoch += 1
+        self.script = (name, list(steps), 0)
+        s.log(f"input script {name}: {len(steps)} step(s), the stand reset")
+        self._apply_due()
+        s.run(s.tick)                             # the first scan (t = 0), as at start
+        self.scans_run += 1
+        self._rebase = True
+
+    def stop_script(self) -> None:
+        if self.script is not None:
+            name, steps, i = self.script
+            self.session.log(f"input script {name} stopped at step {i} of {len(steps)}")
+            self.script = None
+
+    def _next_step_time(self) -> Optional[float]:
+        if self.script is None:
+            return None
+        _name, steps, i = self.script
+        return steps[i].time if i < len(steps) else None
+
+    def _apply_due(self) -> None:
+        """Apply the script's steps due before the next scan (plant time s.now)."""
+        s = self.session
+        while self.script is not None:
+            name, steps, i = self.script
+            if i >= len(steps):
+                s.log(f"input script {name}: done")
+                self.script = None
+                return
+            step = steps[i]
+            if step.time > s.now + 1e-9:
+                return
+            self.script = (name, steps, i + 1)
+            self._apply_step(step, i + 1, len(steps))
+
+    def _apply_step(self, step: Any, n: int, total: int) -> None:
+        s = self.session
+        s.log(f"script step {n}/{total} (line {step.line}, t={step.time:g} s): {step.text}")
+        try:
+            if step.kind == "switch":
+                self.set_control(step.target, step.value)
+            elif step.kind == "button":
+                control = self._control(step.target)
+                if step.value:
+                    s.console.hold(control.input)
+                else:
+                    s.console.release(control.input)
+                self.console_levels[step.target] = step.value
+            elif step.kind == "knob":
+                self.set_knob(step.target, step.value)
+            elif step.kind == "power":
+                s.restart_plc(off_time=step.value)
+                self.forces.attach(s.plc)
+            elif step.kind == "fault":
+                self.inject(step.target, step.value)
+            elif step.kind == "end":
+                s.log(f"input script {self.script[0] if self.script else ''}: END reached")
+                self.script = None
+        except (LabError, PlcLabError) as e:
+            s.log(f"script step {n} refused: {e}")
 
     # ------------------------------------------------------------------ life cycle
     def start(self) -> "Lab":
@@ -169,7 +257,7 @@ class Lab:
         """The commands this stand's page has (the SCADA registers are thermo's only, the
         knobs and part programs the CNC's)."""
         ops = ("set", "press", "release", "speed", "pause", "run", "scan", "restart", "inject", "clear", "trends",
-               "tree", "watch", "force", "unforce", "source", "monitor")
+               "tree", "watch", "force", "unforce", "source", "monitor", "unscript")
         if self.stand == "thermo":
             ops += ("register",)
         if self.panel.knobs:
@@ -386,6 +474,7 @@ class Lab:
         for path in self.forces.attach(s.plc):          # forces on what the new program has stay
             s.log(f"force released: {path} (not in the program loaded)")
         self.watched = [p for p in self.watched if _has(s.plc, p)]
+        self.shipped = False
         self.monitor.pou = None                        # the page picks a POU of the new program
         self._power = None
         self.program_name = name
@@ -516,6 +605,20 @@ class Lab:
         self._run_scans(max(1, math.ceil(round(seconds / self.session.tick, 6))))
 
     def _run_scans(self, n: int) -> None:
+        """n scans; a replayed script's steps applied each before its scan."""
+        if self.script is None:
+            self._scan_block(n)
+            return
+        s = self.session
+        while n > 0:
+            self._apply_due()
+            t = self._next_step_time()
+            k = n if t is None else max(1, min(n, math.ceil(round((t - s.now) / s.tick, 6))))
+            self._scan_block(k)
+            n -= k
+        self._apply_due()
+
+    def _scan_block(self, n: int) -> None:
         s = self.session
         self._console_since_scan = False
         extras = [name for name in self.trend_names
@@ -597,7 +700,8 @@ class Lab:
             "type": "state", "seq": self.seq, "t": round(s.now - s.tick, 6), "tick": s.tick,
             "speed": self.speed, "paused": self.paused, "actual_speed": round(self.actual_speed, 2),
             "held": sorted(self.held), "pace": self.pace(),
-            "program": self.program_name, "loads": self.loads,
+            "program": self.program_name, "loads": self.loads, "epoch": self.epoch,
+            "script": self._script_state(),
             "trace_from": round(s.trace.start_ns / 1e9, 3), "trace_keep": TRACE_KEEP_S,
             "paced": self.paced_now(),          # where the plant should be now: t + the lag
             "wall": time.monotonic(),           # when (CLOCK_MONOTONIC, the same in every process here)
@@ -633,6 +737,14 @@ class Lab:
         if frames is not _SAME:
             snap["frames"] = frames
         return snap
+
+    def _script_state(self) -> Optional[dict]:
+        if self.script is None:
+            return None
+        name, steps, i = self.script
+        nxt = steps[i] if i < len(steps) else None
+        return {"name": name, "done": i, "steps": len(steps),
+                "next": f"t={nxt.time:g} s: {nxt.text}" if nxt is not None else None}
 
     _frames_at = 0.0
     _frames_sent: Any = None

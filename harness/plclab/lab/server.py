@@ -5,6 +5,8 @@
     GET  /ws?token=T       WebSocket: state pushed after every batch of scans; commands in
     POST /api/program      load ST files and/or a plc.xml (multipart), checked first: `file:line:col: ...`
                            (a drawing's errors name its POU, rung and element)
+    POST /api/script?name=F  replay an input script (the CSV as the body): the stand reset, its steps
+                           applied at their plant times (plclab.lab.script)
     POST /api/reload       load the program again (the last upload, else the files it came from)
     POST /api/grade        {"task": "task1"}: the grader on the loaded program, as a table
     GET  /grade/RUN/FILE   a grade run's trace files
@@ -61,6 +63,8 @@ class _Client:
 def _merge(old: dict, new: dict) -> dict:
     """Two snapshots a slow page has not received yet, as one: the newest state with the
     events, actions and trend points of both."""
+    if old.get("epoch") != new.get("epoch"):  # the stand was reset (an input script): the new one only
+        return new
     out = dict(new)
     for key in ("events", "actions"):
         out[key] = old.get(key, []) + new.get(key, [])
@@ -117,6 +121,7 @@ class LabServer:
         app.router.add_get("/ws", self.websocket)
         app.router.add_post("/api/program", self.upload)
         app.router.add_post("/api/reload", self.reload)
+        app.router.add_post("/api/script", self.script)
         app.router.add_post("/api/grade", self.grade)
         app.router.add_get("/grade/{run}/{file}", self.grade_file)
         app.router.add_get("/trace.csv", self.trace_csv)
@@ -341,6 +346,8 @@ class LabServer:
                 (client.held.add if op == "press" else client.held.discard)(label)
             elif op == "speed":
                 await asyncio.wrap_future(lab.call(lambda: lab.set_speed(msg["value"])))
+            elif op == "unscript":
+                await asyncio.wrap_future(lab.call(lab.stop_script))
             elif op in ("pause", "run"):
                 await asyncio.wrap_future(lab.call(lambda: lab.set_paused(op == "pause")))
             elif op == "scan":
@@ -474,6 +481,23 @@ class LabServer:
         self._broadcast({"type": "notice", "text": f"program loaded: {name}"})
         return web.json_response({"ok": True, "message": f"program loaded: {name}", "errors": []})
 
+    async def script(self, request: web.Request) -> web.Response:
+        """Replay an input script: every row checked first (`FILE:LINE: error: ...`), then the
+        stand reset and the steps applied at their plant times."""
+        from plclab.lab.script import MAX_SCRIPT_BYTES, parse_script
+        name = Path(request.query.get("name", "script.csv").replace("\\", "/")).name[:120] or "script.csv"
+        if request.content_length is not None and request.content_length > MAX_SCRIPT_BYTES:
+            return _refuse(f"{name}: larger than {MAX_SCRIPT_BYTES // 1024} KiB: not an input script")
+        data = await request.content.read(MAX_SCRIPT_BYTES + 1)
+        lab = self.lab
+        try:
+            steps = parse_script(data, name, lab.panel, lab.session.labels)
+            await asyncio.wrap_future(lab.call(lambda: lab.start_script(steps, name)))
+        except PlcLabError as e:
+            return _refuse(str(e), errors=[{"text": str(e), "file": name, "line": None, "source": None}])
+        self._broadcast({"type": "notice", "text": f"input script {name}: the stand reset, replaying {len(steps)} step(s)"})
+        return web.json_response({"ok": True, "message": f"replaying {name}: {len(steps)} step(s)", "errors": []})
+
     async def reload(self, request: web.Request) -> web.Response:
         """The program again: the last upload (the page's files are not on disk), else the
         --program files read again, else the shipped variant read again."""
@@ -564,7 +588,7 @@ class LabServer:
 
 
 ALL_OPS = ("set", "press", "release", "speed", "pause", "run", "scan", "restart", "inject", "clear", "trends",
-           "tree", "watch", "force", "unforce", "source", "monitor", "register", "knob", "part", "contour")
+           "tree", "watch", "force", "unforce", "source", "monitor", "unscript", "register", "knob", "part", "contour")
 
 
 def _bit(value: Any) -> int:

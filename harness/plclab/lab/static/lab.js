@@ -252,6 +252,19 @@ function buildRun(h) {
   $("#scan").onclick = () => send("scan").catch((e) => notice(e.message));
   $("#restart").onclick = () => send("restart").catch((e) => notice(e.message));
   $("#reload").onclick = () => postProgram("/api/reload", null);
+  const script = $("#script-file");
+  script.onchange = async () => {
+    const f = script.files[0];
+    script.value = "";
+    if (!f) return;
+    let answer;
+    try {
+      const r = await post(`/api/script?name=${encodeURIComponent(f.name)}`, await f.arrayBuffer(), false);
+      answer = await r.json();
+    } catch (e) { answer = { ok: false, message: `the lab did not answer (${e.message})` }; }
+    say("#script-status", answer.message, answer.ok);
+  };
+  $("#script-stop").onclick = () => send("unscript").catch((e) => notice(e.message));
   const input = $("#program-files");
   input.onchange = () => { if (input.files.length) uploadFiles(input.files); input.value = ""; };
   const drop = $("#drop");
@@ -388,6 +401,10 @@ async function grade(task) {
 // Data is taken as it comes; the page is drawn once per animation frame with the newest.
 let drawScheduled = false;
 function onState(s) {
+  if (lab.state && s.epoch !== lab.state.epoch) {     // the stand was reset (an input script): start afresh
+    lab.trends = new Map(); lab.events = []; lab.actions = [];
+    lab.dirtyEvents = lab.dirtyActions = true;
+  }
   lab.state = s;
   if ("frames" in s) { lab.frames = s.frames; lab.dirtyFrames = true; }
   if (s.monitor) {                           // changes only: kept until drawn (several may come per frame)
@@ -429,6 +446,7 @@ function render(s) {
     speed.value = String(s.speed);
   }
   $("#program-name").textContent = s.program;
+  renderScript(s.script);
   if (s.loads !== lab.loads) {               // another program: the online listing is read again
     const shown = lab.pous !== null && lab.pous !== undefined;
     lab.loads = s.loads;
@@ -456,6 +474,19 @@ function render(s) {
   markFaultLine();
   markForced(s);
   drawTrends();
+}
+
+function renderScript(sc) {
+  let text = null;
+  if (sc) {
+    text = `replaying ${sc.name}: step ${sc.done} of ${sc.steps} applied` + (sc.next ? `; next ${sc.next}` : "");
+    lab.scriptShown = sc.name;
+  } else if (lab.scriptShown) {                 // ended (or stopped): said once
+    text = `${lab.scriptShown}: finished (the console log lists each step)`;
+    lab.scriptShown = null;
+  }
+  $("#script-stop").disabled = !sc;
+  if (text !== null && $("#script-status").textContent !== text) say("#script-status", text, true);
 }
 
 function renderEvents() {
