@@ -549,6 +549,11 @@ class Lab:
         while not self._stop.is_set():
             try:
                 self._run_paced()
+            except MemoryError:       # past the lab's memory limit outside a scan (a scan's is a PLC fault)
+                self.paused = True
+                self.session.log("the lab paused: out of memory (the memory limit of a program run, "
+                                 "docs/reliability.md); load a smaller program or restart the lab")
+                self._stop.wait(0.5)
             except Exception as e:    # noqa: BLE001 - a bug of ours: the clock stops, the pages say why
                 import logging
                 logging.getLogger("plclab.lab").exception("lab engine")
@@ -929,7 +934,7 @@ def read_upload(files: Sequence[tuple[str, Any]]) -> tuple[list[tuple[str, str]]
     element of a drawing. Held to the memory limit of a program run (plclab.limits)."""
     from plclab.frontend import is_project_file
     from plclab.limits import memory_limited
-    from plclab.plcopen.project import source_from_xml
+    from plclab.plcopen.project import source_from_xml       # imported before the limit (lxml maps a lot)
     st_texts = [(n, t) for n, t in files if not is_project_file(n)]
     out: list[tuple[str, str]] = []
     errors: list[str] = []
@@ -950,33 +955,65 @@ def read_upload(files: Sequence[tuple[str, Any]]) -> tuple[list[tuple[str, str]]
     return out, errors
 
 
+TRIAL_TIMEOUT_S = 120.0     # wall seconds a trial load may take (a lab program: well under a second)
+
+
+
 def check_program(sources: Sequence[tuple[str, str]], trial: bool = False):
     """The front end's verdict on an uploaded program: (checked, []) or (None, diagnostics).
     With `trial`, the program is also compiled and instantiated once (no retain, no scan)
-    off the running PLC, so what fails there fails before the PLC stops. Whatever goes
-    wrong (even a RecursionError or a MemoryError) is one line, never an exception."""
-    from plclab.limits import memory_limited
-    with memory_limited():              # a student's file: the check and the trial load held to the limit
-        return _check_program(sources, trial)
-
-
-def _check_program(sources: Sequence[tuple[str, str]], trial: bool):
-    from plclab.frontend import check_sources
+    in a child process held to the memory limit of a program run (plclab.limits: a process
+    limit, as grade-class gives each student), so what fails there fails before the PLC
+    stops and no upload grows the lab's own process past it. Whatever goes wrong (even a
+    RecursionError or a MemoryError) is one line, never an exception."""
     where = f"{sources[-1][0]}:1:1: error: " if sources else "<upload>:1:1: error: "
+    if trial:                           # first: what the check and the load take is then known to fit
+        why = _trial_load(sources)
+        if why is not None:
+            return None, [f"{where}the program cannot be {why}"]
+    return _check_program(sources, where)
+
+
+def _check_program(sources: Sequence[tuple[str, str]], where: str):
+    from plclab.frontend import check_sources
     try:
         checked = check_sources(sources)
     except CompileError as e:
         return None, [str(d) for d in e.diagnostics]
     except (Exception, RecursionError, MemoryError) as e:       # noqa: BLE001 - a student's file
         return None, [f"{where}the program cannot be checked ({_why(e)})"]
-    if trial and checked.config is not None:
-        try:
-            from plclab.runtime.compiler import compile_unit
-            from plclab.runtime.plc import PLC
-            PLC(compile_unit(checked)).stop()
-        except (Exception, RecursionError, MemoryError) as e:   # noqa: BLE001 - a student's file
-            return None, [f"{where}the program cannot be loaded ({_why(e)})"]
     if checked.config is None:
         return None, [f"{sources[-1][0]}:1:1: error: no CONFIGURATION: load the complete program (the bundle "
                       f"from `plclab build`, with its CONFIGURATION Config0 and TASKs)"]
     return checked, []
+
+
+def _trial_load(sources: Sequence[tuple[str, str]]) -> Optional[str]:
+    """Check, compile and instantiate `sources` in a child process under the memory limit
+    (plclab.lab.trial); None when it loads (or fails the check: the caller's check names the
+    diagnostics on the drawing), else 'loaded (why not)' / 'checked (why not)'."""
+    import json
+    import os
+    import subprocess
+    import sys
+
+    import plclab
+    env = dict(os.environ)
+    root = str(Path(plclab.__file__).resolve().parents[1])
+    env["PYTHONPATH"] = root + (os.pathsep + env["PYTHONPATH"] if env.get("PYTHONPATH") else "")
+    data = json.dumps([[str(n), str(t)] for n, t in sources])
+    try:
+        done = subprocess.run([sys.executable, "-m", "plclab.lab.trial"], input=data, capture_output=True,
+                              text=True, env=env, timeout=TRIAL_TIMEOUT_S)
+    except subprocess.TimeoutExpired:
+        return f"loading it took more than {TRIAL_TIMEOUT_S:g} s"
+    except OSError as e:
+        return f"the trial load could not start: {e.strerror or e}"
+    lines = done.stdout.strip().splitlines()
+    if done.returncode == 0 and lines and lines[-1] in ("ok", "check"):
+        return None                     # loads, or the check's diagnostics (this process names them)
+    if lines and lines[-1].startswith(("checked (", "loaded (")):
+        return lines[-1]
+    if done.returncode < 0 or "MemoryError" in done.stderr:
+        return "loaded (it needs more memory than the lab has: MemoryError)"
+    return f"loaded (the trial load stopped, exit {done.returncode})"

@@ -47,6 +47,8 @@ from plclab.lab.engine import SPEEDS, Lab, LabError, check_program, read_upload
 STATIC = Path(__file__).resolve().parent / "static"
 MAX_UPLOAD = 4 * 1024 * 1024      # bytes per upload: a lab program is a few tens of kB of ST (a plc.xml, ten times that)
 MAX_FILES = 32
+LAB_OVERHEAD = 512 * 1024 * 1024  # bytes the lab process may grow by beyond one program run's allowance:
+                                  # its threads' malloc arenas, the page's traces, a grade beside the running PLC
 MAX_MESSAGE = 64 * 1024           # bytes of one WebSocket message from a page
 
 
@@ -461,7 +463,10 @@ class LabServer:
         if sum(is_project_file(n) for n, _ in files) > 1:
             return _refuse("upload: one OpenPLC Editor project (plc.xml) at a time (with .st files if you like)")
         loop = asyncio.get_running_loop()
-        sources, errors = await loop.run_in_executor(None, read_upload, files)
+        try:
+            sources, errors = await loop.run_in_executor(None, read_upload, files)
+        except MemoryError:
+            return _refuse("upload: reading it needs more memory than the lab has; the PLC keeps the program it runs")
         if errors:
             return _refuse(f"the program does not pass the check ({len(errors)} error(s)); the PLC keeps the "
                            f"program it runs", errors=[_located(e, sources) for e in errors])
@@ -708,8 +713,15 @@ class LabThread:
 
 
 def serve_lab(server: LabServer, report=print) -> int:
-    """The CLI's `plclab lab`: serve until Ctrl-C / SIGTERM."""
+    """The CLI's `plclab lab`: serve until Ctrl-C / SIGTERM. The process is held to the memory
+    allowance of a program run (plclab.limits) for its life: a student's program, loaded or
+    uploaded, never takes the machine's memory (a scan past it is the PLC's out_of_memory
+    fault; an upload past it is refused in one line; the lab goes on)."""
     import signal
+
+    from plclab.limits import limit_memory, memory_allowance
+    allowance = memory_allowance()
+    limit_memory(None if allowance is None else allowance + LAB_OVERHEAD)
 
     async def main() -> None:
         stop = asyncio.Event()
