@@ -86,7 +86,12 @@ def test_ladder_online_shows_power_flow_as_sb1_is_held_and_released(lab_page, tm
     long_given = page.get_by_label("ladder diagram").locator('g[aria-label="coil LongGiven"] >> nth=0')
     expect(page.locator(f'#ladder [data-value="{long_given.get_attribute("data-id")}.var"]')).to_have_text(
         "TRUE", timeout=10_000)
-    page.locator("#online").screenshot(path=str(shots / "lab-ladder-online.png"))
+    box = page.locator("#online").bounding_box()            # a full-page capture: nothing scrolls away
+    scroll = page.evaluate("({x: scrollX, y: scrollY})")     # from under the pointer holding SB1
+    page.screenshot(path=str(shots / "lab-ladder-online.png"), full_page=True,
+                    clip={"x": box["x"] + scroll["x"], "y": box["y"] + scroll["y"],
+                          "width": box["width"], "height": box["height"]})
+    expect(pressed).to_have_attribute("data-state", "on")   # still held when the picture was taken
     page.mouse.up()                                     # released: nothing conducts on rung 1
     expect(pressed).to_have_attribute("data-state", "off", timeout=WAIT)
     expect(held).to_have_attribute("data-state", "off", timeout=WAIT)

@@ -550,6 +550,7 @@ async function showPou(name, instance) {
     "An edge contact (P, N) shows its variable's level (its one-scan pulse is too short to see)."
     : pou.generated ? "Drawn in OpenPLC Editor (FBD): shown as the ST it becomes, with live values." : "";
   $("#ladder").hidden = !pou.ladder;
+  $("#online-note").hidden = !!pou.ladder;            // the note on the ST listing: not for a drawing
   $("#source").hidden = !!pou.ladder;
   if (pou.ladder) drawLadder(pou.ladder); else $("#ladder").replaceChildren();
   const byLine = new Map();
