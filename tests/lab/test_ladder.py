@@ -96,3 +96,57 @@ def test_ladder_online_shows_power_flow_as_sb1_is_held_and_released(lab_page, tm
     expect(pressed).to_have_attribute("data-state", "off", timeout=WAIT)
     expect(held).to_have_attribute("data-state", "off", timeout=WAIT)
     expect(was_held).to_have_attribute("data-state", "off", timeout=WAIT)
+
+
+def test_power_flow_follows_the_translated_program_scan_by_scan(tmp_path):
+    """Series and parallel contacts, a negated one, a function box (GT, its result in the
+    Editor's temporary), an FB box (TON) and coils: after each scan of the translated program,
+    the power the lab draws on each element is what the rung's logic gives for the values the
+    PLC holds (and each coil's energised state is its variable, for a normal coil)."""
+    import sys
+    sys.path.insert(0, str(Path(__file__).resolve().parents[1] / "ladder"))
+    from drawing import Diagram, Pou, project
+
+    from plclab.frontend import load_files, read_sources
+    from plclab.lab.ladder import PowerFlow, drawings, pou_elements, time_aware
+    from plclab.runtime.compiler import compile_unit
+    from plclab.runtime.plc import PLC
+    from plclab.runtime.sim import Simulation
+
+    d = Diagram()
+    a = d.contact("A", 0, 0)
+    nb = d.contact("B", 0, 1, after=a, negated=True)
+    c = d.contact("C", 1, 0)
+    q = d.coil("Q", 0, 4, after=[nb, c])                     # Q := (A AND NOT B) OR C
+    x, y = d.invar("X", 3, 0), d.invar("Y", 4, 0)
+    gt = d.block("GT", 3, 1, [("IN1", x), ("IN2", y)], ["OUT"])
+    q2 = d.coil("Q2", 3, 4, after=(gt, "OUT"))               # Q2 := X > Y
+    ton = d.block("TON", 6, 1, [("IN", a), ("PT", d.invar("T#30ms", 7, 0))], ["Q", "ET"], instance="T1")
+    q3 = d.coil("Q3", 6, 4, after=(ton, "Q"))
+    pou = Pou("main", "program", d, {"localVars": [(n, "BOOL", None) for n in ("A", "B", "C", "Q", "Q2", "Q3")]
+                                     + [("X", "INT", None), ("Y", "INT", None), ("T1", "TON", None)]})
+    path = tmp_path / "plc.xml"
+    path.write_bytes(project([pou], program="main"))
+    sources = read_sources([path])
+    assert f"_TMP_GT{gt.local_id}_OUT" in sources[0][1]              # the name the lab reads
+    assert "MAIN" in drawings(sources)
+    sim = Simulation(PLC(compile_unit(load_files([path]))))
+    elements = pou_elements(sources, "main")
+    seen = []
+    for a_, b_, c_, x_, y_ in [(1, 0, 0, 5, 3), (1, 1, 0, 1, 3), (0, 1, 1, 3, 3), (1, 0, 0, 9, 2),
+                               (1, 0, 0, 9, 2), (1, 0, 0, 9, 2), (1, 0, 0, 9, 2), (0, 0, 0, 0, 0)]:
+        for name, v in (("A", bool(a_)), ("B", bool(b_)), ("C", bool(c_)), ("X", x_), ("Y", y_)):
+            sim.set(f"instance0.{name}", v)
+        sim.step(1)
+        power = PowerFlow(elements, "instance0", time_aware(sim.plc)).state()
+        read = sim.plc.read
+        assert power[str(a.local_id)] is bool(a_)
+        assert power[str(nb.local_id)] is (bool(a_) and not b_)
+        assert power[str(q.local_id)] is read("instance0.Q") is ((bool(a_) and not b_) or bool(c_))
+        assert power[f"{gt.local_id}.OUT"] is power[str(q2.local_id)] is read("instance0.Q2") is (x_ > y_)
+        assert power[f"{ton.local_id}.Q"] is power[str(q3.local_id)] is read("instance0.Q3")
+        assert power[f"{q.local_id}.var"] is read("instance0.Q")
+        seen.append(power[str(q3.local_id)])
+        if power[str(q3.local_id)]:
+            assert power[f"{ton.local_id}.ET"] == "T#30ms"
+    assert seen[-1] is False and True in seen            # the 30 ms timer ran out while A stayed on, then reset
