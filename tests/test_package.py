@@ -90,6 +90,8 @@ def test_installed_plclab_builds_runs_and_grades_from_another_folder(installed, 
 
     r = _run([plclab, "grade", "mp9c", "task1", "start.st", "--out", "grade"], cwd=tmp_path)
     assert r.returncode == 1 and "FAIL" in r.stdout and "T1.1" in r.stdout, r.stdout + r.stderr
+    # the wheel carries no model answer: the scenarios ran, one line says exploration did not
+    assert "exploration not run: no model answer here" in r.stdout and "E1" not in r.stdout, r.stdout
 
     r = _run([plclab, "build", "mp9c", "task2", "-o", "ref.st"], cwd=tmp_path)
     assert r.returncode == 1 and r.stderr.count("\n") == 1 and "reference solution" in r.stderr

@@ -233,6 +233,8 @@ def run_bench(report: Callable[[str], None] = print, quick: bool = False,
     results["lab"] = report_lab(report, quick=quick)
     from plclab.cnc.bench import report_cnc
     results["cnc"] = report_cnc(report, quick=quick)
+    from plclab.grader.explore import report_explore
+    results["explore"] = report_explore(report, quick=quick)
     rt = bench_realtime(3.0 if quick else 10.0)
     results["realtime"] = rt
     report(f"real time: {rt['tick_ms']:g} ms task for {rt['seconds']:g} s under {rt['modbus_requests']} Modbus "

@@ -285,9 +285,12 @@ def _cmd_grade(args: argparse.Namespace) -> int:
                           "(plclab grade thermo scada1|scada2)")
     if not args.files:
         raise PlcLabError("grade: give the program's ST files (plclab grade STAND TASK FILE.st...)")
+    if args.explore is not None and args.explore < 0:
+        raise PlcLabError(f"grade: --explore takes a number of scripts >= 0, not {args.explore}")
     from plclab.limits import memory_limited
     with memory_limited():               # the student's program is untrusted: bounded (docs/reliability.md)
-        report = grade(args.stand, args.task, args.files, out_dir=args.out)
+        report = grade(args.stand, args.task, args.files, out_dir=args.out, reference=args.reference,
+                       explore=args.explore)
     print(report.text(), end="")
     return report.exit_code
 
@@ -350,7 +353,8 @@ def _cmd_run(args: argparse.Namespace) -> int:
 
     with memory_limited(None if not args.program else -1):   # your program is bounded like a student's
         r = run_scenario(args.stand, args.variant, args.scenario, args.csv, args.vcd, args.plot,
-                         program=args.program)
+                         program=args.program, inputs=args.inputs, against=args.against,
+                         reference=args.reference)
     print("\n".join(r.timeline))
     if r.absent_note:
         print(r.absent_note)
@@ -358,9 +362,16 @@ def _cmd_run(args: argparse.Namespace) -> int:
         print(f"wrote {f}")
     if r.session.fault is not None:
         print(r.session.fault)
+    if r.failure and args.inputs:
+        print(f"difference from the {args.against} model answer: {r.failure}")
+        return 1
     if r.failure:
         print(f"scenario FAILED: {r.failure}")
         return 1
+    if args.inputs:
+        print(f"script {args.inputs} played ({r.session.now:.1f} s of plant time)"
+              + (f": no difference from the {args.against} model answer" if args.against else ""))
+        return 0
     print(f"scenario {args.scenario or 'demo'} passed ({r.session.now:.1f} s of plant time)")
     return 0
 
@@ -427,6 +438,11 @@ def build_parser() -> argparse.ArgumentParser:
     c.add_argument("--plot", metavar="F")
     c.add_argument("--program", nargs="+", metavar="FILE.st", help="run these ST files (your program) instead "
                    "of a variant")
+    c.add_argument("--inputs", metavar="SCRIPT.csv", help="play this operator script (time_s,name,value; "
+                   "a grade's exploration writes one) instead of a scenario")
+    c.add_argument("--against", metavar="TASK", help="with --inputs: play it on the task's model answer too and "
+                   "show the first difference (a checkout, or --reference)")
+    c.add_argument("--reference", nargs="+", metavar="FILE.st", help="with --against: the course's own model answer")
     c.set_defaults(func=_cmd_run)
 
     c = sub.add_parser("grade", help="grade a program on a lab task: one row per requirement")
@@ -438,6 +454,10 @@ def build_parser() -> argparse.ArgumentParser:
                    help="thermo SCADA tasks: serve the stand here and record the client (default 127.0.0.1:5020)")
     c.add_argument("--duration", type=_seconds, metavar="T", help="thermo SCADA tasks: record for T, then grade")
     c.add_argument("--traffic", metavar="FILE.csv", help="thermo SCADA tasks: grade a recorded traffic log")
+    c.add_argument("--reference", nargs="+", metavar="FILE.st", help="the course's own model answer to explore "
+                   "against (default: the checkout's solutions/)")
+    c.add_argument("--explore", type=int, metavar="N", help="random operator scripts explored against the model "
+                   "answer (default: the stand's budget; 0: scenarios only)")
     c.add_argument("--requirements", action="store_true",
                    help="grade nothing: list what the task checks (id and requirement, as the report's rows)")
     c.set_defaults(func=_cmd_grade)

@@ -40,18 +40,27 @@ class RunResult:
 def run_scenario(stand: str, variant: Optional[str] = None, scenario: Optional[str] = None,
                  csv: Optional[str] = None, vcd: Optional[str] = None, plot: Optional[str] = None,
                  out_dir: str = "out", retain_dir: Optional[Path] = None,
-                 program: Optional[Sequence[str]] = None) -> RunResult:
+                 program: Optional[Sequence[str]] = None, inputs: Optional[str] = None,
+                 against: Optional[str] = None, reference: Optional[Sequence[str]] = None) -> RunResult:
     """Run scenario `scenario` (default: the demo) of `stand` on `variant` or on the ST files
     `program` (one compilation unit, a complete program with its CONFIGURATION). A program
-    that does not compile raises CompileError (its `file:line:col: error:` lines)."""
+    that does not compile raises CompileError (its `file:line:col: error:` lines).
+
+    `inputs`: an operator script (time_s,name,value; what a grade's exploration writes) is
+    played instead of a scenario; with `against` (a task) it is played on that task's model
+    answer too, and `failure` is the first difference, as the grade's row states it."""
     spec = stand_spec(stand)
+    if (against or reference) and not inputs:
+        raise PlcLabError("run: --against and --reference compare an operator script's play: give --inputs too")
+    if inputs and scenario:
+        raise PlcLabError("run: give --scenario or --inputs, not both")
     if program and variant:
         raise PlcLabError("run: give --variant or --program, not both")
     for out in (csv, vcd, plot):
         if out:
             check_output(out)                # plclab.fileio: a bad output path is refused up front
     name = scenario or spec.default_scenario
-    play = spec.scenario(name)
+    play = spec.scenario(name) if not inputs else None
     srcs, checked = None, None
     if program:
         srcs = spec.program_sources(program) if spec.program_sources else read_sources(program)
@@ -71,12 +80,16 @@ def run_scenario(stand: str, variant: Optional[str] = None, scenario: Optional[s
     else:
         s = spec.session(program=srcs, checked=checked, retain_path=retain_path)
     failure = None
-    try:
-        play(s)
-        spec.check_never(s)
-    except ScenarioFailure as e:
-        failure = str(e)
-    if scenario is None and not (csv or vcd or plot):
+    if inputs:
+        from plclab.grader.explore import replay
+        failure = replay(spec, s, inputs, against, reference, srcs, checked)
+    else:
+        try:
+            play(s)
+            spec.check_never(s)
+        except ScenarioFailure as e:
+            failure = str(e)
+    if scenario is None and not inputs and not (csv or vcd or plot):
         base = Path(out_dir) / f"{stand}-{name}"
         csv, vcd, plot = f"{base}.csv", f"{base}.vcd", f"{base}.png"
     files = []

@@ -98,13 +98,19 @@ _ONE_COMPILE: contextvars.ContextVar[Optional[list]] = contextvars.ContextVar("p
 
 
 @contextlib.contextmanager
-def compiled_once(checked: Any) -> Iterator[None]:
+def compiled_once(checked: Any, share: Optional[list] = None) -> Iterator[None]:
     """Inside the block, every Session (and PLC restart) of the checked program `checked`
     loads one compiled program, compiled on first use: the grader runs one submission through
     many scenarios and compiles it once per grade. A compiled program belongs to the PLC that
     loaded it last (as after a cold restart), so the sessions of the block must run one after
-    another, as the grader's scenarios do."""
-    token = _ONE_COMPILE.set([checked, None])
+    another, as the grader's scenarios do. `share` (an empty list the caller keeps) carries
+    the compiled program from one block to the next: exploration alternates two programs."""
+    if share is not None:
+        if not share:
+            share.extend([checked, None])
+        token = _ONE_COMPILE.set(share)
+    else:
+        token = _ONE_COMPILE.set([checked, None])
     try:
         yield
     finally:

@@ -511,7 +511,9 @@ def _pause_pattern(seen: Sequence[float], wanted: Sequence[float], tol: float, n
     if max(seen) - min(seen) <= 2 * tol:
         return f"every frame got the same {seen[0]:.2f} s pause: the pause recorded with each frame is not used"
     if like([wanted[(k + 1) % n] for k in range(n)], range(n - 1)):
-        return "off by one: after each frame came the pause recorded with the next frame"
+        return ("off by one: after each frame came the pause recorded with the next frame (the pause read "
+                "from the wrong frame, or stored on every manual scan instead of at the SB1 press, so that "
+                f"each frame kept {name} as it was set for the next one)")
     if like([wanted[k - 1] for k in range(n)], range(1, n)):
         return "off by one: after each frame came the pause recorded with the frame before it"
     return ""

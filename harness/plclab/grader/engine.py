@@ -14,6 +14,7 @@ or a check (anything but ScenarioFailure) turns that scenario's unfinished requi
 """
 from __future__ import annotations
 
+import dataclasses
 import tempfile
 from pathlib import Path
 from typing import Optional, Sequence
@@ -24,12 +25,17 @@ from plclab.frontend import check_sources, read_sources
 from plclab.scenario import ScenarioFailure, Session, compiled_once
 from plclab.trace import write_csv, write_vcd
 
+from .explore import exploration_rows
 from .registry import EVERY, Checks, Requirement, RequirementSet, requirement_set
 from .report import GradeReport, Row
 
 
-def grade(stand: str, task: str, files: Sequence[str], out_dir: Optional[str] = None) -> GradeReport:
+def grade(stand: str, task: str, files: Sequence[str], out_dir: Optional[str] = None,
+          reference: Optional[Sequence[str]] = None, explore: Optional[int] = 0) -> GradeReport:
     """Grade the ST `files` (one program) on `task` of `stand`; trace files go to `out_dir`.
+    Besides the scenarios, a robot's task is explored against its model answer (the checkout's
+    solutions/, or the `reference` files): `explore` random scripts (None: the stand's budget,
+    what `plclab grade` uses; 0, the default of this function: none); plclab.grader.explore.
 
     Raises PlcLabError only for a stand or task the grader does not know, or trace files it
     must not write; a program that does not compile or does not run is a report that fails.
@@ -41,11 +47,12 @@ def grade(stand: str, task: str, files: Sequence[str], out_dir: Optional[str] = 
         return GradeReport(stand, task, req.title, [str(f) for f in files],
                            errors=[str(d) for d in e.diagnostics], noun=req.submission.noun,
                            unreadable=req.submission.unreadable)
-    return grade_sources(stand, task, sources, out_dir)
+    return grade_sources(stand, task, sources, out_dir, reference, explore)
 
 
 def grade_sources(stand: str, task: str, sources: Sequence[tuple[str, str]],
-                  out_dir: Optional[str] = None) -> GradeReport:
+                  out_dir: Optional[str] = None, reference: Optional[Sequence[str]] = None,
+                  explore: Optional[int] = 0) -> GradeReport:
     """Like `grade`, with the program given as (file name, text) pairs."""
     req = requirement_set(stand, task)
     _check_trace_outputs(req, out_dir)               # a bad --out: one line, before the work
@@ -91,6 +98,18 @@ def grade_sources(stand: str, task: str, sources: Sequence[tuple[str, str]],
             if out_dir is not None:
                 report.traces[scenario.name] = _write_traces(s, req, scenario.name, Path(out_dir))
     report.rows = _rows(req, checks)
+    rows, notes, files = exploration_rows(req, sources, checked, reference, explore, out_dir)
+    if rows:
+        e1, named = rows[0], rows[1] if len(rows) > 1 else None
+        at = next((i for i, r in enumerate(report.rows) if named and r.id == named.id), None)
+        if named is not None and at is not None and report.rows[at].passed:
+            # the difference is named by the requirement it breaks; E1 points there
+            report.rows[at] = named
+            e1 = dataclasses.replace(e1, expected="", observed=f"the difference breaks {named.id}: see its row",
+                                     steps=())
+        report.rows.append(e1)
+    report.notes += notes
+    report.traces.update(files)
     return report
 
 

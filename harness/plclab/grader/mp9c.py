@@ -389,23 +389,42 @@ MECHANISMS = (
 )
 
 
+LONGEST_TRAVEL = 1.2      # s: the rotation
+
+
 def sc_manual(s: Session, c: Checks) -> None:
-    """Each switch moves its mechanism both ways in manual mode."""
+    """Each switch moves its mechanism both ways in manual mode, with the other switches at 0
+    and then at 1: a mechanism interlocked with another one (the extension only while the arm
+    is up) fails its own row, with the other switches named, not only a playback frame."""
     op = Mp9cOp.begin(s, c)
     op.run(0.5)
     for rid, switch, _what, on, off, travel in MECHANISMS:
         with c.requirement(rid):
-            for value, (valves, sensors) in ((1, on), (0, off)):
-                t = op.set(**{switch: value})
-                got = op.settled(t, valves)
-                if not c.check(rid, got == valves, f"after {switch} := {value}: {fmt(valves)} (within one scan)",
-                               fmt(got), t):
+            for others in (0, 1):
+                rest = {sw: others for _r, sw, *_ in MECHANISMS if sw != switch}
+                if others:
+                    op.set(**rest)
+                    op.run(LONGEST_TRAVEL + MARGIN)
+                context = f" (with {fmt(rest)})" if others else ""
+                done = True
+                for value, (valves, sensors) in ((1, on), (0, off)):
+                    t = op.set(**{switch: value})
+                    got = op.settled(t, valves)
+                    if not c.check(rid, got == valves, f"after {switch} := {value}{context}: {fmt(valves)} "
+                                   "(within one scan)", fmt(got), t):
+                        done = False
+                        break
+                    reached = op.when(lambda io, w=sensors: matches(io, w), after=t, timeout=travel + MARGIN)
+                    if not c.check(rid, reached is not None, f"after {switch} := {value}{context}: {fmt(sensors)} "
+                                   f"within {travel + MARGIN:g} s", fmt(op.values(sensors)), t):
+                        done = False
+                        break
+                    op.run(0.5)
+                if others:
+                    op.set(**{sw: 0 for sw in rest})
+                    op.run(LONGEST_TRAVEL + MARGIN)
+                if not done:
                     break
-                reached = op.when(lambda io, w=sensors: matches(io, w), after=t, timeout=travel + MARGIN)
-                if not c.check(rid, reached is not None, f"after {switch} := {value}: {fmt(sensors)} "
-                               f"within {travel + MARGIN:g} s", fmt(op.values(sensors)), t):
-                    break
-                op.run(0.5)
         op.set(**{switch: 0})
         op.run(travel + MARGIN)
 

@@ -42,6 +42,7 @@ class Row:
     scenario: str = ""               # which scenario (trace) shows it
     internal: bool = False           # not checked because the grader failed: not the student's fault
     unchecked: bool = False          # not checked because an earlier failure stopped its scenario
+    steps: tuple[str, ...] = ()      # exploration: the shortest console history that shows it
 
     @property
     def result(self) -> str:
@@ -63,6 +64,7 @@ class GradeReport:
     traces: dict[str, list[Path]] = field(default_factory=dict)   # scenario -> files written
     noun: str = "program"                            # what `files` are (the thermo SCADA tasks: "traffic log")
     unreadable: str = "the program does not compile:"   # heading over `errors` (a traffic log: "cannot be read")
+    notes: list[str] = field(default_factory=list)   # lines after the verdict (how much exploration ran)
 
     @property
     def passed(self) -> bool:
@@ -121,6 +123,12 @@ class GradeReport:
                     where.append(f"scenario '{r.scenario}'{trace}")
                 if where:
                     out.append(f"{indent}{', '.join(where)}")
+                if r.steps:
+                    out.append(f"{indent}shortest console history that shows it:")
+                    for step in r.steps:
+                        wrapped = textwrap.wrap(step, detail_width) or [""]
+                        out.append(f"{indent}  {wrapped[0]}")
+                        out.extend(f"{indent}     {w}" for w in wrapped[1:])
         out.append("")
         n_pass = sum(r.passed for r in self.rows)
         verdict = "PASS" if self.passed else "FAIL"
@@ -133,6 +141,7 @@ class GradeReport:
             n = sum(r.internal for r in self.rows)
             out.append(f"the grader itself failed on {n} requirement(s) (ERROR): not a mistake of your "
                        "program; please report it")
+        out.extend(self.notes)
         written = [p for files in self.traces.values() for p in files]
         if written:
             folders = sorted({str(p.parent) for p in written})

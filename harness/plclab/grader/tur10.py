@@ -50,6 +50,7 @@ SETTLE = 0.3             # s for a link to stop after its reference went to 0 (l
 TRAVEL = 0.3             # +/- share of the expected jog distance a link may miss
 STILL = 2                # codes a link not driven may drift
 READ_WINDOW = 1.0        # s in which every sensor must be selected alone (Task 1)
+LATE_LOOK = 8.0          # s: how much longer a missed frame start is looked for, to measure it
 DONE_WAIT = 5.0          # a frame is reached within this after it started (longest ~1.7 s)
 QUIET = 2.0              # "nothing happens": every reference 0 for this long
 STEP = 0.1               # s the grader runs on between looks at the trace while it waits
@@ -236,8 +237,13 @@ class Tur10Op(Op[Frame]):
         start = self.when(moving, after=since, timeout=timeout)
         if start is None:
             pos = self.positions()
+            # how long the references really stayed 0: a pause too long is measured, not only missed
+            later = self.when(moving, after=since, timeout=timeout + LATE_LOOK)
+            waited = (f"; the next nonzero reference came at t = {later:.2f} s, {later - since:.2f} s after "
+                      f"t = {since:.2f} s" if later is not None else
+                      f"; still none {timeout + LATE_LOOK:g} s after t = {since:.2f} s")
             self.missed(rid, f"{label} starts within {timeout:g} s of t = {since:.2f} s (a nonzero reference "
-                        f"towards {frame.where()})", f"every reference stayed 0 (link 1 at {pos[1]})", since)
+                        f"towards {frame.where()})", f"every reference stayed 0 (link 1 at {pos[1]}){waited}", since)
             return None
         if on_start is not None:
             on_start()

@@ -63,8 +63,9 @@ def to_json_value(v: Any) -> Any:
         return v
     if hasattr(v, "__slots__") or hasattr(v, "__dict__"):   # FB instance: its variables
         names = getattr(type(v), "__slots__", None) or list(vars(v))
+        # a slot never set is no variable of the instance (a VAR_EXTERNAL lives in the globals)
         return {"fb": {n: to_json_value(getattr(v, n)) for n in names
-                       if not n.startswith("_") and not callable(getattr(v, n, None))}}
+                       if not n.startswith("_") and hasattr(v, n) and not callable(getattr(v, n, None))}}
     return None
 
 

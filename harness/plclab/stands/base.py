@@ -79,6 +79,9 @@ class StandSpec:
     # a student's `--program FILES` -> the sources to run (default: the files as they are, a
     # complete program); a stand may let one block of a task stand in for its stub (cnc)
     program_sources: Optional[Callable[[Sequence[str]], list[tuple[str, str]]]] = None
+    # the grader's exploration: operator-script generators, what is compared, tolerances and
+    # freedoms (plclab.stands.operators.Exploration); None: the stand is graded by scenarios alone
+    explore: Any = None
 
     @property
     def name(self) -> str:

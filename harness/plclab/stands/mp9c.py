@@ -17,6 +17,7 @@ from typing import Callable, Optional
 from plclab.plants.mp9c import FACE
 from plclab.scenario import ABSENT, ScenarioFailure, Session
 from plclab.stands import Stand, Task, Variant, gvl_labels
+from plclab.stands import exploration
 from plclab.stands.base import Fault, FaultParam, StandSpec
 
 # the starting program (Appendix 1: main program, manual / automatic / continuous /
@@ -365,5 +366,6 @@ PLOT_SIGNALS = ["SB1", "SA1", "I07"] + VALVES + SENSORS + ["HL1", FRAME_PTR]
 SPEC = StandSpec(
     stand=STAND, console=CONSOLE, lamps=tuple(label for label, _ in FACE.lamps), sensors=tuple(SENSORS), actuators=tuple(VALVES),
     faults=FAULTS, observables=OBSERVABLES, scenarios=SCENARIOS, timeline=timeline,
-    check_never=check_never, plot_signals=tuple(PLOT_SIGNALS))
+    check_never=check_never, plot_signals=tuple(PLOT_SIGNALS),
+    explore=exploration.MP9C)
 session = SPEC.session

@@ -18,6 +18,7 @@ from plclab.plants.base import signed16
 from plclab.plants.tur10 import FACE
 from plclab.scenario import ScenarioFailure, Session
 from plclab.stands import Stand, Task, Variant, gvl_labels
+from plclab.stands import exploration
 from plclab.stands.base import Fault, FaultParam, StandSpec
 
 # the starting program (Appendix 2: main program, manual / automatic subroutines, the timer
@@ -340,5 +341,6 @@ def timeline(s: Session) -> list[str]:
 SPEC = StandSpec(
     stand=STAND, console=CONSOLE, lamps=tuple(label for label, _ in FACE.lamps), sensors=SENSOR_BUS, actuators=tuple(DRIVES) + READ_ENABLES,
     faults=FAULTS, observables=OBSERVABLES, scenarios=SCENARIOS, timeline=timeline,
-    check_never=check_never, plot_signals=tuple(PLOT_SIGNALS))
+    check_never=check_never, plot_signals=tuple(PLOT_SIGNALS),
+    explore=exploration.TUR10)
 session = SPEC.session

@@ -1,0 +1,861 @@
+"""Exploration: the student's program and the task's model answer under the same random
+operator scripts, each in its own PLC with its own plant; what the stands show is compared.
+
+Scripted scenarios check what their authors thought of; a student's mistake often shows only
+after a console history nobody scripted (a stop followed by a second run, a restart in the
+middle of a pause). Here the stand's generator (plclab.stands.operators, declared in the
+StandSpec) writes seeded random scripts; both programs play each one; the first moment the
+stands differ beyond the stand's declared tolerances is a divergence. It is then shrunk to a
+minimal script (fewest actions, shortest holds, earliest times), written in the input-CSV
+format next to the traces, and the row names the student's ST statement that last wrote the
+first differing output in that scan.
+
+Deterministic and bounded: the seed is a hash of the submission's text (the same file gives
+the same report, byte for byte) and the budget is a number of scripts and of shrinking runs,
+never wall-clock time (`plclab bench` reports what one script costs). A budget spent without
+a divergence is a pass of the row; the report says how much was explored.
+
+Only the comparison is the grader's; what an operator does, what a stand shows and how
+closely two stands must agree are the stand's (plclab.stands.exploration).
+"""
+from __future__ import annotations
+
+import hashlib
+import os
+import random
+import re
+import sys
+import tempfile
+from dataclasses import dataclass, field
+from pathlib import Path
+from typing import Any, Callable, Optional, Sequence
+
+from plclab.errors import PlcLabError
+from plclab.scenario import Session, compiled_once
+from plclab.stands.operators import (FAULT, POWER, Event, Exploration, Observed, Script, fault_params,
+                                     script_from_rows)
+
+SUSPECT_MARGIN = 0.1       # s: an action this close to where two drifted programs differ is ambiguous
+DRIFT_SPAN = 0.5          # s: changes this close are one program a little behind the other, not two stories
+MOVE_SUSPECT = 0.35        # s: an ambiguous action is moved this much later and the script played again
+SHRINK_RUNS = 200          # default budget of the shrinker, in script plays (both programs)
+
+
+# --------------------------------------------------------------------------- playing a script
+
+class _Probe:
+    """Samples what the stand shows at every scan (a step hook after the plant's own) and keeps
+    only the changes: signal -> [(t, value)], the first entry the power-up value."""
+
+    def __init__(self, plant: Any, observe: Callable[[Any, Any], dict[str, Any]], clock: Callable[[], float]):
+        self.plant, self.observe, self.clock = plant, observe, clock
+        self.last: Optional[dict[str, Any]] = None
+        self.changes: dict[str, list[tuple[float, Any]]] = {}
+
+    def step(self, _dt: float) -> None:
+        now = round(self.clock(), 6)         # the session's time of the scan about to run
+        v = self.observe(self.plant, self.last)
+        last = self.last
+        if last is None:
+            self.changes = {k: [(now, x)] for k, x in v.items()}
+        else:
+            for k, x in v.items():
+                if x != last[k]:
+                    self.changes[k].append((now, x))
+        self.last = v
+
+
+def actions(script: Script) -> list[tuple[float, int, str, str, str]]:
+    """The script as timed actions (time, order, kind, name, value): set, press, release,
+    power, fault."""
+    out = []
+    for n, e in enumerate(script.events):
+        if e.name == POWER:
+            out.append((e.time, n, "power", e.name, e.value))
+        elif e.name == FAULT:
+            out.append((e.time, n, "fault", e.name, e.value))
+        elif e.is_press:
+            out.append((e.time, n, "press", e.name, "1"))
+            out.append((e.time + e.hold, n, "release", e.name, "0"))
+        else:
+            out.append((e.time, n, "set", e.name, e.value))
+    return sorted(out, key=lambda a: (round(a[0], 6), a[1]))
+
+
+def play(s: Session, script: Script, expl: Optional[Exploration] = None, until: Optional[float] = None,
+         split: Optional[tuple[float, Callable[[], None]]] = None) -> Optional[_Probe]:
+    """Play `script` on session `s` up to `until` (default: its end), logging each action so the
+    timeline shows it. With `expl`, a probe records what the stand shows; returns it.
+    `split = (t, fn)`: fn() is called once when plant time t is reached (a line tracer starts)."""
+    probe = _Probe(s.plant, expl.observe, lambda: s.now) if expl is not None else None
+
+    def attach() -> None:
+        if probe is not None and probe not in s.sim.plants:
+            s.sim.plants.append(probe)
+
+    def run_to(t: float) -> None:
+        nonlocal split
+        if split is not None and split[0] <= t:
+            at, fn = split
+            split = None
+            run_to(at)
+            fn()
+        dt = round(t - s.now, 9)
+        if dt > 0:
+            s.run(dt)
+
+    attach()
+    end = script.duration if until is None else until
+    for t, _n, kind, name, value in actions(script):
+        if t >= end:
+            break
+        run_to(t)
+        if kind == "set":
+            s.console.set(**{name: int(float(value))})
+        elif kind == "press":
+            s.console.hold(name)
+        elif kind == "release":
+            s.console.release(name)
+        elif kind == "power":
+            s.restart_plc(off_time=float(value))
+            attach()
+        else:
+            fname, params = fault_params(value)
+            s.inject(fname, **params)
+    run_to(end)
+    return probe
+
+
+def read_script(path: str, buttons: Sequence[str]) -> Script:
+    """An operator script file (time_s,name,value rows; plclab.stands.operators), one clear line
+    for a bad file."""
+    from plclab.trace.csvio import read_rows
+    try:
+        rows = read_rows(path)
+    except FileNotFoundError:
+        raise PlcLabError(f"{path}: no such file") from None
+    except OSError as e:
+        raise PlcLabError(f"{path}: cannot read: {e.strerror or e}") from None
+    out = []
+    for r in rows:
+        out.append((r.time_ns / 1e9, r.name, r.text))
+    return script_from_rows(out, buttons, where=path)
+
+
+# --------------------------------------------------------------------------- comparison
+
+@dataclass(frozen=True)
+class Divergence:
+    """The first moment the stands differ beyond the tolerances."""
+
+    time: float
+    signal: Observed
+    model: Any                   # the model answer's value then
+    student: Any                 # the student's
+    kind: str                    # 'value' | 'missing' | 'extra' | 'late' | 'early'
+    since: float                 # the last time this signal agreed (where the line search starts)
+    drift: float                 # how far the student lagged the model answer just before
+    lag: float = 0.0             # late / early: by how much
+
+    def text(self, tick: float) -> str:
+        o = self.signal
+        first = (f"at {self.time:.2f} s the model answer has {o.name} {o.show(self.model)}, "
+                 f"your program {o.name} {o.show(self.student)}")
+        if self.kind == "late":
+            first += f" (it changes {self.lag:.2f} s later than the model answer's)"
+        elif self.kind == "early":
+            first += f" (it changes {self.lag:.2f} s earlier than the model answer's)"
+        return first
+
+
+def _value_at(changes: list[tuple[float, Any]], t: float) -> Any:
+    v = changes[0][1]
+    for ct, cv in changes:
+        if ct > t + 1e-9:
+            break
+        v = cv
+    return v
+
+
+def _windows(script: Script, switch: str, value: int, settle: float) -> list[tuple[float, float]]:
+    """The spans when console `switch` has had `value` for `settle` s (power-up: 0)."""
+    spans, state, since = [], 0, 0.0
+    for e in script.events:
+        if e.name != switch or e.is_press:
+            continue
+        v = int(float(e.value))
+        if v == state:
+            continue
+        if state == value:
+            spans.append((since + settle, e.time))
+        state, since = v, e.time
+    if state == value:
+        spans.append((since + settle, float("inf")))
+    return [(a, b) for a, b in spans if b > a]
+
+
+def _in(spans: list[tuple[float, float]], t: float) -> bool:
+    return any(a <= t < b for a, b in spans)
+
+
+def compare(model: dict[str, list], student: dict[str, list], observed: Sequence[Observed], expl: Exploration,
+            script: Script, end: float) -> Optional[Divergence]:
+    """The first divergence of `student` from `model` (probe changes), or None.
+
+    Each signal's changes are paired in order: a pair must carry the same value (the signal's
+    own tolerance) and come at the same time within `timing_tol`, or within `timing_tol` of
+    the lag the student had at the pair before (a program a scan late at every frame is late
+    by a scan more each frame), and never more than `max_drift` late in all. A change one
+    program makes and the other does not is a divergence unless it comes so near the end of
+    the script that the other had no time to make it."""
+    tol, cut = expl.timing_tol, end - expl.max_drift - expl.timing_tol
+    found: list[Divergence] = []
+    pairs: list[tuple[float, float, Observed, float]] = []      # (tm, ts, signal, since)
+    for o in observed:
+        cm, cs = model[o.name], student[o.name]
+        if o.only_when is not None:
+            spans = _windows(script, *o.only_when)
+            cm = cm[:1] + [c for c in cm[1:] if _in(spans, c[0])]
+            cs = cs[:1] + [c for c in cs[1:] if _in(spans, c[0])]
+        since = 0.0
+        if not o.equal(cm[0][1], cs[0][1]):
+            found.append(Divergence(0.0, o, cm[0][1], cs[0][1], "value", 0.0, 0.0))
+            continue
+        for k in range(1, max(len(cm), len(cs))):
+            if k < len(cm) and k < len(cs):
+                (tm, vm), (ts, vs) = cm[k], cs[k]
+                if not o.equal(vm, vs):
+                    t = max(tm, ts)
+                    found.append(Divergence(t, o, vm, vs, "value", since, ts - tm))
+                    break
+                pairs.append((tm, ts, o, since))
+                since = min(tm, ts)
+            elif k < len(cm):
+                tm, vm = cm[k]
+                if tm <= cut:
+                    found.append(Divergence(tm, o, vm, _value_at(cs, tm), "missing", since, 0.0))
+                break
+            else:
+                ts, vs = cs[k]
+                if ts <= cut:
+                    found.append(Divergence(ts, o, _value_at(cm, ts), vs, "extra", since, 0.0))
+                break
+    prev = 0.0
+    for tm, ts, o, since in sorted(pairs, key=lambda p: (p[0], p[1])):
+        d = ts - tm
+        if (abs(d) > tol and abs(d - prev) > tol) or abs(d) > expl.max_drift:
+            if d > 0:
+                found.append(Divergence(tm, o, _value_at(model[o.name], tm), _value_at(student[o.name], tm),
+                                        "late", since, prev, d))
+            else:
+                found.append(Divergence(ts, o, _value_at(model[o.name], ts), _value_at(student[o.name], ts),
+                                        "early", since, prev, -d))
+            break
+        prev = d
+    if not found:
+        return None
+    first = min(found, key=lambda d: d.time)
+    drift = 0.0
+    for tm, ts, _o, _s in sorted(pairs, key=lambda p: (p[0], p[1])):
+        if tm < first.time:
+            drift = ts - tm
+    return Divergence(first.time, first.signal, first.model, first.student, first.kind, first.since, drift,
+                      first.lag)
+
+
+def suspects(script: Script, div: Divergence, model: dict, student: dict, observed: Sequence[Observed],
+             tick: float) -> set[int]:
+    """Actions so close to where the two programs' timing differs that which side of a
+    transition they fall on decides the outcome (a correct program a scan later than the
+    model answer must not fail for a press in that scan): their indexes in the script."""
+    spans: list[tuple[float, float]] = []
+    if abs(div.drift) >= tick / 2:
+        spans.append((div.time - abs(div.drift) - SUSPECT_MARGIN, div.time + SUSPECT_MARGIN))
+    for o in observed:
+        for (tm, _vm), (ts, _vs) in zip(model[o.name][1:], student[o.name][1:]):
+            if max(tm, ts) >= div.time:
+                break
+            if tick / 2 <= abs(ts - tm) <= DRIFT_SPAN:          # two programs a little apart in time
+                spans.append((min(tm, ts) - SUSPECT_MARGIN, max(tm, ts) + SUSPECT_MARGIN))
+    out = set()
+    for n, e in enumerate(script.events):
+        times = [e.time] + ([e.time + e.hold] if e.is_press else [])
+        if any(a <= t <= b for t in times for a, b in spans):
+            out.add(n)
+    return out
+
+
+# --------------------------------------------------------------------------- the two stands
+
+@dataclass
+class Program:
+    """One side of the comparison: sources, the front end's result, a compiled-once cache."""
+
+    sources: list[tuple[str, str]]
+    checked: Any
+    cache: list = field(default_factory=list)
+
+
+@dataclass
+class Outcome:
+    divergence: Optional[Divergence]
+    suspect: set[int]
+    model: Optional[Session] = None
+    student: Optional[Session] = None
+
+
+class Explorer:
+    """Plays scripts on the model answer and the student's program and compares them."""
+
+    def __init__(self, expl: Exploration, task: str, make_session: Callable, student: Program, model: Program,
+                 workdir: Path):
+        self.expl, self.task, self.make_session = expl, task, make_session
+        self.student, self.model, self.workdir = student, model, workdir
+        self.observed = expl.compared(task)
+        self.plays = 0
+
+    def session(self, p: Program, name: str) -> Session:
+        retain = self.workdir / f"{name}.retain.json"
+        if retain.exists():
+            retain.unlink()
+        with compiled_once(p.checked, share=p.cache):
+            return self.make_session(p.sources, retain, p.checked)
+
+    def run(self, p: Program, name: str, script: Script, until: Optional[float] = None,
+            expl: bool = True) -> tuple[Session, Optional[_Probe]]:
+        with compiled_once(p.checked, share=p.cache):
+            s = self.session(p, name)
+            probe = play(s, script, self.expl if expl else None, until)
+        return s, probe
+
+    def outcome(self, script: Script, keep: bool = False) -> Outcome:
+        """Both programs on `script`: the divergence (None: alike) and the ambiguous actions."""
+        self.plays += 1
+        ms, mp = self.run(self.model, "model", script)
+        ss, sp = self.run(self.student, "student", script)
+        assert mp is not None and sp is not None
+        div = compare(mp.changes, sp.changes, self.observed, self.expl, script, script.duration)
+        sus = suspects(script, div, mp.changes, sp.changes, self.observed, self.expl.tick_s) if div else set()
+        return Outcome(div, sus, ms if keep else None, ss if keep else None)
+
+    def confirmed(self, script: Script, tries: int = 3) -> tuple[Script, Optional[Divergence], bool]:
+        """A divergence not owed to an ambiguous action: such actions are moved a little later
+        and the script played again (at most `tries` times; still ambiguous: no divergence, and
+        the third value is True)."""
+        for _ in range(tries):
+            out = self.outcome(script)
+            if out.divergence is None:
+                return script, None, False
+            if not out.suspect:
+                return script, out.divergence, False
+            events = [Event(round(e.time + MOVE_SUSPECT, 3), e.name, e.value, e.hold) if n in out.suspect else e
+                      for n, e in enumerate(script.events)]
+            script = Script(tuple(sorted(events, key=lambda e: e.time)),
+                            round(max(script.duration, max(e.time + e.hold for e in events) + 1.0), 3))
+        return script, None, True
+
+    def diverges(self, script: Script) -> Optional[Divergence]:
+        out = self.outcome(script)
+        return out.divergence if out.divergence is not None and not out.suspect else None
+
+
+# --------------------------------------------------------------------------- shrinking
+
+def _truncated(script: Script, div: Divergence, expl: Exploration) -> Script:
+    end = round(div.time + expl.max_drift + expl.timing_tol + 0.3, 3)
+    events = tuple(e for e in script.events if e.time <= div.time)
+    return Script(events, min(script.duration, end))
+
+
+def shrink(ex: Explorer, script: Script, div: Divergence, budget: int = SHRINK_RUNS) -> tuple[Script, Divergence]:
+    """A smaller script that still diverges: fewest actions (chunks then single actions
+    removed), shortest holds, earliest times (gaps halved). Each candidate is played on both
+    programs; `budget` plays at most (deterministic)."""
+    start = ex.plays
+    best, best_div = _truncated(script, div, ex.expl), div
+
+    def left() -> bool:
+        return ex.plays - start < budget
+
+    def accept(candidate: Script) -> bool:
+        nonlocal best, best_div
+        if not left():
+            return False
+        d = ex.diverges(candidate)
+        if d is None:
+            return False
+        best, best_div = _truncated(candidate, d, ex.expl), d
+        return True
+
+    if ex.diverges(best) is None:                    # truncation changed the outcome: keep the whole
+        best = script
+    # rounds of: fewer actions, shorter holds, earlier times, while one of them gains
+    for _round in range(3):
+        before = (len(best.events), best.duration, sum(e.hold for e in best.events))
+        # 1. fewest actions: chunks of 16, 8, 4, 2 then single actions removed, from the end back
+        for size in ((16, 8, 4, 2, 1) if _round == 0 else (2, 1)):
+            i = len(best.events) - size
+            while i >= 0 and left():
+                drop = set(range(i, min(i + size, len(best.events))))
+                cand = Script(tuple(e for k, e in enumerate(best.events) if k not in drop), best.duration)
+                accept(cand)
+                i = min(i, len(best.events)) - size
+            if size > 1 and not left():
+                break
+        # 2. shortest holds
+        for i in range(len(best.events)):
+            if not left() or i >= len(best.events):
+                break
+            e = best.events[i]
+            if e.is_press:
+                for hold in ((3.3,) if e.hold >= 3.3 else (0.2,) if e.hold > 0.2 else ()):
+                    events = list(best.events)
+                    events[i] = Event(e.time, e.name, e.value, hold)
+                    if accept(Script(tuple(events), best.duration)):
+                        break
+        # 3. earliest times: the gap before each action shrunk (the later ones move with it), the
+        #    first action to 0 s, every gap to 0.3 s, else to half
+        for _ in range(2):
+            for i in range(len(best.events)):
+                if not left() or i >= len(best.events):
+                    break
+                prev = best.events[i - 1].time + best.events[i - 1].hold if i else 0.0
+                gap = best.events[i].time - prev
+                for new_gap in ((0.0 if i == 0 else 0.3), round(gap / 2, 2)):
+                    if gap - new_gap < 0.1:
+                        continue
+                    shift = round(gap - new_gap, 2)
+                    events = list(best.events[:i]) + [Event(round(e.time - shift, 3), e.name, e.value, e.hold)
+                                                       for e in best.events[i:]]
+                    if accept(Script(tuple(events), round(best.duration - shift, 3))):
+                        break
+        if (len(best.events), best.duration, sum(e.hold for e in best.events)) == before or not left():
+            break
+    return best, best_div
+
+
+# --------------------------------------------------------------------------- the student's line
+
+def _output_attr(s: Session, label: str) -> Optional[tuple[Any, str]]:
+    address = s.labels.get(label)
+    if address is None:
+        return None
+    from plclab.runtime.image import image_slot
+    area, index = image_slot(address)
+    for b in s.plc.bindings:
+        if b.area == area and b.index == index and not b.is_input:
+            return b.owner, b.attr
+    return None
+
+
+def first_differing_output(model: Session, student: Session, div: Divergence) -> tuple[Optional[str], float]:
+    """The first output driving the diverging signal that differs between the two programs,
+    and the scan it first differs in (from `div.since` to the divergence)."""
+    outputs = [o for o in div.signal.outputs if o in model.trace and o in student.trace]
+    times = set()
+    for o in outputs:
+        for tr in (model.trace, student.trace):
+            times.update(t / 1e9 for t, _v in tr.changes(o) if div.since - 1e-9 <= t / 1e9 <= div.time + 1e-9)
+    for t in sorted(times):
+        for o in outputs:
+            if model.trace.value_at(o, t) != student.trace.value_at(o, t):
+                return o, t
+    return (outputs[0] if outputs else None), div.time
+
+
+def last_writer(ex: Explorer, script: Script, output: str, t: float, since: float) -> Optional[tuple[str, int, str]]:
+    """(file, line, statement) of the student's ST statement that last wrote `output` up to and
+    in the scan at plant time `t` (looked for up to 5 s back): the script is
+    played again, the scans from there under a line tracer; the generated Python's line map
+    (`plclab check --emit-python`) names the ST line."""
+    with compiled_once(ex.student.checked, share=ex.student.cache):
+        s = ex.session(ex.student, "line")
+        target = _output_attr(s, output)
+        if target is None:
+            return None
+        owner, attr = target
+        compiled = s.plc.compiled
+        pattern = re.compile(rf"(?:^|[^\w.])G\.{re.escape(attr)}\s*=(?!=)")
+        writers = {n for n, line in enumerate(compiled.source.splitlines(), 1) if pattern.search(line)}
+        hits: list[int] = []
+        changed: list[int] = []
+        state: dict[str, Any] = {"line": None}
+
+        def local(frame: Any, event: str, _arg: Any) -> Any:
+            if event == "line":
+                if state.get("plc") is not s.plc:                   # a PLC restart makes new objects
+                    state["plc"], state["oa"] = s.plc, _output_attr(s, output) or (owner, attr)
+                o, a = state["oa"]
+                now = getattr(o, a, None)
+                if "value" in state and now != state["value"] and state["line"] is not None:
+                    changed.append(state["line"])
+                state["value"] = now
+                state["line"] = frame.f_lineno
+                if frame.f_lineno in writers:
+                    hits.append(frame.f_lineno)
+            return local
+
+        def global_(frame: Any, event: str, _arg: Any) -> Any:
+            return local if frame.f_code.co_filename == s.plc.compiled.filename else None
+
+        old = sys.gettrace()
+        start = round(max(t - 5.0, 0.0) / ex.expl.tick_s) * ex.expl.tick_s
+        try:
+            play(s, script, None, until=t + ex.expl.tick_s / 2, split=(start, lambda: sys.settrace(global_)))
+        finally:
+            sys.settrace(old)
+        for n in reversed(hits or changed):
+            info = compiled.where(n)
+            if info is not None:
+                return info.file, info.line, _st_line(ex.student.sources, info.file, info.line)
+    return None
+
+
+def _st_line(sources: Sequence[tuple[str, str]], file: str, line: int) -> str:
+    for name, text in sources:
+        if name == file:
+            lines = text.splitlines()
+            return lines[line - 1].strip() if 0 < line <= len(lines) else ""
+    return ""
+
+
+# --------------------------------------------------------------------------- a task's exploration
+
+@dataclass
+class Finding:
+    """What exploration found: the shrunk script, the divergence, the student's line."""
+
+    script: Script
+    divergence: Divergence
+    steps: list[str]
+    first_difference: str
+    line: Optional[tuple[str, int, str]]
+    output: Optional[str]
+    output_time: float
+    model_output: Any = None
+    student_output: Any = None
+
+
+@dataclass
+class ExploreResult:
+    """The result of exploring one task for one program."""
+
+    episodes: int
+    plant_seconds: float
+    plays: int
+    seed: int
+    inconclusive: int = 0
+    finding: Optional[Finding] = None
+
+
+def _fast_tmp() -> Optional[str]:
+    """A folder in memory for the retain files (/dev/shm where there is one): the PLC saves its
+    retained memory every few scans, and thousands of scripts must not wait for a disk."""
+    shm = Path("/dev/shm")
+    return str(shm) if shm.is_dir() and os.access(shm, os.W_OK) else None
+
+
+def seed_of(stand: str, task: str, sources: Sequence[tuple[str, str]]) -> int:
+    """The seed: the submission's content (file texts, not names or paths), stand and task."""
+    h = hashlib.sha256(f"{stand}\0{task}".encode())
+    for _name, text in sources:
+        h.update(b"\0")
+        h.update(text.encode("utf-8", "replace"))
+    return int.from_bytes(h.digest()[:8], "big")
+
+
+def explore(expl: Exploration, stand: str, task: str, make_session: Callable, student: Program, model: Program,
+            episodes: Optional[int] = None, shrink_runs: int = SHRINK_RUNS, seed: Optional[int] = None) -> ExploreResult:
+    """Up to `episodes` seeded random scripts (default: the stand's budget) on both programs;
+    the first confirmed divergence is shrunk and explained."""
+    episodes = expl.episodes if episodes is None else episodes
+    seed = seed_of(stand, task, student.sources) if seed is None else seed
+    with tempfile.TemporaryDirectory(prefix="plclab-explore-", dir=_fast_tmp()) as tmp:
+        ex = Explorer(expl, task, make_session, student, model, Path(tmp))
+        result = ExploreResult(0, 0.0, 0, seed)
+        for n in range(episodes):
+            rng = random.Random(f"{seed}:{n}")
+            script = expl.generate(rng, task, expl.episode_s)
+            result.episodes += 1
+            result.plant_seconds += script.duration
+            played, div, ambiguous = ex.confirmed(script)
+            if div is None:
+                result.inconclusive += ambiguous                    # still ambiguous after moving
+                continue
+            small, sdiv = shrink(ex, played, div, shrink_runs)
+            result.finding = explain(ex, small, sdiv)
+            break
+        result.plays = ex.plays
+    return result
+
+
+def explain(ex: Explorer, script: Script, div: Divergence) -> Finding:
+    """The finding in the console's words: numbered steps, the first difference, the line."""
+    out = ex.outcome(script, keep=True)
+    if out.divergence is not None:
+        div = out.divergence
+    steps = [f"{n}. {e.time:.2f} s {ex.expl.describe(e)}" for n, e in enumerate(script.events, 1)]
+    line, output, t_out, mv, sv = None, None, div.time, None, None
+    if out.model is not None and out.student is not None:
+        output, t_out = first_differing_output(out.model, out.student, div)
+        if output is not None:
+            mv = out.model.trace.value_at(output, t_out)
+            sv = out.student.trace.value_at(output, t_out)
+            line = last_writer(ex, script, output, t_out, div.since)
+    return Finding(script, div, steps, div.text(ex.expl.tick_s), line, output, t_out, mv, sv)
+
+
+# The requirement a divergence breaks, where one plainly matches (else it is E1's own): a
+# mechanism not following its switch in manual mode before any automatic mode (Task 1's rows).
+# A lamp or a playback difference has too many causes to name one requirement for it (a
+# watchdog fault may be the symptom of a playback that should never have resumed): those stay
+# E1's, with the history that shows them. Requirement ids are the grader's (plclab.grader.<stand>).
+_MANUAL_ROWS = {("mp9c", "task1"): {"gripper": "T1.1", "rotation": "T1.2", "extension": "T1.3", "lift": "T1.4"}}
+
+
+def _mode_at(script: Script, switch: str, t: float) -> tuple[int, bool]:
+    """The mode switch's value at `t` and whether it was ever 1 before."""
+    value, ever = 0, False
+    for e in script.events:
+        if e.time > t:
+            break
+        if e.name == switch and not e.is_press:
+            value = int(float(e.value))
+            ever = ever or value == 1
+    return value, ever
+
+
+def requirement_of(stand: str, task: str, f: Finding, expl: Exploration) -> Optional[str]:
+    """The id of the requirement `f` breaks, where one plainly matches; None: E1's own."""
+    mode_switch = next((k for k, v in expl.meaning.items() if v == ("manual", "automatic")), None)
+    if mode_switch is None:
+        return None
+    mode, was_auto = _mode_at(f.script, mode_switch, f.divergence.time)
+    name = f.divergence.signal.name
+    if mode == 0 and not was_auto:
+        return _MANUAL_ROWS.get((stand, task), {}).get(name)
+    return None
+
+
+__all__ = ["Divergence", "ExploreResult", "Explorer", "Finding", "Program", "compare", "explain", "explore",
+           "play", "read_script", "seed_of", "shrink"]
+
+
+# --------------------------------------------------------------------------- the grade's row
+
+EXPLORE_ID = "E1"
+
+
+def model_answer(stand: str, task: str, reference: Optional[Sequence[str]]) -> tuple[Optional[Program], str]:
+    """The task's model answer (a course's own `reference` files, else the checkout's
+    solutions/) as a Program, or None and the one-line reason exploration cannot run."""
+    from plclab.errors import CompileError
+    from plclab.frontend import check_sources, read_sources
+    from plclab.stands import get_stand, sources
+    from plclab.stands.base import stand_spec
+    expl = stand_spec(stand).explore
+    if reference:
+        try:
+            srcs = read_sources(reference)
+            return Program(srcs, check_sources(srcs)), ""
+        except CompileError as e:
+            return None, f"the reference does not compile: {e.diagnostics[0] if e.diagnostics else e}"
+    variant = expl.references.get(task) if expl else None
+    stand_ = get_stand(stand)
+    if variant is None:
+        return None, f"{stand} {task} has no model answer to explore against"
+    if not stand_.available(variant):
+        return None, ("no model answer here (the installed package carries none): run the grade in the "
+                      "instructor's checkout of PLC Lab, or give the course's model answer with --reference FILE.st...")
+    srcs = sources(stand_, variant)
+    return Program(srcs, check_sources(srcs)), ""
+
+
+def row_text(expl: Exploration, task: str) -> str:
+    observed = expl.compared(task)
+    names = ", ".join(o.name for o in observed)
+    return (f"Under random operator scripts (any console action, at any moment) the stand behaves like the task's "
+            f"model answer's: {names} (timing within {expl.timing_tol:g} s).")
+
+
+def exploration_rows(req: Any, sources: Sequence[tuple[str, str]], checked: Any,
+                     reference: Optional[Sequence[str]] = None, episodes: Optional[int] = None,
+                     out_dir: Optional[str] = None) -> tuple[list[Any], list[str], dict[str, list[Path]]]:
+    """The exploration row (E1) of a grade, the report's notes about it and the files written
+    (the shrunk script and the student's traces under it, in `out_dir`). A difference that
+    plainly breaks one of the task's requirements comes with that requirement's row too, after
+    E1's (the engine puts it in place of the scenarios' row if they passed it)."""
+    from plclab.stands.base import stand_spec
+    from plclab.trace import write_csv, write_vcd
+
+    from .report import Row
+    expl = stand_spec(req.stand).explore
+    if expl is None or episodes == 0:
+        return [], [], {}
+    model, why = model_answer(req.stand, req.task, reference)
+    if model is None:
+        return [], [f"exploration not run: {why}"], {}
+    text = row_text(expl, req.task)
+    student = Program(list(sources), checked)
+    try:
+        result = explore(expl, req.stand, req.task, req.make_session, student, model, episodes)
+    except Exception as e:                           # a bug of the grader: never the student's FAIL
+        return [Row(EXPLORE_ID, text, False, "", f"not checked: the grader failed ({type(e).__name__}: {e}); "
+                    "this is a bug of the grader, not of your program: please report it", None, "explore",
+                    internal=True)], [], {}
+    amount = (f"{result.episodes} random operator script{'s' if result.episodes != 1 else ''}, "
+              f"{result.plant_seconds:.0f} s of plant time (seed {result.seed:016x})")
+    f = result.finding
+    if f is None:
+        extra = f"; {result.inconclusive} ambiguous at one scan, not judged" if result.inconclusive else ""
+        return [Row(EXPLORE_ID, text, True, scenario="explore")], \
+            [f"exploration: {amount}: no difference from the model answer{extra}"], {}
+    files: list[Path] = []
+    script_name = f"{req.stand}-{req.task}-explore.csv"
+    if out_dir is not None:
+        base = Path(out_dir)
+        base.mkdir(parents=True, exist_ok=True)
+        (base / script_name).write_text(f.script.csv_text(), encoding="utf-8")
+        files.append(base / script_name)
+        with compiled_once(checked, share=student.cache), tempfile.TemporaryDirectory(dir=_fast_tmp()) as tmp:
+            ex = Explorer(expl, req.task, req.make_session, student, model, Path(tmp))
+            s, _ = ex.run(student, "trace", f.script, expl=False)
+        names = req.trace_names(s) if req.trace_names else None
+        for suffix, write in ((".trace.csv", write_csv), (".trace.vcd", write_vcd)):
+            path = base / f"{req.stand}-{req.task}-explore{suffix}"
+            write(s.trace, path, names=names)
+            files.append(path)
+    d = f.divergence
+    o = d.signal
+    tol = f"timing +/- {expl.timing_tol:g} s" + (f", {o.tolerance}" if o.tolerance else "")
+    expected = f"{o.name} {o.show(d.model)} at {d.time:.2f} s, as the model answer's stand shows ({tol})"
+    observed = f"{o.name} {o.show(d.student)}"
+    if d.kind == "late":
+        observed += f": the change comes {d.lag:.2f} s later than in the model answer"
+    elif d.kind == "early":
+        observed += f": the change comes {d.lag:.2f} s earlier than in the model answer"
+    if f.output is not None and f.model_output is not None and f.model_output != f.student_output:
+        observed += (f"; at {f.output_time:.2f} s {f.output} = {int(bool(f.student_output)) if isinstance(f.student_output, bool) else f.student_output}"
+                     f" in your program, {int(bool(f.model_output)) if isinstance(f.model_output, bool) else f.model_output}"
+                     " in the model answer")
+    if f.line is not None:
+        file, line, stmt = f.line
+        observed += f"; {f.output} last written by {Path(file).name}:{line}" + (f" `{stmt}`" if stmt else "")
+    steps = tuple(f.steps) + (f"-> {f.first_difference}",)
+    replay = (f"replay: plclab run {req.stand} --program {' '.join(n for n, _ in sources)} --inputs "
+              f"{files[0] if files else script_name} --against {req.task}")
+    rid = requirement_of(req.stand, req.task, f, expl)
+    rows = [Row(EXPLORE_ID, text, False, expected, observed, d.time, "explore", steps=steps)]
+    if rid is not None and any(r.id == rid for r in req.requirements):
+        # named by the requirement it breaks: that row carries it where the scenarios passed it
+        # (the engine decides), and E1 points there
+        r = next(r for r in req.requirements if r.id == rid)
+        rows.append(Row(rid, r.text, False, expected, observed, d.time, "explore", steps=steps))
+    notes = [f"exploration: {amount}: a difference in script {result.episodes}, shrunk to "
+             f"{len(f.script.events)} console step{'s' if len(f.script.events) != 1 else ''}", replay]
+    return rows, notes, {"explore": files}
+
+
+def check_script(spec: Any, script: Script, where: str) -> None:
+    """Every action of `script` is one the stand's console (or its plant) can take: one clear
+    line naming the file otherwise, before anything runs."""
+    for e in script.events:
+        at = f"{where}: at {e.time:g} s"
+        if e.name == POWER:
+            try:
+                ok = float(e.value) >= 0
+            except ValueError:
+                ok = False
+            if not ok:
+                raise PlcLabError(f"{at}: {POWER} takes the seconds the PLC stays off (>= 0), not {e.value!r}")
+        elif e.name == FAULT:
+            name, params = fault_params(e.value)
+            try:
+                fault = spec.fault(name)
+            except PlcLabError as err:
+                raise PlcLabError(f"{at}: {err}") from None
+            known = {p.name for p in fault.params}
+            for k in params:
+                if k not in known:
+                    raise PlcLabError(f"{at}: fault {name} has no parameter {k!r} (it has: {', '.join(sorted(known))})")
+        elif e.name not in spec.console:
+            raise PlcLabError(f"{at}: {e.name!r} is no console input of {spec.name} (one of "
+                              f"{', '.join(spec.console)}, {POWER}, {FAULT}, END)")
+        elif not e.is_press and e.value.strip() not in ("0", "1"):
+            raise PlcLabError(f"{at}: {e.name} takes 0 or 1, not {e.value!r}")
+
+
+def replay(spec: Any, s: Session, inputs: str, against: Optional[str], reference: Optional[Sequence[str]],
+           student_sources: Optional[Sequence[tuple[str, str]]], checked: Any) -> Optional[str]:
+    """`plclab run STAND --program FILE.st --inputs SCRIPT.csv [--against TASK]`: play the
+    script on session `s` (its timeline and traces are the run's); with `against`, play it on
+    the task's model answer too and return the first difference in the grade's words (None:
+    alike)."""
+    from plclab.grader.registry import requirement_set
+    expl = spec.explore
+    if expl is None:
+        raise PlcLabError(f"run: {spec.name} has no operator scripts (--inputs is for the robots)")
+    script = read_script(inputs, expl.buttons)
+    check_script(spec, script, inputs)
+    from plclab.plants.base import PlantError
+    try:
+        play(s, script)
+    except PlantError as e:                              # a fault parameter the plant refuses
+        raise PlcLabError(f"{inputs}: {e}") from None
+    if against is None:
+        return None
+    req = requirement_set(spec.name, against)
+    model, why = model_answer(spec.name, against, reference)
+    if model is None:
+        raise PlcLabError(f"run: --against {against}: {why}")
+    srcs = list(student_sources) if student_sources is not None else s.sources
+    student = Program(srcs, checked if checked is not None else s.checked)
+    with tempfile.TemporaryDirectory(prefix="plclab-replay-", dir=_fast_tmp()) as tmp:
+        ex = Explorer(expl, against, req.make_session, student, model, Path(tmp))
+        out = ex.outcome(script)
+    if out.divergence is None:
+        return None
+    return out.divergence.text(expl.tick_s)
+
+
+# --------------------------------------------------------------------------- plclab bench
+
+EXPLORE_GOAL_S = 20.0      # s of one core per task and program for the default budget
+
+
+def bench_explore(stand: str, task: str, episodes: int = 4) -> Optional[dict]:
+    """The CPU cost of exploration: `episodes` scripts of the model answer against itself (both
+    programs played, as for a student), seconds per script, scripts per second, and what the
+    stand's default budget costs (the goal: at most EXPLORE_GOAL_S). None where the model answers
+    are not available (an installed package)."""
+    import time
+
+    from plclab.grader.registry import requirement_set
+    from plclab.stands.base import stand_spec
+    expl = stand_spec(stand).explore
+    model, _why = model_answer(stand, task, None) if expl is not None else (None, "")
+    if model is None or expl is None:
+        return None
+    req = requirement_set(stand, task)
+    start = time.process_time()
+    result = explore(expl, stand, task, req.make_session, model, model, episodes, seed=0)
+    spent = time.process_time() - start
+    per = spent / max(result.episodes, 1)
+    return {"stand": stand, "task": task, "episodes": result.episodes, "plant_s": result.plant_seconds,
+            "s_per_episode": per, "episodes_per_s": 1 / per if per else 0.0, "budget": expl.episodes,
+            "budget_s": per * expl.episodes, "goal_s": EXPLORE_GOAL_S}
+
+
+def report_explore(report: Callable[[str], None], quick: bool = False) -> list[dict]:
+    """`plclab bench`'s exploration lines, one per robot."""
+    out = []
+    for stand in ("mp9c", "tur10"):
+        r = bench_explore(stand, "task3", 2 if quick else 4)
+        if r is None:
+            report(f"explore: {stand}: no model answer here (a checkout has them)")
+            continue
+        out.append(r)
+        report(f"explore: {stand} {r['task']}: {r['s_per_episode']:.2f} s CPU per random script "
+               f"({r['plant_s'] / r['episodes']:.0f} s of plant time, both programs), {r['episodes_per_s']:.2f} "
+               f"scripts/s; default budget {r['budget']} scripts = {r['budget_s']:.1f} s (goal <= {r['goal_s']:g} s)")
+    return out
