@@ -69,13 +69,8 @@ class Lab:
         srcs = list(sources) if sources is not None else variant_sources(self.module.STAND, variant)
         self.program_name = ", ".join(Path(n).name for n, _t in srcs if not n.startswith("<")) \
             if sources is not None else f"{variant} (shipped)"
-        self.session: Session = self.module.session(variant, program=list(sources) if sources is not None else None,
-                                                    retain_path=self.retain_path, watch_internals=False)
-        # the stand's observables (TUR-10's Target1..5, ...) are read by name where the program
-        # has them, for the drawing and the trends; not recorded (the trace stays the I/O's)
-        from plclab.stands.base import stand_spec
-        self.session.observables = stand_spec(stand).observables_for(variant if sources is None else None)
-        self._refine_tick()
+        self.shipped = sources is None                # the shipped variant runs (no program loaded)
+        self.session: Session = self._new_session(list(sources) if sources is not None else None)
         from plclab.lab.variables import Forces
         self.forces = Forces()                         # the watch and force table's forces
         self.forces.attach(self.session.plc)
@@ -106,6 +101,99 @@ class Lab:
         self.seq = 0
         self.scans_run = 0
         self._pace = (0.0, 1.0, 0.0)                 # (wall, speed, virtual): where the pacing stands
+
+    def _new_session(self, program: Optional[list[tuple[str, str]]], checked: Any = None) -> Session:
+        """The stand at power-up running `program` (None: the shipped variant)."""
+        s = self.module.session(self.variant, program=program, checked=checked,
+                                retain_path=self.retain_path, watch_internals=False)
+        # the stand's observables (TUR-10's Target1..5, ...) are read by name where the program
+        # has them, for the drawing and the trends; not recorded (the trace stays the I/O's)
+        from plclab.stands.base import stand_spec
+        s.observables = stand_spec(self.stand).observables_for(self.variant if program is None else None)
+        self.session = s
+        self._refine_tick()
+        return s
+
+    # ------------------------------------------------------------------ input scripts
+    script: Any = None             # (name, steps, index of the next step) while a script replays
+    epoch = 0                      # stand resets so far: a page clears its trends and logs on a new one
+
+    def start_script(self, steps: list, name: str) -> None:
+        """Replay an input script (plclab.lab.script): the stand is reset (a fresh plant at
+        power-up, the PLC cold with no retained values, the trace started again at t = 0) and
+        each step is applied before the first scan at or after its plant time."""
+        old = self.session
+        old.plc.stop()
+        self.retain_path.unlink(missing_ok=True)
+        s = self._new_session(None if self.shipped else list(old.sources), None if self.shipped else old.checked)
+        for path in self.forces.attach(s.plc):
+            s.log(f"force released: {path} (not in the program)")
+        self.held.clear()
+        self.console_levels.clear()
+        self.extras = Trace()
+        self._extra_unknown.clear()
+        self._trend_sent, self._events_sent, self._actions_sent = {}, 0, 0
+        self._trimmed_at = 0.0
+        self.epoch += 1
+        self.script = (name, list(steps), 0)
+        s.log(f"input script {name}: {len(steps)} step(s), the stand reset")
+        self._apply_due()
+        s.run(s.tick)                             # the first scan (t = 0), as at start
+        self.scans_run += 1
+        self._rebase = True
+
+    def stop_script(self) -> None:
+        if self.script is not None:
+            name, steps, i = self.script
+            self.session.log(f"input script {name} stopped at step {i} of {len(steps)}")
+            self.script = None
+
+    def _next_step_time(self) -> Optional[float]:
+        if self.script is None:
+            return None
+        _name, steps, i = self.script
+        return steps[i].time if i < len(steps) else None
+
+    def _apply_due(self) -> None:
+        """Apply the script's steps due before the next scan (plant time s.now)."""
+        s = self.session
+        while self.script is not None:
+            name, steps, i = self.script
+            if i >= len(steps):
+                s.log(f"input script {name}: done")
+                self.script = None
+                return
+            step = steps[i]
+            if step.time > s.now + 1e-9:
+                return
+            self.script = (name, steps, i + 1)
+            self._apply_step(step, i + 1, len(steps))
+
+    def _apply_step(self, step: Any, n: int, total: int) -> None:
+        s = self.session
+        s.log(f"script step {n}/{total} (line {step.line}, t={step.time:g} s): {step.text}")
+        try:
+            if step.kind == "switch":
+                self.set_control(step.target, step.value)
+            elif step.kind == "button":
+                control = self._control(step.target)
+                if step.value:
+                    s.console.hold(control.input)
+                else:
+                    s.console.release(control.input)
+                self.console_levels[step.target] = step.value
+            elif step.kind == "knob":
+                self.set_knob(step.target, step.value)
+            elif step.kind == "power":
+                s.restart_plc(off_time=step.value)
+                self.forces.attach(s.plc)
+            elif step.kind == "fault":
+                self.inject(step.target, step.value)
+            elif step.kind == "end":
+                s.log(f"input script {self.script[0] if self.script else ''}: END reached")
+                self.script = None
+        except (LabError, PlcLabError) as e:
+            s.log(f"script step {n} refused: {e}")
 
     # ------------------------------------------------------------------ life cycle
     def start(self) -> "Lab":
@@ -169,7 +257,7 @@ class Lab:
         """The commands this stand's page has (the SCADA registers are thermo's only, the
         knobs and part programs the CNC's)."""
         ops = ("set", "press", "release", "speed", "pause", "run", "scan", "restart", "inject", "clear", "trends",
-               "tree", "watch", "force", "unforce", "source", "monitor")
+               "tree", "watch", "force", "unforce", "source", "monitor", "unscript")
         if self.stand == "thermo":
             ops += ("register",)
         if self.panel.knobs:
@@ -291,10 +379,25 @@ class Lab:
             if p["name"].upper() == str(pou).upper():
                 self.monitor.select(self.session.plc, p, instance if instance else None)
                 self._monitor_at = 0.0
+                self._power = None
+                if "ladder" in p:                  # an LD POU: its power flow, from the same instance
+                    from plclab.lab.ladder import PowerFlow, pou_elements
+                    elements = pou_elements(self.session.sources, p["name"])
+                    if elements is not None:
+                        self._power = (PowerFlow, elements, self.monitor.instance or next(iter(p["instances"]), None))
                 return
         raise LabError(f"the program has no POU '{str(pou)[:80]}'")
 
     _monitor_at = 0.0
+    _power: Any = None
+
+    def _power_flow(self) -> Optional[dict]:
+        """The shown LD POU's power on every element output (plclab.lab.ladder), or None."""
+        if self._power is None:
+            return None
+        from plclab.lab.ladder import time_aware
+        flow, elements, instance = self._power
+        return flow(elements, instance, time_aware(self.session.plc)).state()
 
     def _monitor_values(self, full: bool) -> Any:
         now = time.monotonic()
@@ -371,7 +474,9 @@ class Lab:
         for path in self.forces.attach(s.plc):          # forces on what the new program has stay
             s.log(f"force released: {path} (not in the program loaded)")
         self.watched = [p for p in self.watched if _has(s.plc, p)]
+        self.shipped = False
         self.monitor.pou = None                        # the page picks a POU of the new program
+        self._power = None
         self.program_name = name
         self.loads += 1
         if upload:                         # Reload loads it again (the browser's files are not on disk)
@@ -444,6 +549,11 @@ class Lab:
         while not self._stop.is_set():
             try:
                 self._run_paced()
+            except MemoryError:       # past the lab's memory limit outside a scan (a scan's is a PLC fault)
+                self.paused = True
+                self.session.log("the lab paused: out of memory (the memory limit of a program run, "
+                                 "docs/reliability.md); load a smaller program or restart the lab")
+                self._stop.wait(0.5)
             except Exception as e:    # noqa: BLE001 - a bug of ours: the clock stops, the pages say why
                 import logging
                 logging.getLogger("plclab.lab").exception("lab engine")
@@ -500,6 +610,20 @@ class Lab:
         self._run_scans(max(1, math.ceil(round(seconds / self.session.tick, 6))))
 
     def _run_scans(self, n: int) -> None:
+        """n scans; a replayed script's steps applied each before its scan."""
+        if self.script is None:
+            self._scan_block(n)
+            return
+        s = self.session
+        while n > 0:
+            self._apply_due()
+            t = self._next_step_time()
+            k = n if t is None else max(1, min(n, math.ceil(round((t - s.now) / s.tick, 6))))
+            self._scan_block(k)
+            n -= k
+        self._apply_due()
+
+    def _scan_block(self, n: int) -> None:
         s = self.session
         self._console_since_scan = False
         extras = [name for name in self.trend_names
@@ -581,7 +705,8 @@ class Lab:
             "type": "state", "seq": self.seq, "t": round(s.now - s.tick, 6), "tick": s.tick,
             "speed": self.speed, "paused": self.paused, "actual_speed": round(self.actual_speed, 2),
             "held": sorted(self.held), "pace": self.pace(),
-            "program": self.program_name, "loads": self.loads,
+            "program": self.program_name, "loads": self.loads, "epoch": self.epoch,
+            "script": self._script_state(),
             "trace_from": round(s.trace.start_ns / 1e9, 3), "trace_keep": TRACE_KEEP_S,
             "paced": self.paced_now(),          # where the plant should be now: t + the lag
             "wall": time.monotonic(),           # when (CLOCK_MONOTONIC, the same in every process here)
@@ -610,10 +735,21 @@ class Lab:
         values = self._monitor_values(full)
         if values is not _SAME and values is not None:
             snap["monitor"] = {"pou": self.monitor.pou, "instance": self.monitor.instance, "values": values}
+            power = self._power_flow()
+            if power is not None:
+                snap["monitor"]["power"] = power
         frames = self._frames(full)
         if frames is not _SAME:
             snap["frames"] = frames
         return snap
+
+    def _script_state(self) -> Optional[dict]:
+        if self.script is None:
+            return None
+        name, steps, i = self.script
+        nxt = steps[i] if i < len(steps) else None
+        return {"name": name, "done": i, "steps": len(steps),
+                "next": f"t={nxt.time:g} s: {nxt.text}" if nxt is not None else None}
 
     _frames_at = 0.0
     _frames_sent: Any = None
@@ -791,27 +927,93 @@ def _why(e: BaseException) -> str:
     return f"{type(e).__name__}: {str(e)[:200]}"
 
 
+def read_upload(files: Sequence[tuple[str, Any]]) -> tuple[list[tuple[str, str]], list[str]]:
+    """A page's upload as the program's sources: ST files as they are, an OpenPLC Editor
+    project (`.xml`, bytes) turned into its ST as every command reads it (its ST files'
+    blocks may be boxes in its drawing); or the diagnostics, which name the POU, rung and
+    element of a drawing. Held to the memory limit of a program run (plclab.limits)."""
+    from plclab.frontend import is_project_file
+    from plclab.limits import memory_limited
+    from plclab.plcopen.project import source_from_xml       # imported before the limit (lxml maps a lot)
+    st_texts = [(n, t) for n, t in files if not is_project_file(n)]
+    out: list[tuple[str, str]] = []
+    errors: list[str] = []
+    for name, data in files:
+        if not is_project_file(name):
+            out.append((name, data))
+            continue
+        try:
+            with memory_limited():
+                out.append((name, source_from_xml(name, data, st_texts)))
+        except CompileError as e:
+            errors.extend(str(d) for d in e.diagnostics)
+        except PlcLabError as e:
+            text = str(e)
+            errors.append(text if text.startswith(name) else f"{name}: {text}")
+        except (Exception, RecursionError, MemoryError) as e:     # noqa: BLE001 - a student's file
+            errors.append(f"{name}: project: the project cannot be read ({_why(e)})")
+    return out, errors
+
+
+TRIAL_TIMEOUT_S = 120.0     # wall seconds a trial load may take (a lab program: well under a second)
+
+
+
 def check_program(sources: Sequence[tuple[str, str]], trial: bool = False):
     """The front end's verdict on an uploaded program: (checked, []) or (None, diagnostics).
     With `trial`, the program is also compiled and instantiated once (no retain, no scan)
-    off the running PLC, so what fails there fails before the PLC stops. Whatever goes
-    wrong (even a RecursionError or a MemoryError) is one line, never an exception."""
-    from plclab.frontend import check_sources
+    in a child process held to the memory limit of a program run (plclab.limits: a process
+    limit, as grade-class gives each student), so what fails there fails before the PLC
+    stops and no upload grows the lab's own process past it. Whatever goes wrong (even a
+    RecursionError or a MemoryError) is one line, never an exception."""
     where = f"{sources[-1][0]}:1:1: error: " if sources else "<upload>:1:1: error: "
+    if trial:                           # first: what the check and the load take is then known to fit
+        why = _trial_load(sources)
+        if why is not None:
+            return None, [f"{where}the program cannot be {why}"]
+    return _check_program(sources, where)
+
+
+def _check_program(sources: Sequence[tuple[str, str]], where: str):
+    from plclab.frontend import check_sources
     try:
         checked = check_sources(sources)
     except CompileError as e:
         return None, [str(d) for d in e.diagnostics]
     except (Exception, RecursionError, MemoryError) as e:       # noqa: BLE001 - a student's file
         return None, [f"{where}the program cannot be checked ({_why(e)})"]
-    if trial and checked.config is not None:
-        try:
-            from plclab.runtime.compiler import compile_unit
-            from plclab.runtime.plc import PLC
-            PLC(compile_unit(checked)).stop()
-        except (Exception, RecursionError, MemoryError) as e:   # noqa: BLE001 - a student's file
-            return None, [f"{where}the program cannot be loaded ({_why(e)})"]
     if checked.config is None:
         return None, [f"{sources[-1][0]}:1:1: error: no CONFIGURATION: load the complete program (the bundle "
                       f"from `plclab build`, with its CONFIGURATION Config0 and TASKs)"]
     return checked, []
+
+
+def _trial_load(sources: Sequence[tuple[str, str]]) -> Optional[str]:
+    """Check, compile and instantiate `sources` in a child process under the memory limit
+    (plclab.lab.trial); None when it loads (or fails the check: the caller's check names the
+    diagnostics on the drawing), else 'loaded (why not)' / 'checked (why not)'."""
+    import json
+    import os
+    import subprocess
+    import sys
+
+    import plclab
+    env = dict(os.environ)
+    root = str(Path(plclab.__file__).resolve().parents[1])
+    env["PYTHONPATH"] = root + (os.pathsep + env["PYTHONPATH"] if env.get("PYTHONPATH") else "")
+    data = json.dumps([[str(n), str(t)] for n, t in sources])
+    try:
+        done = subprocess.run([sys.executable, "-m", "plclab.lab.trial"], input=data, capture_output=True,
+                              text=True, env=env, timeout=TRIAL_TIMEOUT_S)
+    except subprocess.TimeoutExpired:
+        return f"loading it took more than {TRIAL_TIMEOUT_S:g} s"
+    except OSError as e:
+        return f"the trial load could not start: {e.strerror or e}"
+    lines = done.stdout.strip().splitlines()
+    if done.returncode == 0 and lines and lines[-1] in ("ok", "check"):
+        return None                     # loads, or the check's diagnostics (this process names them)
+    if lines and lines[-1].startswith(("checked (", "loaded (")):
+        return lines[-1]
+    if done.returncode < 0 or "MemoryError" in done.stderr:
+        return "loaded (it needs more memory than the lab has: MemoryError)"
+    return f"loaded (the trial load stopped, exit {done.returncode})"

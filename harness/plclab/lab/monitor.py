@@ -32,8 +32,10 @@ def listing(plc: Any, sources: list[tuple[str, str]]) -> list[dict]:
     """Every POU of the program with a body in the sources: its lines, the variables it uses
     where (line, first column, last column, the chain as written, 'local' or 'global') and
     the instance paths whose values can be shown beside it."""
+    from plclab.lab.ladder import drawings
     texts = dict(sources)
     instances = fb_instances(plc)
+    ladders = drawings(sources)
     out = []
     for key, pou in plc.checked.pous.items():
         if not hasattr(pou, "decls") or pou.file not in texts:
@@ -47,6 +49,10 @@ def listing(plc: Any, sources: list[tuple[str, str]]) -> list[dict]:
         out.append({"name": pou.name, "kind": pou.kind, "file": pou.file, "display": display_name(pou.file),
                     "line": first, "lines": lines[first - 1:last], "instances": paths,
                     "refs": _refs(pou, plc.checked.globals, lines, first, last)})
+        if key in ladders:                   # an LD POU of a plc.xml: drawn as rungs, power flow live
+            out[-1]["ladder"] = ladders[key]
+        elif getattr(texts[pou.file], "xml", None):   # FBD (or ST) in a plc.xml: the ST it becomes
+            out[-1]["generated"] = True
     out.sort(key=lambda p: (p["kind"] != "PROGRAM", p["kind"] != "FUNCTION_BLOCK", p["name"].upper()))
     return out
 

@@ -3,7 +3,10 @@
     GET  /                 the page (static/index.html, shipped in the package; no CDN)
     GET  /api/session      {"token", "session"}: what the page needs to send commands
     GET  /ws?token=T       WebSocket: state pushed after every batch of scans; commands in
-    POST /api/program      load ST files (multipart), checked first: `file:line:col: ...`
+    POST /api/program      load ST files and/or a plc.xml (multipart), checked first: `file:line:col: ...`
+                           (a drawing's errors name its POU, rung and element)
+    POST /api/script?name=F  replay an input script (the CSV as the body): the stand reset, its steps
+                           applied at their plant times (plclab.lab.script)
     POST /api/reload       load the program again (the last upload, else the files it came from)
     POST /api/grade        {"task": "task1"}: the grader on the loaded program, as a table
     GET  /grade/RUN/FILE   a grade run's trace files
@@ -38,11 +41,14 @@ from typing import Any, Optional
 from aiohttp import BodyPartReader, WSMsgType, web
 
 from plclab.errors import PlcLabError
-from plclab.lab.engine import SPEEDS, Lab, LabError, check_program
+from plclab.frontend import is_project_file
+from plclab.lab.engine import SPEEDS, Lab, LabError, check_program, read_upload
 
 STATIC = Path(__file__).resolve().parent / "static"
-MAX_UPLOAD = 1024 * 1024          # bytes of ST per upload: a lab program is a few tens of kB
+MAX_UPLOAD = 4 * 1024 * 1024      # bytes per upload: a lab program is a few tens of kB of ST (a plc.xml, ten times that)
 MAX_FILES = 32
+LAB_OVERHEAD = 512 * 1024 * 1024  # bytes the lab process may grow by beyond one program run's allowance:
+                                  # its threads' malloc arenas, the page's traces, a grade beside the running PLC
 MAX_MESSAGE = 64 * 1024           # bytes of one WebSocket message from a page
 
 
@@ -59,6 +65,8 @@ class _Client:
 def _merge(old: dict, new: dict) -> dict:
     """Two snapshots a slow page has not received yet, as one: the newest state with the
     events, actions and trend points of both."""
+    if old.get("epoch") != new.get("epoch"):  # the stand was reset (an input script): the new one only
+        return new
     out = dict(new)
     for key in ("events", "actions"):
         out[key] = old.get(key, []) + new.get(key, [])
@@ -115,6 +123,7 @@ class LabServer:
         app.router.add_get("/ws", self.websocket)
         app.router.add_post("/api/program", self.upload)
         app.router.add_post("/api/reload", self.reload)
+        app.router.add_post("/api/script", self.script)
         app.router.add_post("/api/grade", self.grade)
         app.router.add_get("/grade/{run}/{file}", self.grade_file)
         app.router.add_get("/trace.csv", self.trace_csv)
@@ -339,6 +348,8 @@ class LabServer:
                 (client.held.add if op == "press" else client.held.discard)(label)
             elif op == "speed":
                 await asyncio.wrap_future(lab.call(lambda: lab.set_speed(msg["value"])))
+            elif op == "unscript":
+                await asyncio.wrap_future(lab.call(lab.stop_script))
             elif op in ("pause", "run"):
                 await asyncio.wrap_future(lab.call(lambda: lab.set_paused(op == "pause")))
             elif op == "scan":
@@ -413,7 +424,7 @@ class LabServer:
     # ------------------------------------------------------------------ program
     async def upload(self, request: web.Request) -> web.Response:
         if request.content_length is not None and request.content_length > MAX_UPLOAD + 64 * 1024:
-            return _refuse(f"upload too large ({request.content_length} bytes): at most {MAX_UPLOAD // 1024} KiB of ST")
+            return _refuse(f"upload too large ({request.content_length} bytes): at most {MAX_UPLOAD // 1024} KiB")
         try:
             reader = await request.multipart()
         except Exception:            # noqa: BLE001 - not multipart, or a broken header
@@ -435,11 +446,11 @@ class LabServer:
                         break
                     total += len(chunk)
                     if total > MAX_UPLOAD:
-                        return _refuse(f"upload too large: at most {MAX_UPLOAD // 1024} KiB of ST in one load")
+                        return _refuse(f"upload too large: at most {MAX_UPLOAD // 1024} KiB in one load")
                     data += chunk
                 if len(files) >= MAX_FILES:
                     return _refuse(f"upload: at most {MAX_FILES} files in one load")
-                files.append((name, _decode(name, bytes(data))))
+                files.append((name, bytes(data) if is_project_file(name) else _decode(name, bytes(data))))
         except _NotText as e:
             return _refuse(str(e), errors=[{"text": str(e), "line": None, "source": None}])
         except (asyncio.CancelledError, MemoryError):
@@ -448,8 +459,18 @@ class LabServer:
             why = " ".join(str(e).split())[:120] or type(e).__name__
             return _refuse(f"upload: the request could not be read as multipart/form-data ({why})", status=400)
         if not files:
-            return _refuse("upload: no file in the request (choose one or more .st files)")
-        return await self._load(files, ", ".join(n for n, _ in files), upload=True)
+            return _refuse("upload: no file in the request (choose one or more .st files or a plc.xml)")
+        if sum(is_project_file(n) for n, _ in files) > 1:
+            return _refuse("upload: one OpenPLC Editor project (plc.xml) at a time (with .st files if you like)")
+        loop = asyncio.get_running_loop()
+        try:
+            sources, errors = await loop.run_in_executor(None, read_upload, files)
+        except MemoryError:
+            return _refuse("upload: reading it needs more memory than the lab has; the PLC keeps the program it runs")
+        if errors:
+            return _refuse(f"the program does not pass the check ({len(errors)} error(s)); the PLC keeps the "
+                           f"program it runs", errors=[_located(e, sources) for e in errors])
+        return await self._load(sources, ", ".join(n for n, _ in files), upload=True)
 
     async def _load(self, files: list[tuple[str, str]], name: str, upload: bool = False) -> web.Response:
         loop = asyncio.get_running_loop()
@@ -464,6 +485,23 @@ class LabServer:
             return _refuse(str(e), errors=[{"text": str(e), "file": None, "line": None, "source": None}])
         self._broadcast({"type": "notice", "text": f"program loaded: {name}"})
         return web.json_response({"ok": True, "message": f"program loaded: {name}", "errors": []})
+
+    async def script(self, request: web.Request) -> web.Response:
+        """Replay an input script: every row checked first (`FILE:LINE: error: ...`), then the
+        stand reset and the steps applied at their plant times."""
+        from plclab.lab.script import MAX_SCRIPT_BYTES, parse_script
+        name = Path(request.query.get("name", "script.csv").replace("\\", "/")).name[:120] or "script.csv"
+        if request.content_length is not None and request.content_length > MAX_SCRIPT_BYTES:
+            return _refuse(f"{name}: larger than {MAX_SCRIPT_BYTES // 1024} KiB: not an input script")
+        data = await request.content.read(MAX_SCRIPT_BYTES + 1)
+        lab = self.lab
+        try:
+            steps = parse_script(data, name, lab.panel, lab.session.labels)
+            await asyncio.wrap_future(lab.call(lambda: lab.start_script(steps, name)))
+        except PlcLabError as e:
+            return _refuse(str(e), errors=[{"text": str(e), "file": name, "line": None, "source": None}])
+        self._broadcast({"type": "notice", "text": f"input script {name}: the stand reset, replaying {len(steps)} step(s)"})
+        return web.json_response({"ok": True, "message": f"replaying {name}: {len(steps)} step(s)", "errors": []})
 
     async def reload(self, request: web.Request) -> web.Response:
         """The program again: the last upload (the page's files are not on disk), else the
@@ -555,7 +593,7 @@ class LabServer:
 
 
 ALL_OPS = ("set", "press", "release", "speed", "pause", "run", "scan", "restart", "inject", "clear", "trends",
-           "tree", "watch", "force", "unforce", "source", "monitor", "register", "knob", "part", "contour")
+           "tree", "watch", "force", "unforce", "source", "monitor", "unscript", "register", "knob", "part", "contour")
 
 
 def _bit(value: Any) -> int:
@@ -675,8 +713,15 @@ class LabThread:
 
 
 def serve_lab(server: LabServer, report=print) -> int:
-    """The CLI's `plclab lab`: serve until Ctrl-C / SIGTERM."""
+    """The CLI's `plclab lab`: serve until Ctrl-C / SIGTERM. The process is held to the memory
+    allowance of a program run (plclab.limits) for its life: a student's program, loaded or
+    uploaded, never takes the machine's memory (a scan past it is the PLC's out_of_memory
+    fault; an upload past it is refused in one line; the lab goes on)."""
     import signal
+
+    from plclab.limits import limit_memory, memory_allowance
+    allowance = memory_allowance()
+    limit_memory(None if allowance is None else allowance + LAB_OVERHEAD)
 
     async def main() -> None:
         stop = asyncio.Event()

@@ -217,7 +217,9 @@ def source_from_xml(path: str | Path, data: Optional[bytes] = None,
         except OSError as e:
             raise PlcLabError(f"{path}: cannot read: {e.strerror}") from None
     from plclab.plcopen.graphical import st_library
-    return project_source(parse_xml(data, str(path)), str(path), st_library(st_texts or []))
+    source = project_source(parse_xml(data, str(path)), str(path), st_library(st_texts or []))
+    source.xml = data          # the drawing itself: the lab draws its LD POUs online (plclab.lab.ladder)
+    return source
 
 
 def st_from_xml(path: str | Path) -> str:

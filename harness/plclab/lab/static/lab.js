@@ -252,6 +252,19 @@ function buildRun(h) {
   $("#scan").onclick = () => send("scan").catch((e) => notice(e.message));
   $("#restart").onclick = () => send("restart").catch((e) => notice(e.message));
   $("#reload").onclick = () => postProgram("/api/reload", null);
+  const script = $("#script-file");
+  script.onchange = async () => {
+    const f = script.files[0];
+    script.value = "";
+    if (!f) return;
+    let answer;
+    try {
+      const r = await post(`/api/script?name=${encodeURIComponent(f.name)}`, await f.arrayBuffer(), false);
+      answer = await r.json();
+    } catch (e) { answer = { ok: false, message: `the lab did not answer (${e.message})` }; }
+    say("#script-status", answer.message, answer.ok);
+  };
+  $("#script-stop").onclick = () => send("unscript").catch((e) => notice(e.message));
   const input = $("#program-files");
   input.onchange = () => { if (input.files.length) uploadFiles(input.files); input.value = ""; };
   const drop = $("#drop");
@@ -388,6 +401,10 @@ async function grade(task) {
 // Data is taken as it comes; the page is drawn once per animation frame with the newest.
 let drawScheduled = false;
 function onState(s) {
+  if (lab.state && s.epoch !== lab.state.epoch) {     // the stand was reset (an input script): start afresh
+    lab.trends = new Map(); lab.events = []; lab.actions = [];
+    lab.dirtyEvents = lab.dirtyActions = true;
+  }
   lab.state = s;
   if ("frames" in s) { lab.frames = s.frames; lab.dirtyFrames = true; }
   if (s.monitor) {                           // changes only: kept until drawn (several may come per frame)
@@ -429,6 +446,7 @@ function render(s) {
     speed.value = String(s.speed);
   }
   $("#program-name").textContent = s.program;
+  renderScript(s.script);
   if (s.loads !== lab.loads) {               // another program: the online listing is read again
     const shown = lab.pous !== null && lab.pous !== undefined;
     lab.loads = s.loads;
@@ -456,6 +474,19 @@ function render(s) {
   markFaultLine();
   markForced(s);
   drawTrends();
+}
+
+function renderScript(sc) {
+  let text = null;
+  if (sc) {
+    text = `replaying ${sc.name}: step ${sc.done} of ${sc.steps} applied` + (sc.next ? `; next ${sc.next}` : "");
+    lab.scriptShown = sc.name;
+  } else if (lab.scriptShown) {                 // ended (or stopped): said once
+    text = `${lab.scriptShown}: finished (the console log lists each step)`;
+    lab.scriptShown = null;
+  }
+  $("#script-stop").disabled = !sc;
+  if (text !== null && $("#script-status").textContent !== text) say("#script-status", text, true);
 }
 
 function renderEvents() {
@@ -512,6 +543,16 @@ async function showPou(name, instance) {
   if (instance) inst.value = instance;
   lab.shownPou = pou;
   lab.monitorValues = {};
+  const note = $("#pou-note");
+  note.hidden = !pou.ladder && !pou.generated;
+  note.textContent = pou.ladder ? "Ladder online: green contacts conduct, green coils are energised (power " +
+    "reaches them), green wires carry power; each coil's variable and each box output's value beside it. " +
+    "An edge contact (P, N) shows its variable's level (its one-scan pulse is too short to see)."
+    : pou.generated ? "Drawn in OpenPLC Editor (FBD): shown as the ST it becomes, with live values." : "";
+  $("#ladder").hidden = !pou.ladder;
+  $("#online-note").hidden = !!pou.ladder;            // the note on the ST listing: not for a drawing
+  $("#source").hidden = !!pou.ladder;
+  if (pou.ladder) drawLadder(pou.ladder); else $("#ladder").replaceChildren();
   const byLine = new Map();
   for (const ref of pou.refs) { if (!byLine.has(ref[0])) byLine.set(ref[0], []); byLine.get(ref[0]).push(ref); }
   $("#source").replaceChildren(...pou.lines.map((text, i) => {
@@ -545,8 +586,83 @@ function openSource(file, line) {
   }).catch((e) => notice(e.message));
 }
 
+// An LD POU: its elements where the Editor's file puts them, wires along the stored points;
+// every element and wire keyed by the output whose power it shows (renderPower).
+function drawLadder(d) {
+  const NS = "http://www.w3.org/2000/svg";
+  const s = (tag, attrs = {}, text) => {
+    const e = document.createElementNS(NS, tag);
+    for (const [k, v] of Object.entries(attrs)) e.setAttribute(k, v);
+    if (text !== undefined) e.textContent = text;
+    return e;
+  };
+  let w = 100, h = 60;
+  for (const e of d.elements) { w = Math.max(w, e.x + e.w + 90); h = Math.max(h, e.y + e.h + 30); }
+  const root = s("svg", { width: w, height: h, viewBox: `0 0 ${w} ${h}` });
+  for (const wire of d.wires) {
+    const p = wire.points;
+    let pts = p;
+    if (p.length === 2 && p[0][1] !== p[1][1]) {            // two points: orthogonal, as the Editor draws
+      const xm = p[1][0] + 10;
+      pts = [p[1], [xm, p[1][1]], [xm, p[0][1]], p[0]];
+    }
+    root.append(s("polyline", { class: "wire", "data-from": wire.from, points: pts.map((q) => q.join(",")).join(" ") }));
+  }
+  for (const e of d.elements) {
+    const g = s("g", { class: "el", "data-kind": e.kind, "data-id": String(e.id), "data-from": String(e.id) });
+    const { x, y } = e, cy = y + e.h / 2;
+    if (e.kind === "leftPowerRail" || e.kind === "rightPowerRail") {
+      g.append(s("rect", { class: "rail", x, y, width: 4, height: e.h }));
+      g.removeAttribute("data-from");
+    } else if (e.kind === "contact") {
+      g.setAttribute("aria-label", `contact ${e.name}`);
+      g.append(s("path", { class: "sym", d: `M${x} ${cy}H${x + 10}M${x + 10} ${y}V${y + e.h}M${x + 20} ${y}V${y + e.h}M${x + 20} ${cy}H${x + e.w}` }),
+        s("text", { x: x + 15, y: cy + 4, "text-anchor": "middle" }, e.mod),
+        s("text", { class: "name", x: x + 15, y: y - 4, "text-anchor": "middle" }, e.name));
+    } else if (e.kind === "coil") {
+      g.setAttribute("aria-label", `coil ${e.name}`);
+      g.append(s("path", { class: "sym", d: `M${x + 9} ${y}A12 12 0 0 0 ${x + 9} ${y + e.h}M${x + 21} ${y}A12 12 0 0 1 ${x + 21} ${y + e.h}` }),
+        s("text", { x: x + 15, y: cy + 4, "text-anchor": "middle" }, e.mod),
+        s("text", { class: "name", x: x + 15, y: y - 4, "text-anchor": "middle" }, e.name),
+        s("text", { class: "live", "data-value": `${e.id}.var`, x: x + e.w + 4, y: cy + 4 }));
+    } else if (e.kind === "block") {
+      g.setAttribute("aria-label", `block ${e.name || e.type}`);
+      g.removeAttribute("data-from");
+      g.append(s("rect", { class: "box", x, y, width: e.w, height: e.h }),
+        s("text", { x: x + e.w / 2, y: y + 12, "text-anchor": "middle", "font-weight": "bold" }, e.type),
+        s("text", { class: "name", x: x + e.w / 2, y: y - 4, "text-anchor": "middle" }, e.name || ""));
+      for (const [pin, rel] of e.inputs) if (rel) g.append(s("text", { x: x + 3, y: y + rel[1] + 4 }, pin));
+      for (const [pin, rel] of e.outputs) {
+        if (!rel) continue;
+        g.append(s("text", { x: x + e.w - 3, y: y + rel[1] + 4, "text-anchor": "end" }, pin),
+          s("text", { class: "live", "data-value": `${e.id}.${pin}`, x: x + e.w + 4, y: y + rel[1] - 3 }));
+      }
+    } else if (e.kind !== "comment") {
+      g.setAttribute("aria-label", `${e.kind} ${e.name}`);
+      g.append(s("rect", { class: "box", x, y, width: e.w, height: e.h, rx: 6 }),
+        s("text", { class: "name", x: x + e.w / 2, y: cy + 4, "text-anchor": "middle" }, e.name),
+        s("text", { class: "live", "data-value": String(e.id), x, y: y - 3 }));
+    }
+    root.append(g);
+  }
+  $("#ladder").replaceChildren(root);
+}
+
+function renderPower(power) {
+  const state = (v) => v === true ? "on" : v === false ? "off" : "unknown";
+  for (const node of document.querySelectorAll("#ladder [data-from]")) {
+    const v = power[node.dataset.from];
+    if (v !== undefined) node.dataset.state = state(v);
+  }
+  for (const node of document.querySelectorAll("#ladder [data-value]")) {
+    const v = power[node.dataset.value];
+    node.textContent = v === true ? "TRUE" : v === false ? "FALSE" : v === null || v === undefined ? "" : String(v);
+  }
+}
+
 function renderMonitor(m) {
   if (!lab.shownPou || m.pou !== lab.shownPou.name) return;
+  if (m.power && lab.shownPou.ladder) renderPower(m.power);
   for (const [chain, value] of Object.entries(m.values)) {
     for (const span of document.querySelectorAll(`#source .val[data-chain="${CSS.escape(chain)}"]`)) span.textContent = String(value);
   }

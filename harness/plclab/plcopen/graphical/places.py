@@ -43,6 +43,7 @@ class GeneratedSource(str):
 
     spans: dict[int, list[tuple[int, int, Place]]]
     generated: str   # the file name diagnostics use
+    xml: bytes = b""  # the plc.xml it was made from (source_from_xml; the lab draws its ladder)
 
     def __new__(cls, text: str, spans: dict[int, list[tuple[int, int, Place]]], name: str) -> "GeneratedSource":
         obj = super().__new__(cls, text)
