@@ -859,7 +859,8 @@ function addPoints(name, points) {
 }
 
 // Each trend is drawn at the canvas's size on screen (a phone's narrow column included), the
-// plot on the left, the current value in a margin of its own on the right.
+// plot on the left, the current value in a margin of its own on the right, between the
+// scale's top and bottom (no text is ever drawn over the line).
 function drawTrends() {
   if (!lab.state) return;
   const span = lab.trendWindow, now = lab.state.t, from = now - span;
@@ -899,10 +900,10 @@ function drawTrends() {
     const current = pts[pts.length - 1][1];
     const text = typeof current === "number" && !Number.isInteger(current) ? current.toFixed(2) : `${current}`;
     ctx.fillText(text, plot + 6, h / 2 + 4, 58);
-    ctx.fillStyle = "#6b7280";
+    ctx.fillStyle = "#6b7280";                       // the scale: in the margin too, never over the line
     ctx.font = "10px sans-serif";
-    ctx.fillText(`${hi}`, 2, 10);
-    ctx.fillText(`${lo}`, 2, h - 2);
+    ctx.fillText(`${hi}`, plot + 6, 10, 58);
+    ctx.fillText(`${lo}`, plot + 6, h - 2, 58);
   }
 }
 
