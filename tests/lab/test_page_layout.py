@@ -105,3 +105,13 @@ def test_mp9c_mimic_labels_trends_and_fault_form_do_not_overlap(lab_page):
     _assert_trends_clear_of_text(page)
     _assert_labels_apart(page, "#controls button, #controls small, #plant-faults label, #plant-faults select, "
                                "#plant-faults input, #plant-faults button, #lamps .lamp")
+
+
+def test_thermo_and_cnc_mimic_labels_do_not_overlap(lab_page):
+    for stand in ("thermo", "cnc"):
+        lp = lab_page(stand, speed=5)
+        let_time_pass(lp.page, 1)                    # the mimic's live texts filled in
+        overlaps = lp.page.evaluate(f"(() => {{ const L = {_OVERLAPS}; const t = L.texts(document.querySelector('#mimic')); "
+                                    f"return [t.length, L.pairs(t, t)]; }})()")
+        assert overlaps[0] >= 5 and overlaps[1] == [], f"{stand}: mimic labels run together: {overlaps}"
+        lp.close()
