@@ -16,6 +16,8 @@ VAR
     y : INT;
     z : INT;
     w : INT;
+    M : ARRAY[1..2, 1..3] OF INT := [1, 2, 3, 4, 5, 6];
+    m2 : INT;
 END_VAR
 Frames[1].Data[2] := 7;
 Frames[2].Pause := T#1500ms;
@@ -23,6 +25,7 @@ x := Valves[i];             (* a variable index *)
 y := Valves[ 3 ] + Valves[i + 1];   (* a constant; an expression: not computed *)
 z := Frames[n].Data[2];
 w := Valves[i];
+m2 := M[n, i];              (* two dimensions *)
 END_PROGRAM
 CONFIGURATION Config0
     RESOURCE Res0 ON PLC
@@ -49,16 +52,18 @@ def test_indexed_uses_show_the_element_their_live_indexes_name_and_nothing_out_o
     assert (body, "i") in shown                            # an index is a use of its own
     lab.select_monitor("Idx", "Main")
     v = _values(lab)
-    assert (v["Valves[i]"], v["Valves[3]"], v["Frames[n].Data[2]"]) == (20, 30, 7)
+    assert (v["Valves[i]"], v["Valves[3]"], v["Frames[n].Data[2]"], v["M[n,i]"]) == (20, 30, 7, 2)
     assert "Valves" not in v                               # an array has no value to show
     plc = lab.session.plc
     plc.write("Main.i", 4)
     plc.write("Main.n", 2)
     v = _values(lab)
-    assert (v["Valves[i]"], v["Frames[n].Data[2]"]) == (40, 0)
+    assert (v["Valves[i]"], v["Frames[n].Data[2]"], v["M[n,i]"]) == (40, 0, "")   # M[2, 4]: out of range
     plc.write("Main.i", 5)                                 # out of range: nothing, not a stale value
     plc.write("Main.n", 0)
     v = _values(lab)
-    assert (v["Valves[i]"], v["Frames[n].Data[2]"]) == ("", "")
+    assert (v["Valves[i]"], v["Frames[n].Data[2]"], v["M[n,i]"]) == ("", "", "")
     plc.write("Main.i", 1)
-    assert lab.monitor.values(plc, False) == {"i": 1, "Valves[i]": 10}   # changes only, as for plain names
+    plc.write("Main.n", 2)
+    assert lab.monitor.values(plc, False) == {"i": 1, "n": 2, "Valves[i]": 10, "Frames[n].Data[2]": 0,
+                                              "M[n,i]": 4}   # changes only, as for plain names
