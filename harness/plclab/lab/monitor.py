@@ -103,7 +103,7 @@ def _refs(pou: Any, globals_: dict, lines: list[str], first: int, last: int) -> 
 
 def _indexed(text: str, at: int, scope_of: Any) -> tuple[int, list]:
     """Past a chain at `at`: where its `[i].field[2]` tail ends and each index as [text, scope]
-    ('const', 'local' or 'global'); ([], at) when the chain has no index the page can compute.
+    ('const', 'local' or 'global'); (at, []) when the chain has no index the page can compute.
     A tail is taken up to its last index that is an integer or a variable chain."""
     end, indexes = at, []
     while True:
@@ -226,8 +226,8 @@ class Monitor:
                     return None, False
                 idx.append(value)
             container, key, ty = plc.resolve_typed(fmt.format(*idx))
-        except (PlcLabError, ValueError):
-            return None, False
+        except (PlcLabError, ValueError, LookupError, AttributeError, TypeError):
+            return None, False             # e.g. a VAR_IN_OUT not yet bound before the first scan
         base = T.base_of(ty)
         if not isinstance(base, T.ElementaryType):
             return None, False
