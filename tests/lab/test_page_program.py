@@ -189,3 +189,30 @@ def test_online_monitoring_shows_an_indexed_use_s_element_as_the_program_records
     expect(ptr).to_have_text("2", timeout=WAIT)
     expect(playing).to_have_text(str(read("Main.Cp.Frames[2].Data[1]")), timeout=WAIT)
     page.screenshot(path=str(shots / "lab-mp9c-online-indexed.png"), full_page=True)
+
+
+def test_an_indexed_use_follows_its_index_and_is_marked_when_its_element_is_forced(lab_page):
+    from test_monitor import PROGRAM
+
+    lp = lab_page("mp9c", speed=2)
+    page, lab = lp.page, lp.lab
+    page.get_by_label("Load ST files").set_input_files(
+        files=[{"name": "idx.st", "mimeType": "text/plain", "buffer": PROGRAM.encode()}])
+    expect(page.locator("#program-message")).to_have_text("program loaded: idx.st", timeout=WAIT)
+    page.get_by_role("button", name="Show the program").click()
+    page.get_by_label("POU", exact=True).select_option("Idx")
+    line = page.get_by_label("program source").locator('li[data-text^="x := Valves[i];"]')
+    use = line.get_by_label("value of Valves[i]", exact=True)
+    expect(use).to_have_text("20", timeout=WAIT)                       # i = 2
+    lab.call(lambda: lab.force("Main.Valves[2]", "55")).result(10)
+    expect(use).to_have_text("55", timeout=WAIT)
+    expect(use).to_have_attribute("data-forced", "true")               # the element shown is forced
+    lab.call(lambda: lab.force("Main.i", "3")).result(10)
+    expect(use).to_have_text("30", timeout=WAIT)                       # another element: not forced
+    expect(use).not_to_have_attribute("data-forced", "true")
+    lab.call(lambda: lab.force("Main.i", "9")).result(10)              # out of range: nothing, no mark
+    expect(use).to_have_text("", timeout=WAIT)
+    expect(use).not_to_have_attribute("data-forced", "true")
+    lab.call(lambda: lab.force("Main.i", "2")).result(10)
+    expect(use).to_have_text("55", timeout=WAIT)
+    expect(use).to_have_attribute("data-forced", "true")

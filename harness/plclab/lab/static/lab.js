@@ -559,9 +559,11 @@ async function showPou(name, instance) {
     const n = pou.line + i;
     const li = el("li", { value: String(n), id: `src-${n}`, "data-line": String(n), "data-text": text });
     let at = 0;
-    for (const [, c0, c1, chain, scope] of byLine.get(n) || []) {
+    for (const [, c0, c1, chain, scope, indexes] of byLine.get(n) || []) {
       const path = scope === "global" || !instance ? chain : `${instance}.${chain}`;
-      li.append(text.slice(at, c1), el("span", { class: "val", "data-chain": chain, "data-path": path, "aria-label": `value of ${chain}` }));
+      // an indexed use (`Valves[i]`): its path is known once its indexes' values are (renderMonitor)
+      const where = indexes ? { "data-template": path, "data-indexes": JSON.stringify(indexes) } : { "data-path": path };
+      li.append(text.slice(at, c1), el("span", { class: "val", "data-chain": chain, ...where, "aria-label": `value of ${chain}` }));
       at = c1;
     }
     li.append(text.slice(at) || (at ? "" : " "));
@@ -665,6 +667,21 @@ function renderMonitor(m) {
   if (m.power && lab.shownPou.ladder) renderPower(m.power);
   for (const [chain, value] of Object.entries(m.values)) {
     for (const span of document.querySelectorAll(`#source .val[data-chain="${CSS.escape(chain)}"]`)) span.textContent = String(value);
+  }
+  Object.assign(lab.monitorValues, m.values);
+  // an indexed use names the element its indexes' live values pick (`Main.Valves[2]`), so a
+  // force of that element marks it; no value shown (out of range): no path, no mark
+  for (const span of document.querySelectorAll("#source .val[data-indexes]")) {
+    const items = JSON.parse(span.dataset.indexes);
+    let k = 0, ok = span.textContent !== "";
+    const path = span.dataset.template.replace(/\[[^\]]*\]/g, (g) => "[" + g.slice(1, -1).split(",").map(() => {
+      const [text, scope] = items[k++] || [];
+      const v = scope === "const" ? Number(text) : lab.monitorValues[text];
+      if (!Number.isInteger(v)) ok = false;
+      return String(v);
+    }).join(",") + "]");
+    if (ok) span.dataset.path = path;
+    else { delete span.dataset.path; delete span.dataset.forced; }
   }
 }
 
