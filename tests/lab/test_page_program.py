@@ -188,6 +188,7 @@ def test_online_monitoring_shows_an_indexed_use_s_element_as_the_program_records
     expect(status).to_have_text("2 frame(s); executing frame 2", timeout=WAIT)
     expect(ptr).to_have_text("2", timeout=WAIT)
     expect(playing).to_have_text(str(read("Main.Cp.Frames[2].Data[1]")), timeout=WAIT)
+    playing.scroll_into_view_if_needed()
     page.screenshot(path=str(shots / "lab-mp9c-online-indexed.png"), full_page=True)
 
 
