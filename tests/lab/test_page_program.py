@@ -140,3 +140,80 @@ def test_online_monitoring_shows_values_beside_their_use_and_a_fault_opens_its_s
     page.get_by_label("POU", exact=True).select_option("Faulty")
     opener.click()
     expect(line).to_have_class(re.compile(r"\btarget-line\b"), timeout=WAIT)
+
+
+def test_online_monitoring_shows_an_indexed_use_s_element_as_the_program_records_and_plays(lab_page, shots):
+    """`Cp.Frames[Cp.Count].Data[2]`: the element the live index names, the lab's own read of
+    it; nothing while the index is out of range (no frame recorded: Cp.Count = 0)."""
+    lp = lab_page("mp9c", speed=2)
+    page, lab = lp.page, lp.lab
+
+    def read(path: str):
+        return lab.call(lambda: lab.session.plc.read(path)).result(10)
+
+    page.get_by_role("button", name="Show the program").click()
+    page.get_by_label("POU", exact=True).select_option("FB_Mp9cManual")
+    source = page.get_by_label("program source")
+    count = source.get_by_label("value of Cp.Count").first
+    sensors = source.get_by_label("value of Cp.Frames[Cp.Count].Data[2]", exact=True)
+    valves = source.get_by_label("value of Cp.Frames[Cp.Count].Data[1]", exact=True)
+    expect(count).to_have_text("0", timeout=WAIT)
+    expect(sensors).to_have_text("")                                # Frames[0]: out of range, nothing
+    expect(sensors).to_be_hidden()
+    flip(page, "SA5", True)
+    on(lamp(page, "SQ2"))
+    tap_sb1(page)                                                   # frame 1
+    expect(count).to_have_text("1", timeout=WAIT)
+    expect(sensors).to_have_text(str(read("Main.Cp.Frames[1].Data[2]")), timeout=WAIT)
+    expect(valves).to_have_text(str(read("Main.Cp.Frames[1].Data[1]")))
+    flip(page, "SA5", False)
+    on(lamp(page, "SQ1"))
+    flip(page, "I0.7", True)
+    tap_sb1(page)                                                   # frame 2: other bytes
+    expect(count).to_have_text("2", timeout=WAIT)
+    assert read("Main.Cp.Frames[2].Data[2]") != read("Main.Cp.Frames[1].Data[2]")
+    expect(sensors).to_have_text(str(read("Main.Cp.Frames[2].Data[2]")), timeout=WAIT)
+    expect(valves).to_have_text(str(read("Main.Cp.Frames[2].Data[1]")))
+    # playback: the frame the sequencer points at, as it moves
+    page.get_by_label("POU", exact=True).select_option("FB_Mp9cAutomatic")
+    playing = source.get_by_label("value of Cp.Frames[Sequencer.Ptr].Data[1]", exact=True)
+    ptr = source.get_by_label("value of Sequencer.Ptr", exact=True).first
+    status = page.locator("#frames-status")
+    flip(page, "SA1", True)
+    tap_sb1(page)
+    expect(status).to_have_text("2 frame(s); executing frame 1", timeout=WAIT)
+    expect(ptr).to_have_text("1", timeout=WAIT)
+    expect(playing).to_have_text(str(read("Main.Cp.Frames[1].Data[1]")), timeout=WAIT)
+    on(lamp(page, "SQ2"))
+    expect(status).to_have_text("2 frame(s); executing frame 2", timeout=WAIT)
+    expect(ptr).to_have_text("2", timeout=WAIT)
+    expect(playing).to_have_text(str(read("Main.Cp.Frames[2].Data[1]")), timeout=WAIT)
+    playing.scroll_into_view_if_needed()
+    page.screenshot(path=str(shots / "lab-mp9c-online-indexed.png"), full_page=True)
+
+
+def test_an_indexed_use_follows_its_index_and_is_marked_when_its_element_is_forced(lab_page):
+    from test_monitor import PROGRAM
+
+    lp = lab_page("mp9c", speed=2)
+    page, lab = lp.page, lp.lab
+    page.get_by_label("Load ST files").set_input_files(
+        files=[{"name": "idx.st", "mimeType": "text/plain", "buffer": PROGRAM.encode()}])
+    expect(page.locator("#program-message")).to_have_text("program loaded: idx.st", timeout=WAIT)
+    page.get_by_role("button", name="Show the program").click()
+    page.get_by_label("POU", exact=True).select_option("Idx")
+    line = page.get_by_label("program source").locator('li[data-text^="x := Valves[i];"]')
+    use = line.get_by_label("value of Valves[i]", exact=True)
+    expect(use).to_have_text("20", timeout=WAIT)                       # i = 2
+    lab.call(lambda: lab.force("Main.Valves[2]", "55")).result(10)
+    expect(use).to_have_text("55", timeout=WAIT)
+    expect(use).to_have_attribute("data-forced", "true")               # the element shown is forced
+    lab.call(lambda: lab.force("Main.i", "3")).result(10)
+    expect(use).to_have_text("30", timeout=WAIT)                       # another element: not forced
+    expect(use).not_to_have_attribute("data-forced", "true")
+    lab.call(lambda: lab.force("Main.i", "9")).result(10)              # out of range: nothing, no mark
+    expect(use).to_have_text("", timeout=WAIT)
+    expect(use).not_to_have_attribute("data-forced", "true")
+    lab.call(lambda: lab.force("Main.i", "2")).result(10)
+    expect(use).to_have_text("55", timeout=WAIT)
+    expect(use).to_have_attribute("data-forced", "true")

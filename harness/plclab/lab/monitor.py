@@ -4,8 +4,12 @@ does), and the live values of one POU instance.
 
 The listing comes from the checked program (each POU's file and lines, its symbols); the uses
 are found by a small scanner that skips comments and strings and takes dotted chains
-(`Robot.Sequencer.Ptr`) whose first name is one of the POU's variables or a global. Values
-are read through paths resolved once per PLC (a restart or a load re-resolves them).
+(`Robot.Sequencer.Ptr`) whose first name is one of the POU's variables or a global, with
+their array indexes when every index is an integer constant or a variable chain
+(`Cp.Frames[Cp.Count].Data[1]`, `Valves[i]`). Values are read through paths resolved once
+per PLC (a restart or a load re-resolves them); an indexed use is resolved at every read from
+its indexes' live values in the same instance, and shows nothing when an index is out of
+range or cannot be read (never the value of another element).
 """
 from __future__ import annotations
 
@@ -17,8 +21,13 @@ from plclab.errors import PlcLabError
 from plclab.iec import types as T
 
 MAX_REFS = 2000           # variable uses listed per POU (a longer POU: the first ones)
+MAX_INDEXED = 200         # indexed uses read per instance (each is resolved at every read)
 _TOKENS = re.compile(r"\(\*[\s\S]*?\*\)|//[^\n]*|'(?:\$.|[^'$])*'|\"(?:\$.|[^\"$])*\"|"
                      r"(?<![\w#.])([A-Za-z_]\w*(?:[ \t]*\.[ \t]*[A-Za-z_]\w*)*)(?![\w#])")
+_INDEX = re.compile(r"[ \t]*\[([^\]\[\n()'\"]*)\]")          # one `[...]` on the same line, no nesting
+_FIELDS = re.compile(r"[ \t]*\.[ \t]*[A-Za-z_]\w*(?:[ \t]*\.[ \t]*[A-Za-z_]\w*)*(?![\w#])")
+_INT = re.compile(r"[+-]?\d(?:_?\d)*$")
+_CHAIN = re.compile(r"[A-Za-z_]\w*(?:\s*\.\s*[A-Za-z_]\w*)*$")
 
 
 def display_name(file: str) -> str:
@@ -64,24 +73,60 @@ def _refs(pou: Any, globals_: dict, lines: list[str], first: int, last: int) -> 
         starts.append(starts[-1] + len(line) + 1)
     symbols = pou.symbols or {}
     refs: list[list] = []
+    def scope_of(chain: str) -> Optional[str]:
+        head = chain.split(".", 1)[0].strip().upper()
+        decl = symbols.get(head)
+        if decl is not None and decl.section != "VAR_EXTERNAL":
+            return "local"
+        return "global" if head in globals_ else None
+
     for m in _TOKENS.finditer(text):
         chain = m.group(1)
         if not chain:
             continue
-        head = chain.split(".", 1)[0].strip().upper()
-        decl = symbols.get(head)
-        if decl is not None and decl.section != "VAR_EXTERNAL":
-            scope = "local"
-        elif head in globals_:
-            scope = "global"
-        else:
+        scope = scope_of(chain)
+        if scope is None:
             continue
         pos = m.start(1)
         line = _line_of(starts, pos)
-        refs.append([first + line, pos - starts[line], m.end(1) - starts[line], re.sub(r"\s+", "", chain), scope])
+        end, indexes = _indexed(text, m.end(1), scope_of)
+        if indexes:        # `Frames[Ptr].Data[1]`: the element's value, not the array's (none)
+            refs.append([first + line, pos - starts[line], end - starts[line],
+                         re.sub(r"\s+", "", text[pos:end]), scope, indexes])
+        else:
+            refs.append([first + line, pos - starts[line], m.end(1) - starts[line], re.sub(r"\s+", "", chain), scope])
         if len(refs) >= MAX_REFS:
             break
+    refs.sort(key=lambda r: (r[0], r[2]))   # the page inserts values left to right, line by line
     return refs
+
+
+def _indexed(text: str, at: int, scope_of: Any) -> tuple[int, list]:
+    """Past a chain at `at`: where its `[i].field[2]` tail ends and each index as [text, scope]
+    ('const', 'local' or 'global'); (at, []) when the chain has no index the page can compute.
+    A tail is taken up to its last index that is an integer or a variable chain."""
+    end, indexes = at, []
+    while True:
+        m = _INDEX.match(text, at)
+        if not m:
+            break
+        items = []
+        for item in m.group(1).split(","):
+            item = item.strip()
+            if _INT.match(item):
+                items.append([item.replace("_", ""), "const"])
+            elif _CHAIN.match(item) and scope_of(item):
+                items.append([re.sub(r"\s+", "", item), scope_of(item)])
+            else:
+                return end, indexes
+        indexes.extend(items)
+        at = end = m.end()
+        f = _FIELDS.match(text, at)
+        if f:
+            at = f.end()
+            if not _INDEX.match(text, at):       # `[i].Pause`: the field belongs to the use
+                end = at
+    return end, indexes
 
 
 def _line_of(starts: list[int], pos: int) -> int:
@@ -122,6 +167,7 @@ class Monitor:
         self.instance: Optional[str] = None
         self.chains: list[tuple[str, str]] = []       # (chain as the page keys it, path to read)
         self._targets: list[tuple[str, Any, Any, bool]] = []
+        self.indexed: list[tuple[str, str, list[tuple[str, str]]]] = []  # (chain, path with {} per index, indexes)
         self._plc: Any = None
         self._sent: dict[str, Any] = {}
 
@@ -130,12 +176,21 @@ class Monitor:
             raise PlcLabError(f"{pou['name']} has no instance '{str(instance)[:80]}'")
         self.pou, self.instance = pou["name"], instance
         chains: dict[str, str] = {}
-        for _line, _c0, _c1, chain, scope in pou["refs"]:
-            if scope == "global":
-                chains[chain] = chain
-            elif instance is not None:
-                chains[chain] = f"{instance}.{chain}"
+        indexed: dict[str, tuple[str, list[tuple[str, str]]]] = {}
+        for _line, _c0, _c1, chain, scope, *more in pou["refs"]:
+            if scope == "local" and instance is None:
+                continue
+            path = chain if scope == "global" else f"{instance}.{chain}"
+            if not more:
+                chains[chain] = path
+                continue
+            if instance is None and any(s == "local" for _i, s in more[0]):
+                continue
+            if len(indexed) < MAX_INDEXED:      # each index: a constant, or its path in this instance
+                indexed[chain] = (re.sub(r"\[[^\]]*\]", lambda m: "[" + ",".join(["{}"] * (m.group(0).count(",") + 1)) + "]", path),
+                                  [(i, "const" if s == "const" else i if s == "global" else f"{instance}.{i}") for i, s in more[0]])
         self.chains = list(chains.items())
+        self.indexed = [(chain, fmt, idx) for chain, (fmt, idx) in indexed.items()]
         self._plc = None
         self._sent = {}
 
@@ -148,17 +203,36 @@ class Monitor:
             full = True
         out = {}
         for chain, container, key, is_time in self._targets:
-            value = container[key] if isinstance(container, list) else getattr(container, key)
-            if is_time:
-                value = f"T#{value / 1e6:g}ms" if abs(value) < 1e9 else f"T#{value / 1e9:g}s"
-            elif isinstance(value, bool):
-                value = "TRUE" if value else "FALSE"
-            elif isinstance(value, float):
-                value = round(value, 4)
+            value = _show(container[key] if isinstance(container, list) else getattr(container, key), is_time)
             if full or self._sent.get(chain, _NONE) != value:
                 out[chain] = value
                 self._sent[chain] = value
+        for chain, fmt, indexes in self.indexed:
+            value = _show(*self._element(plc, fmt, indexes))
+            if full or self._sent.get(chain, _NONE) != value:
+                out[chain] = value                     # "": shown as nothing (an index out of range)
+                self._sent[chain] = value
         return out
+
+    @staticmethod
+    def _element(plc: Any, fmt: str, indexes: list[tuple[str, str]]) -> tuple[Any, bool]:
+        """The element an indexed use names now, from its indexes' live values; (None, False)
+        when an index is not an integer or out of range, or the element is not elementary."""
+        try:
+            idx = []
+            for text, path in indexes:
+                value = int(text) if path == "const" else plc.read(path)
+                if isinstance(value, bool) or not isinstance(value, int):
+                    return None, False
+                idx.append(value)
+            container, key, ty = plc.resolve_typed(fmt.format(*idx))
+        except (PlcLabError, ValueError, LookupError, AttributeError, TypeError):
+            return None, False             # e.g. a VAR_IN_OUT not yet bound before the first scan
+        base = T.base_of(ty)
+        if not isinstance(base, T.ElementaryType):
+            return None, False
+        value = container[key] if isinstance(container, list) else getattr(container, key)
+        return value, base.kind == "time"
 
     def _resolve(self, plc: Any) -> None:
         self._plc = plc
@@ -176,3 +250,16 @@ class Monitor:
 
 
 _NONE = object()
+
+
+def _show(value: Any, is_time: bool) -> Any:
+    """A value as the page prints it beside its use ("" for none)."""
+    if value is None:
+        return ""
+    if is_time:
+        return f"T#{value / 1e6:g}ms" if abs(value) < 1e9 else f"T#{value / 1e9:g}s"
+    if isinstance(value, bool):
+        return "TRUE" if value else "FALSE"
+    if isinstance(value, float):
+        return round(value, 4)
+    return value

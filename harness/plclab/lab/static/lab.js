@@ -559,9 +559,11 @@ async function showPou(name, instance) {
     const n = pou.line + i;
     const li = el("li", { value: String(n), id: `src-${n}`, "data-line": String(n), "data-text": text });
     let at = 0;
-    for (const [, c0, c1, chain, scope] of byLine.get(n) || []) {
+    for (const [, c0, c1, chain, scope, indexes] of byLine.get(n) || []) {
       const path = scope === "global" || !instance ? chain : `${instance}.${chain}`;
-      li.append(text.slice(at, c1), el("span", { class: "val", "data-chain": chain, "data-path": path, "aria-label": `value of ${chain}` }));
+      // an indexed use (`Valves[i]`): its path is known once its indexes' values are (renderMonitor)
+      const where = indexes ? { "data-template": path, "data-indexes": JSON.stringify(indexes) } : { "data-path": path };
+      li.append(text.slice(at, c1), el("span", { class: "val", "data-chain": chain, ...where, "aria-label": `value of ${chain}` }));
       at = c1;
     }
     li.append(text.slice(at) || (at ? "" : " "));
@@ -665,6 +667,21 @@ function renderMonitor(m) {
   if (m.power && lab.shownPou.ladder) renderPower(m.power);
   for (const [chain, value] of Object.entries(m.values)) {
     for (const span of document.querySelectorAll(`#source .val[data-chain="${CSS.escape(chain)}"]`)) span.textContent = String(value);
+  }
+  Object.assign(lab.monitorValues, m.values);
+  // an indexed use names the element its indexes' live values pick (`Main.Valves[2]`), so a
+  // force of that element marks it; no value shown (out of range): no path, no mark
+  for (const span of document.querySelectorAll("#source .val[data-indexes]")) {
+    const items = JSON.parse(span.dataset.indexes);
+    let k = 0, ok = span.textContent !== "";
+    const path = span.dataset.template.replace(/\[[^\]]*\]/g, (g) => "[" + g.slice(1, -1).split(",").map(() => {
+      const [text, scope] = items[k++] || [];
+      const v = scope === "const" ? Number(text) : lab.monitorValues[text];
+      if (!Number.isInteger(v)) ok = false;
+      return String(v);
+    }).join(",") + "]");
+    if (ok) span.dataset.path = path;
+    else { delete span.dataset.path; delete span.dataset.forced; }
   }
 }
 
@@ -859,7 +876,8 @@ function addPoints(name, points) {
 }
 
 // Each trend is drawn at the canvas's size on screen (a phone's narrow column included), the
-// plot on the left, the current value in a margin of its own on the right.
+// plot on the left, the current value in a margin of its own on the right, between the
+// scale's top and bottom (no text is ever drawn over the line).
 function drawTrends() {
   if (!lab.state) return;
   const span = lab.trendWindow, now = lab.state.t, from = now - span;
@@ -899,10 +917,10 @@ function drawTrends() {
     const current = pts[pts.length - 1][1];
     const text = typeof current === "number" && !Number.isInteger(current) ? current.toFixed(2) : `${current}`;
     ctx.fillText(text, plot + 6, h / 2 + 4, 58);
-    ctx.fillStyle = "#6b7280";
+    ctx.fillStyle = "#6b7280";                       // the scale: in the margin too, never over the line
     ctx.font = "10px sans-serif";
-    ctx.fillText(`${hi}`, 2, 10);
-    ctx.fillText(`${lo}`, 2, h - 2);
+    ctx.fillText(`${hi}`, plot + 6, 10, 58);
+    ctx.fillText(`${lo}`, plot + 6, h - 2, 58);
   }
 }
 

@@ -109,7 +109,7 @@ const Mimic = (() => {
     parts.links = [];
     for (let k = 0; k < 5; k++) {
       const y0 = 30 + k * 52;
-      const g = s("g", { transform: `translate(0,${y0})` });
+      const g = s("g", { class: "gauge", transform: `translate(0,${y0})` });
       s("text", { class: "mimic-text", x: 10, y: 14, text: `${k + 1} ${AXES[k]}` }, g);
       const track = s("rect", { x: 150, y: 4, width: 360, height: 14, fill: "#e5e7eb", stroke: "#9ca3af" }, g);
       const working = s("rect", { x: 150, y: 4, width: 0, height: 14, fill: "#d1fae5" }, g);
