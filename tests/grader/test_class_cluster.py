@@ -11,7 +11,6 @@ import subprocess
 import sys
 from pathlib import Path
 
-import pytest
 from lxml import etree
 
 from plclab.grader.classroom import cells, grade_class, grade_on_worker, write_class_outputs
@@ -49,7 +48,6 @@ def _junit_without_clock(path: Path) -> bytes:
 
 
 def test_a_class_on_a_dask_cluster_gets_the_outputs_of_grading_it_here(tmp_path):
-    pytest.importorskip("distributed")
     folder = tmp_path / "class"
     folder.mkdir()
     for name in ("task1_gripper_inverted.st", "task1_hl1_inverted.st"):

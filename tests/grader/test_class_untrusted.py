@@ -144,21 +144,33 @@ def test_plclab_grade_quotes_a_huge_identifier_capped_too(tmp_path, capsys):
 # --------------------------------------------------------------------------- --out before the work (item 8)
 @contextlib.contextmanager
 def read_only(folder: Path):
-    """`folder` made unwritable: chmod for a user, the immutable attribute for root (whom
-    permissions do not stop)."""
+    """`folder` made unwritable: chmod for a user; for root (whom permissions do not stop) a
+    read-only tmpfs mounted on it (the suite runs as root in CI, as scripts/setup does)."""
     folder.mkdir(parents=True, exist_ok=True)
     if os.geteuid() != 0:
         folder.chmod(0o555)
-        undo = lambda: folder.chmod(0o755)           # noqa: E731
-    else:
-        made = subprocess.run(["chattr", "+i", str(folder)], capture_output=True)
-        if made.returncode != 0:
-            pytest.skip(f"root without chattr +i here: {made.stderr.decode().strip()}")
-        undo = lambda: subprocess.run(["chattr", "-i", str(folder)], check=True)   # noqa: E731
+        try:
+            yield folder
+        finally:
+            folder.chmod(0o755)
+        return
+    with mounted_tmpfs(folder, "ro,size=1m"):
+        yield folder
+
+
+@contextlib.contextmanager
+def mounted_tmpfs(folder: Path, options: str):
+    """A tmpfs with `options` mounted on `folder`, unmounted after. Needs root: never skipped,
+    a machine where it cannot be mounted fails the test saying so."""
+    if os.geteuid() != 0:
+        pytest.fail("this test mounts a small file system: run the suite as root (as CI and scripts/setup do)")
+    made = subprocess.run(["mount", "-t", "tmpfs", "-o", options, "tmpfs", str(folder)], capture_output=True)
+    if made.returncode != 0:
+        pytest.fail(f"cannot mount a tmpfs on {folder} as root: {made.stderr.decode().strip()}")
     try:
         yield folder
     finally:
-        undo()
+        subprocess.run(["umount", "-l", str(folder)], check=True)
 
 
 def test_a_read_only_out_is_refused_before_any_student_is_graded(tmp_path, own_tmp, capsys):
@@ -178,15 +190,10 @@ def test_a_read_only_out_is_refused_before_any_student_is_graded(tmp_path, own_t
 
 @contextlib.contextmanager
 def small_disk(folder: Path, size: str):
-    """A tmpfs of `size` mounted on `folder` (root only; unmounted after)."""
+    """A tmpfs of `size` mounted on `folder` (root; unmounted after)."""
     folder.mkdir(parents=True, exist_ok=True)
-    made = subprocess.run(["mount", "-t", "tmpfs", "-o", f"size={size}", "tmpfs", str(folder)], capture_output=True)
-    if made.returncode != 0:
-        pytest.skip(f"cannot mount a small file system here: {made.stderr.decode().strip()}")
-    try:
+    with mounted_tmpfs(folder, f"size={size}"):
         yield folder
-    finally:
-        subprocess.run(["umount", "-l", str(folder)], check=True)
 
 
 def test_a_full_out_is_refused_before_the_work_and_verdicts_are_written_before_traces(tmp_path, own_tmp):
