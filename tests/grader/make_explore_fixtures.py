@@ -166,6 +166,12 @@ TUR10 = (
              ("Robot(Active := SA7, Press := Button.Press, Cp := Cp);\n",
               "Robot(Active := SA7, Press := Button.Press OR (FirstScan AND Resume AND SA7), Cp := Cp);\n"
               "FirstScan := FALSE;\nResume := Robot.Sequencer.Running;\n"))),
+    Fixture("tur10", "task1_auto_resumes_after_manual", "task1", False,
+            "leaving automatic mode in the middle of a frame: the playback is not stopped (only the "
+            "pointer goes back to frame 1), so on the return to automatic mode the robot moves again "
+            "without a press.",
+            (("IF NOT Active THEN\n    Sequencer.State := STOPPED;\n    Sequencer.Ptr := 1;\n",
+              "IF NOT Active THEN\n    Sequencer.Ptr := 1;\n"),)),
     # ------------------------------------------------------------------ correct alternatives
     Fixture("tur10", "task1_alt_jog_case", "task1", True,
             "other structure: the jog reference from a CASE on the two buttons.",

@@ -28,16 +28,16 @@ import sys
 import tempfile
 from dataclasses import dataclass, field
 from pathlib import Path
-from typing import Any, Callable, Optional, Sequence
+from typing import Any, Callable, Iterator, Optional, Sequence
 
 from plclab.errors import PlcLabError
 from plclab.scenario import Session, compiled_once
-from plclab.stands.operators import (FAULT, POWER, Event, Exploration, Observed, Script, fault_params,
-                                     script_from_rows)
+from plclab.stands.operators import BLINK_END_TOL, START_S, Exploration, Observed, blink_spans
+from plclab.stands.scripts import FAULT, POWER, Event, Script, fault_params, read_script
 
 SUSPECT_MARGIN = 0.1       # s: an action this close to where two drifted programs differ is ambiguous
-DRIFT_SPAN = 0.5          # s: changes this close are one program a little behind the other, not two stories
 MOVE_SUSPECT = 0.35        # s: an ambiguous action is moved this much later and the script played again
+JITTER = 0.03             # s: how far actions are moved to tell a difference from a one-scan coincidence
 SHRINK_RUNS = 200          # default budget of the shrinker, in script plays (both programs)
 
 
@@ -126,22 +126,6 @@ def play(s: Session, script: Script, expl: Optional[Exploration] = None, until: 
     return probe
 
 
-def read_script(path: str, buttons: Sequence[str]) -> Script:
-    """An operator script file (time_s,name,value rows; plclab.stands.operators), one clear line
-    for a bad file."""
-    from plclab.trace.csvio import read_rows
-    try:
-        rows = read_rows(path)
-    except FileNotFoundError:
-        raise PlcLabError(f"{path}: no such file") from None
-    except OSError as e:
-        raise PlcLabError(f"{path}: cannot read: {e.strerror or e}") from None
-    out = []
-    for r in rows:
-        out.append((r.time_ns / 1e9, r.name, r.text))
-    return script_from_rows(out, buttons, where=path)
-
-
 # --------------------------------------------------------------------------- comparison
 
 @dataclass(frozen=True)
@@ -198,25 +182,95 @@ def _in(spans: list[tuple[float, float]], t: float) -> bool:
     return any(a <= t < b for a, b in spans)
 
 
+def _free_blinks(cm: list, cs: list, mode: list[tuple[float, float]]) -> list[tuple[float, float]]:
+    """The blinks of either lamp pattern that begin in `mode` (console spans), to their end and
+    BLINK_END_TOL after (a blink begun there may go on after the mode changes)."""
+    return [(a, b + BLINK_END_TOL) for a, b in blink_spans(cm) + blink_spans(cs) if _in(mode, a)]
+
+
+def _free_after(script: Script, switch: str, conditions: tuple[tuple[str, int], ...],
+                settle: float) -> list[tuple[float, float]]:
+    """From each change of `switch` while every console switch of `conditions` has its value,
+    until one of them next changes, and `settle` s after (Exploration.free_after)."""
+    spans: list[tuple[float, float]] = []
+    level: dict[str, int] = {}
+    start = None
+    for e in script.events:
+        if e.is_press or (e.name != switch and e.name not in dict(conditions)):
+            continue
+        v = int(float(e.value))
+        if e.name == switch:
+            changed = v != level.get(switch, 0)
+            level[switch] = v
+            if changed and start is None and all(level.get(n, 0) == want for n, want in conditions):
+                start = e.time
+        else:
+            if v != level.get(e.name, 0) and start is not None:
+                spans.append((start, e.time + settle))
+                start = None
+            level[e.name] = v
+    if start is not None:
+        spans.append((start, float("inf")))
+    return spans
+
+
+def _without(cm: list, cs: list, spans: list[tuple[float, float]]) -> tuple[list, list]:
+    """Both change lists with what they show inside `spans` taken out: at the end of each span
+    each keeps the value it shows then."""
+    merged: list[tuple[float, float]] = []
+    for a, b in sorted(spans):
+        if merged and a <= merged[-1][1]:
+            merged[-1] = (merged[-1][0], max(merged[-1][1], b))
+        else:
+            merged.append((a, b))
+    if not merged:
+        return cm, cs
+
+    def cut(changes: list) -> list:
+        out = changes[:1] + [c for c in changes[1:] if not any(a <= c[0] < b for a, b in merged)]
+        out += [(b, _value_at(changes, b)) for _a, b in merged if b != float("inf")]
+        out = out[:1] + sorted(out[1:], key=lambda c: c[0])
+        dedup = out[:1]
+        for t, v in out[1:]:
+            if v != dedup[-1][1]:
+                dedup.append((t, v))
+        return dedup
+    return cut(cm), cut(cs)
+
+
 def compare(model: dict[str, list], student: dict[str, list], observed: Sequence[Observed], expl: Exploration,
-            script: Script, end: float) -> Optional[Divergence]:
+            script: Script, end: float, task: str = "") -> Optional[Divergence]:
     """The first divergence of `student` from `model` (probe changes), or None.
 
     Each signal's changes are paired in order: a pair must carry the same value (the signal's
     own tolerance) and come at the same time within `timing_tol`, or within `timing_tol` of
     the lag the student had at the pair before (a program a scan late at every frame is late
-    by a scan more each frame), and never more than `max_drift` late in all. A change one
-    program makes and the other does not is a divergence unless it comes so near the end of
-    the script that the other had no time to make it."""
+    by a scan more each frame, plus `drift_rate` of the time since), and never more than
+    `max_drift` late in all. A change one program makes and the other does not is a divergence
+    unless it comes so near the end of the script that the other had no time to make it.
+
+    The task's freedoms, declared by the stand, come first: a signal is compared as the
+    operator sees it (`Observed.pattern`: a lamp on, off or blinking), a change into or out of
+    a shown value may have a looser timing (`Observed.timing`), spans the task leaves to the
+    program are taken out (`Exploration.free_after` of `task`, `Observed.free_blinks`), and a
+    value may differ more the further apart in time the two stands are (`Observed.lag_band`)."""
     tol, cut = expl.timing_tol, end - expl.max_drift - expl.timing_tol
     found: list[Divergence] = []
     pairs: list[tuple[float, float, Observed, float]] = []      # (tm, ts, signal, since)
+    shown: dict[str, tuple[list, list]] = {}
+    free = [span for switch, conditions in expl.free_after(task) for span in
+            _free_after(script, switch, conditions, expl.settle_s)]
     for o in observed:
-        cm, cs = model[o.name], student[o.name]
+        cm, cs = o.shown(model[o.name]), o.shown(student[o.name])
+        spans = list(free)
+        if o.free_blinks is not None:
+            spans += _free_blinks(cm, cs, _windows(script, *o.free_blinks, 0.0))
+        cm, cs = _without(cm, cs, spans)
         if o.only_when is not None:
             spans = _windows(script, *o.only_when)
             cm = cm[:1] + [c for c in cm[1:] if _in(spans, c[0])]
             cs = cs[:1] + [c for c in cs[1:] if _in(spans, c[0])]
+        shown[o.name] = (cm, cs)
         since = 0.0
         if not o.equal(cm[0][1], cs[0][1]):
             found.append(Divergence(0.0, o, cm[0][1], cs[0][1], "value", 0.0, 0.0))
@@ -224,34 +278,41 @@ def compare(model: dict[str, list], student: dict[str, list], observed: Sequence
         for k in range(1, max(len(cm), len(cs))):
             if k < len(cm) and k < len(cs):
                 (tm, vm), (ts, vs) = cm[k], cs[k]
-                if not o.equal(vm, vs):
+                lag = max(abs(ts - tm), abs(cs[k - 1][0] - cm[k - 1][0]) if k > 1 else 0.0)
+                if not o.equal(vm, vs, lag):
                     t = max(tm, ts)
                     found.append(Divergence(t, o, vm, vs, "value", since, ts - tm))
                     break
-                pairs.append((tm, ts, o, since))
+                loose = o.timing_tol(cm[k - 1][1], vm)
+                if loose is None:
+                    pairs.append((tm, ts, o, since))
+                elif abs(ts - tm) > loose:                   # a freedom of the task, and beyond it
+                    kind, t = ("late", tm) if ts > tm else ("early", ts)
+                    found.append(Divergence(t, o, _value_at(cm, t), _value_at(cs, t), kind, since, 0.0,
+                                            abs(ts - tm)))
+                    break
                 since = min(tm, ts)
             elif k < len(cm):
                 tm, vm = cm[k]
-                if tm <= cut:
+                if tm <= min(cut, end - (o.timing_tol(cm[k - 1][1], vm) or 0.0)):
                     found.append(Divergence(tm, o, vm, _value_at(cs, tm), "missing", since, 0.0))
                 break
             else:
                 ts, vs = cs[k]
-                if ts <= cut:
+                if ts <= min(cut, end - (o.timing_tol(cs[k - 1][1], vs) or 0.0)):
                     found.append(Divergence(ts, o, _value_at(cm, ts), vs, "extra", since, 0.0))
                 break
-    prev = 0.0
+    prev, prev_t = 0.0, 0.0
     for tm, ts, o, since in sorted(pairs, key=lambda p: (p[0], p[1])):
         d = ts - tm
-        if (abs(d) > tol and abs(d - prev) > tol) or abs(d) > expl.max_drift:
+        if (abs(d) > tol and abs(d - prev) > tol + expl.drift_rate * (tm - prev_t)) or abs(d) > expl.max_drift:
+            cm, cs = shown[o.name]
             if d > 0:
-                found.append(Divergence(tm, o, _value_at(model[o.name], tm), _value_at(student[o.name], tm),
-                                        "late", since, prev, d))
+                found.append(Divergence(tm, o, _value_at(cm, tm), _value_at(cs, tm), "late", since, prev, d))
             else:
-                found.append(Divergence(ts, o, _value_at(model[o.name], ts), _value_at(student[o.name], ts),
-                                        "early", since, prev, -d))
+                found.append(Divergence(ts, o, _value_at(cm, ts), _value_at(cs, ts), "early", since, prev, -d))
             break
-        prev = d
+        prev, prev_t = d, tm
     if not found:
         return None
     first = min(found, key=lambda d: d.time)
@@ -264,18 +325,19 @@ def compare(model: dict[str, list], student: dict[str, list], observed: Sequence
 
 
 def suspects(script: Script, div: Divergence, model: dict, student: dict, observed: Sequence[Observed],
-             tick: float) -> set[int]:
+             tick: float, max_drift: float = 1.0) -> set[int]:
     """Actions so close to where the two programs' timing differs that which side of a
     transition they fall on decides the outcome (a correct program a scan later than the
-    model answer must not fail for a press in that scan): their indexes in the script."""
+    model answer must not fail for a press in that scan): their indexes in the script. The
+    programs may be apart by as much as the stand lets them drift (`max_drift`)."""
     spans: list[tuple[float, float]] = []
     if abs(div.drift) >= tick / 2:
         spans.append((div.time - abs(div.drift) - SUSPECT_MARGIN, div.time + SUSPECT_MARGIN))
     for o in observed:
-        for (tm, _vm), (ts, _vs) in zip(model[o.name][1:], student[o.name][1:]):
+        for (tm, _vm), (ts, _vs) in zip(o.shown(model[o.name])[1:], o.shown(student[o.name])[1:]):
             if max(tm, ts) >= div.time:
                 break
-            if tick / 2 <= abs(ts - tm) <= DRIFT_SPAN:          # two programs a little apart in time
+            if tick / 2 <= abs(ts - tm) <= max_drift:           # two programs a little apart in time
                 spans.append((min(tm, ts) - SUSPECT_MARGIN, max(tm, ts) + SUSPECT_MARGIN))
     out = set()
     for n, e in enumerate(script.events):
@@ -313,6 +375,7 @@ class Explorer:
         self.student, self.model, self.workdir = student, model, workdir
         self.observed = expl.compared(task)
         self.plays = 0
+        self.phases: list[float] = []
 
     def session(self, p: Program, name: str) -> Session:
         retain = self.workdir / f"{name}.retain.json"
@@ -328,25 +391,32 @@ class Explorer:
             probe = play(s, script, self.expl if expl else None, until)
         return s, probe
 
-    def outcome(self, script: Script, keep: bool = False) -> Outcome:
-        """Both programs on `script`: the divergence (None: alike) and the ambiguous actions."""
+    def outcome(self, script: Script, keep: bool = False, record_phases: bool = False) -> Outcome:
+        """Both programs on `script`: the divergence (None: alike) and the ambiguous actions.
+        `record_phases`: keep the times the model answer's stand changed (`phases`: where the
+        next script aims its actions)."""
         self.plays += 1
         ms, mp = self.run(self.model, "model", script)
         ss, sp = self.run(self.student, "student", script)
         assert mp is not None and sp is not None
-        div = compare(mp.changes, sp.changes, self.observed, self.expl, script, script.duration)
-        sus = suspects(script, div, mp.changes, sp.changes, self.observed, self.expl.tick_s) if div else set()
+        if record_phases:
+            self.phases = sorted({t for ch in mp.changes.values() for t, _v in ch[1:]})
+        div = compare(mp.changes, sp.changes, self.observed, self.expl, script, script.duration, self.task)
+        sus = suspects(script, div, mp.changes, sp.changes, self.observed, self.expl.tick_s,
+                       self.expl.max_drift) if div else set()
         return Outcome(div, sus, ms if keep else None, ss if keep else None)
 
     def confirmed(self, script: Script, tries: int = 3) -> tuple[Script, Optional[Divergence], bool]:
         """A divergence not owed to an ambiguous action: such actions are moved a little later
         and the script played again (at most `tries` times; still ambiguous: no divergence, and
         the third value is True)."""
-        for _ in range(tries):
-            out = self.outcome(script)
+        for n in range(tries):
+            out = self.outcome(script, record_phases=n == 0)
             if out.divergence is None:
                 return script, None, False
             if not out.suspect:
+                if not self.robust(script):
+                    return script, None, True
                 return script, out.divergence, False
             events = [Event(round(e.time + MOVE_SUSPECT, 3), e.name, e.value, e.hold) if n in out.suspect else e
                       for n, e in enumerate(script.events)]
@@ -355,8 +425,26 @@ class Explorer:
         return script, None, True
 
     def diverges(self, script: Script) -> Optional[Divergence]:
+        """The divergence of `script`, if no action is ambiguous and it does not hang on the scan
+        the actions fall in (robust)."""
         out = self.outcome(script)
-        return out.divergence if out.divergence is not None and not out.suspect else None
+        if out.divergence is None or out.suspect or not self.robust(script):
+            return None
+        return out.divergence
+
+    def robust(self, script: Script) -> bool:
+        """The stands still differ with the actions a few scans off (every other one JITTER s
+        earlier, the others later, and the other way round): a difference only one scan's
+        coincidence shows (a stop press in the very scan a frame starts) decides nothing, as a
+        hold at a threshold decides nothing."""
+        return all(self.outcome(jittered(script, sign)).divergence is not None for sign in (1, -1))
+
+
+def jittered(script: Script, sign: int) -> Script:
+    """`script` with its actions JITTER s later and earlier in turn (`sign`: which come first)."""
+    events = [Event(round(max(e.time + (JITTER if (n % 2 == 0) == (sign > 0) else -JITTER), 0.0), 3), e.name,
+                    e.value, e.hold) for n, e in enumerate(script.events)]
+    return Script(tuple(sorted(events, key=lambda e: e.time)), round(script.duration + JITTER, 3))
 
 
 # --------------------------------------------------------------------------- shrinking
@@ -414,12 +502,13 @@ def shrink(ex: Explorer, script: Script, div: Divergence, budget: int = SHRINK_R
                     if accept(Script(tuple(events), best.duration)):
                         break
         # 3. earliest times: the gap before each action shrunk (the later ones move with it), the
-        #    first action to 0 s, every gap to 0.3 s, else to half
+        #    first action to START_S (the PLC has read its inputs once), every gap to 0.3 s, else
+        #    to half
         for _ in range(2):
             for i in range(len(best.events)):
                 if not left() or i >= len(best.events):
                     break
-                prev = best.events[i - 1].time + best.events[i - 1].hold if i else 0.0
+                prev = best.events[i - 1].time + best.events[i - 1].hold if i else START_S
                 gap = best.events[i].time - prev
                 for new_gap in ((0.0 if i == 0 else 0.3), round(gap / 2, 2)):
                     if gap - new_gap < 0.1:
@@ -564,6 +653,24 @@ def seed_of(stand: str, task: str, sources: Sequence[tuple[str, str]]) -> int:
     return int.from_bytes(h.digest()[:8], "big")
 
 
+def script_stream(ex: Explorer, seed: Any, count: int) -> Iterator[Script]:
+    """`count` scripts for explorer `ex`, seeded by `seed`: random ones (the stand's generate),
+    each but the first of every pair followed by the same script with actions aimed at the
+    moments the model answer's stand changed in it (the stand's aim: a press, a spare input
+    flip, a mode change in the scan a frame starts or a link arrives, or a little after),
+    read from `ex.phases` after the previous script was played (ex.confirmed)."""
+    expl = ex.expl
+    previous: Optional[Script] = None
+    for n in range(count):
+        rng = random.Random(f"{seed}:{n}")
+        if n % 2 == 1 and previous is not None and ex.phases and expl.aim is not None:
+            script = expl.aim(rng, ex.task, previous, list(ex.phases))
+        else:
+            script = expl.generate(rng, ex.task, expl.episode_s)
+        previous = script
+        yield script
+
+
 def explore(expl: Exploration, stand: str, task: str, make_session: Callable, student: Program, model: Program,
             episodes: Optional[int] = None, shrink_runs: int = SHRINK_RUNS, seed: Optional[int] = None) -> ExploreResult:
     """Up to `episodes` seeded random scripts (default: the stand's budget) on both programs;
@@ -573,9 +680,7 @@ def explore(expl: Exploration, stand: str, task: str, make_session: Callable, st
     with tempfile.TemporaryDirectory(prefix="plclab-explore-", dir=_fast_tmp()) as tmp:
         ex = Explorer(expl, task, make_session, student, model, Path(tmp))
         result = ExploreResult(0, 0.0, 0, seed)
-        for n in range(episodes):
-            rng = random.Random(f"{seed}:{n}")
-            script = expl.generate(rng, task, expl.episode_s)
+        for script in script_stream(ex, seed, episodes):
             result.episodes += 1
             result.plant_seconds += script.duration
             played, div, ambiguous = ex.confirmed(script)
@@ -638,7 +743,7 @@ def requirement_of(stand: str, task: str, f: Finding, expl: Exploration) -> Opti
 
 
 __all__ = ["Divergence", "ExploreResult", "Explorer", "Finding", "Program", "compare", "explain", "explore",
-           "play", "read_script", "seed_of", "shrink"]
+           "play", "seed_of", "shrink"]
 
 
 # --------------------------------------------------------------------------- the grade's row
@@ -728,7 +833,8 @@ def exploration_rows(req: Any, sources: Sequence[tuple[str, str]], checked: Any,
             files.append(path)
     d = f.divergence
     o = d.signal
-    tol = f"timing +/- {expl.timing_tol:g} s" + (f", {o.tolerance}" if o.tolerance else "")
+    tol = f"timing +/- {expl.timing_tol:g} s" + (f", {o.tolerance}" if o.tolerance else "") + \
+        (f"; {o.freedom}" if o.freedom else "")
     expected = f"{o.name} {o.show(d.model)} at {d.time:.2f} s, as the model answer's stand shows ({tol})"
     observed = f"{o.name} {o.show(d.student)}"
     if d.kind == "late":
@@ -761,35 +867,6 @@ def exploration_rows(req: Any, sources: Sequence[tuple[str, str]], checked: Any,
     return rows, notes, {"explore": files}
 
 
-def check_script(spec: Any, script: Script, where: str) -> None:
-    """Every action of `script` is one the stand's console (or its plant) can take: one clear
-    line naming the file otherwise, before anything runs."""
-    for e in script.events:
-        at = f"{where}: at {e.time:g} s"
-        if e.name == POWER:
-            try:
-                ok = float(e.value) >= 0
-            except ValueError:
-                ok = False
-            if not ok:
-                raise PlcLabError(f"{at}: {POWER} takes the seconds the PLC stays off (>= 0), not {e.value!r}")
-        elif e.name == FAULT:
-            name, params = fault_params(e.value)
-            try:
-                fault = spec.fault(name)
-            except PlcLabError as err:
-                raise PlcLabError(f"{at}: {err}") from None
-            known = {p.name for p in fault.params}
-            for k in params:
-                if k not in known:
-                    raise PlcLabError(f"{at}: fault {name} has no parameter {k!r} (it has: {', '.join(sorted(known))})")
-        elif e.name not in spec.console:
-            raise PlcLabError(f"{at}: {e.name!r} is no console input of {spec.name} (one of "
-                              f"{', '.join(spec.console)}, {POWER}, {FAULT}, END)")
-        elif not e.is_press and e.value.strip() not in ("0", "1"):
-            raise PlcLabError(f"{at}: {e.name} takes 0 or 1, not {e.value!r}")
-
-
 def replay(spec: Any, s: Session, inputs: str, against: Optional[str], reference: Optional[Sequence[str]],
            student_sources: Optional[Sequence[tuple[str, str]]], checked: Any) -> Optional[str]:
     """`plclab run STAND --program FILE.st --inputs SCRIPT.csv [--against TASK]`: play the
@@ -800,8 +877,7 @@ def replay(spec: Any, s: Session, inputs: str, against: Optional[str], reference
     expl = spec.explore
     if expl is None:
         raise PlcLabError(f"run: {spec.name} has no operator scripts (--inputs is for the robots)")
-    script = read_script(inputs, expl.buttons)
-    check_script(spec, script, inputs)
+    script = read_script(inputs, spec, s.labels)
     from plclab.plants.base import PlantError
     try:
         play(s, script)

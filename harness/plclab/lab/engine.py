@@ -28,6 +28,7 @@ from plclab.errors import CompileError, PlcLabError
 from plclab.lab.panels import PANELS, Panel
 from plclab.plants.base import PlantError
 from plclab.scenario import Session
+from plclab.stands.scripts import fault_params
 from plclab.trace import Trace
 
 SPEEDS = (1, 2, 5, 10, 20, 50)
@@ -188,7 +189,8 @@ class Lab:
                 s.restart_plc(off_time=step.value)
                 self.forces.attach(s.plc)
             elif step.kind == "fault":
-                self.inject(step.target, step.value)
+                _name, params = fault_params(step.value)
+                self.inject(step.target, {k: str(v) for k, v in params.items()})
             elif step.kind == "end":
                 s.log(f"input script {self.script[0] if self.script else ''}: END reached")
                 self.script = None

@@ -17,125 +17,20 @@ in one `Exploration` (referenced from its StandSpec as `explore`):
   of timing; the TUR-10 positions within a band) and freedoms (a signal compared only while the
   console is in one mode: a don't-care outside that window).
 
-A script is a list of `Event`s. Its file form is the input-CSV format of traces (`time_s,name,
-value`): a switch row sets it, a button's 1 and 0 rows are its press and release, `PLC` with
-the seconds it stays off is a power cycle of the controller, `FAULT` with `name k=v ...`
-injects a plant fault, and `END` marks how long the script runs. `plclab run STAND --program
-FILE.st --inputs SCRIPT.csv` replays such a file.
+- `aim(rng, task, script, times)`: the script again with actions added at the moments the
+  model answer's stand changed in it (phase boundaries);
+- lamps as the operator sees them (`lamp_pattern`: on, off or blinking) and the freedoms the
+  tasks leave a blink.
+
+Scripts themselves and their file form are plclab.stands.scripts.
 """
 from __future__ import annotations
 
-import csv
-import io
 import random
-from dataclasses import dataclass, field, replace
+from dataclasses import dataclass, field
 from typing import Any, Callable, Optional, Sequence
 
-from plclab.errors import PlcLabError
-
-POWER = "PLC"          # row name: the PLC is switched off for `value` seconds, then on again
-FAULT = "FAULT"        # row name: a plant fault injected, value `name param=value ...`
-END = "END"            # row name: the script ends here (its value is ignored)
-
-
-@dataclass(frozen=True)
-class Event:
-    """One console action: a switch set (`hold` 0), a button held `hold` s, a power cycle
-    (`name` PLC, `value` the off time in s) or a plant fault (`name` FAULT)."""
-
-    time: float
-    name: str
-    value: str = "1"
-    hold: float = 0.0
-
-    @property
-    def is_press(self) -> bool:
-        return self.hold > 0
-
-
-@dataclass(frozen=True)
-class Script:
-    events: tuple[Event, ...]
-    duration: float
-
-    def rows(self) -> list[tuple[float, str, str]]:
-        """The script as (time_s, name, value) rows, sorted by time (input-CSV form)."""
-        rows: list[tuple[float, str, str]] = []
-        for e in self.events:
-            if e.is_press:
-                rows.append((e.time, e.name, "1"))
-                rows.append((min(e.time + e.hold, self.duration), e.name, "0"))
-            else:
-                rows.append((e.time, e.name, e.value))
-        rows.append((self.duration, END, "0"))
-        rows = [(round(t, 3), n, v) for t, n, v in rows]
-        return sorted(rows, key=lambda r: r[0])
-
-    def csv_text(self) -> str:
-        out = io.StringIO()
-        w = csv.writer(out, lineterminator="\n")
-        w.writerow(("time_s", "name", "value"))
-        for t, n, v in self.rows():
-            w.writerow((f"{t:.3f}", n, v))
-        return out.getvalue()
-
-    @property
-    def plant_seconds(self) -> float:
-        return self.duration
-
-
-def script_from_rows(rows: Sequence[tuple[float, str, str]], buttons: Sequence[str],
-                     where: str = "script") -> Script:
-    """Rows (time_s, name, value) -> a Script: a button's 1 row opens a press its 0 row closes
-    (a button still held at END is held to the end)."""
-    events: list[Event] = []
-    open_press: dict[str, float] = {}
-    end = None
-    for t, name, value in rows:
-        if name == END:
-            end = t
-            break
-        if name in buttons:
-            if _bit(value, where, name):
-                open_press.setdefault(name, t)
-            elif name in open_press:
-                start = open_press.pop(name)
-                events.append(Event(start, name, "1", max(t - start, 1e-3)))
-            continue
-        events.append(Event(t, name, value.strip()))
-    last = max((e.time + e.hold for e in events), default=0.0)
-    duration = end if end is not None else last + 5.0
-    for name, start in open_press.items():
-        events.append(Event(start, name, "1", max(duration - start, 1e-3)))
-    return Script(tuple(sorted(events, key=lambda e: e.time)), duration)
-
-
-def _bit(value: str, where: str, name: str) -> int:
-    v = value.strip()
-    if v not in ("0", "1"):
-        raise PlcLabError(f"{where}: {name} takes 0 or 1, not {v!r}")
-    return int(v)
-
-
-def fault_params(text: str) -> tuple[str, dict[str, Any]]:
-    """`jammed mechanism=lift` -> ('jammed', {'mechanism': 'lift'}) (numbers as numbers)."""
-    parts = text.split()
-    if not parts:
-        raise PlcLabError("FAULT row without a fault name")
-    params: dict[str, Any] = {}
-    for p in parts[1:]:
-        if "=" not in p:
-            raise PlcLabError(f"FAULT {parts[0]}: parameter {p!r} is not name=value")
-        k, v = p.split("=", 1)
-        try:
-            params[k] = int(v)
-        except ValueError:
-            try:
-                params[k] = float(v)
-            except ValueError:
-                params[k] = v
-    return parts[0], params
-
+from plclab.stands.scripts import FAULT, POWER, Event, Script, fault_params
 
 # --------------------------------------------------------------------------- what is compared
 
@@ -155,9 +50,86 @@ class Observed:
     same: Optional[Callable[[Any, Any], bool]] = None
     only_when: Optional[tuple[str, int, float]] = None
     tolerance: str = ""                      # the value tolerance in words ('+/- 40 codes')
+    # what the stand shows, read from the changes (a lamp: on, off or blinking), and the timing
+    # tolerance of a change from one shown value to another where the task leaves it free
+    # (None: the stand's timing_tol)
+    pattern: Optional[Callable[[list[tuple[float, Any]]], list[tuple[float, Any]]]] = None
+    timing: Optional[Callable[[Any, Any], Optional[float]]] = None
+    freedom: str = ""                        # the timing freedom in words
+    # (switch, value): while the console switch has that value, a blink of this lamp on either
+    # stand, and BLINK_END_TOL after it, is not compared (how a blink answers more presses is free)
+    free_blinks: Optional[tuple[str, int]] = None
 
-    def equal(self, a: Any, b: Any) -> bool:
-        return a == b if self.same is None else self.same(a, b)
+    # a value tolerance that grows with how far apart in time the two stands are: `lag_band`
+    # more per second of lag (a link stopped mid-travel by a program a scan later stands
+    # a scan's travel further on)
+    lag_band: float = 0.0
+
+    def equal(self, a: Any, b: Any, lag: float = 0.0) -> bool:
+        if self.same is None:
+            return a == b
+        if self.lag_band and lag > 0:
+            return self.same(a, b, self.lag_band * lag)
+        return self.same(a, b)
+
+    def shown(self, changes: list[tuple[float, Any]]) -> list[tuple[float, Any]]:
+        return self.pattern(changes) if self.pattern is not None else changes
+
+    def timing_tol(self, before: Any, after: Any) -> Optional[float]:
+        return self.timing(before, after) if self.timing is not None else None
+
+
+BLINKING = "blinking"
+BLINK_HALF_MAX = 0.6     # s: a lamp toggling again within this is blinking (1 Hz and 2 Hz blinks)
+BLINK_START_TOL = 0.65   # s: a blink may begin in either phase (on first, or off first)
+BLINK_END_TOL = 2.5      # s: how long a blink lasts after its last cause is the program's choice
+
+
+def lamp_pattern(changes: list[tuple[float, Any]]) -> list[tuple[float, Any]]:
+    """A lamp as an operator sees it: on, off or blinking. Three or more toggles each within
+    BLINK_HALF_MAX of the one before are one blink, from its first toggle to its last (the
+    lamp then stays as the last toggle left it)."""
+    out = changes[:1]
+    k = 1
+    while k < len(changes):
+        j = k
+        while j + 1 < len(changes) and changes[j + 1][0] - changes[j][0] <= BLINK_HALF_MAX + 1e-9:
+            j += 1
+        if j - k + 1 >= 3:
+            out.append((changes[k][0], BLINKING))
+            out.append((changes[j][0], changes[j][1]))
+        else:
+            out.extend(changes[k:j + 1])
+        k = j + 1
+    merged = out[:1]
+    for t, v in out[1:]:
+        if v != merged[-1][1]:
+            merged.append((t, v))
+    return merged
+
+
+def lamp_timing(before: Any, after: Any) -> Optional[float]:
+    """The freedoms of a blinking lamp the tasks leave open: the phase it begins in, and how
+    long it goes on (a refused press during the full-memory blink may restart its 2 s or not;
+    the blink rate is the scenarios' to check)."""
+    if after == BLINKING:
+        return BLINK_START_TOL
+    if before == BLINKING:
+        return BLINK_END_TOL
+    return None
+
+
+def blink_spans(changes: list[tuple[float, Any]]) -> list[tuple[float, float]]:
+    """The spans a lamp pattern (lamp_pattern) is blinking: (start, end)."""
+    spans = []
+    for k, (t, v) in enumerate(changes):
+        if v == BLINKING:
+            spans.append((t, changes[k + 1][0] if k + 1 < len(changes) else float("inf")))
+    return spans
+
+
+def show_lamp(v: Any) -> str:
+    return "blinking" if v == BLINKING else "on" if v else "off"
 
 
 @dataclass(frozen=True)
@@ -170,8 +142,21 @@ class Exploration:
     references: dict[str, str]                        # task -> the variant that is its model answer
     buttons: tuple[str, ...]                          # console inputs that are push buttons
     meaning: dict[str, tuple[str, str]]               # switch -> words for 0 and 1
+    # the script again with actions aimed at the moments its model answer's stand changed
+    # (rng, task, script, times) -> script; None: random scripts only
+    aim: Optional[Callable[[random.Random, str, Script, list[float]], Script]] = None
+    # task -> ((switch, ((console switch, value), ...)), ...): a change of `switch` while every
+    # console switch listed has its value leaves what follows to the program until one of them
+    # changes (and settle_s after): nothing is compared in between (the MP-9C's SA6 flipped
+    # mid-run: "SA6 is read at frame boundaries" lets a program take it at the next pause's
+    # start or end, or at a press)
+    free_after: Callable[[str], tuple[tuple[str, tuple[tuple[str, int], ...]], ...]] = lambda task: ()
+    settle_s: float = 0.5
     timing_tol: float = 0.06          # s: how much later or earlier a change may come
     max_drift: float = 1.0            # s: how far a program may lag the model answer in all
+    drift_rate: float = 0.0           # s per s: how much more it may lag between two changes the
+                                      # longer they are apart (frames nobody sees end: a link
+                                      # already at the next frame's position)
     episode_s: float = 45.0           # plant seconds of one random script
     episodes: int = 40                # default budget: scripts per task and program
     tick_s: float = 0.01
@@ -223,13 +208,14 @@ class _Writer:
         self.events.append(Event(round(t, 2), name, value, round(hold, 2)))
 
 
-def hold_time(rng: random.Random) -> float:
+def hold_time(rng: random.Random, bounce_max: float = 0.03) -> float:
     """An SB1 hold, as operators press: mostly taps and short presses, sometimes a contact
-    bounce (under the 50 ms debounce), a long press (released before 3 s) or a 3-s hold. Holds
-    within 0.15 s of a threshold (50 ms, 3 s) are not drawn: there one scan decides."""
+    bounce (under the 50 ms debounce, up to `bounce_max`), a long press (released before 3 s)
+    or a 3-s hold. Holds near a threshold are not drawn (a bounce stays more than a scan
+    under 50 ms, the others 0.3 s off 3 s): there one scan decides."""
     r = rng.random()
     if r < 0.12:
-        return rng.uniform(0.005, 0.03)          # bounce
+        return rng.uniform(0.005, bounce_max)    # bounce
     if r < 0.65:
         return rng.uniform(0.1, 0.35)            # tap
     if r < 0.82:
@@ -248,99 +234,271 @@ class Console:
     spare: str                       # the spare input of Tasks 2 and 3
     step: Optional[str]              # continuous / step switch, if the stand has one
     teach: Callable[[_Writer, str], None]   # one manual move of the robot (task) before a frame
-    faults: Callable[[random.Random], str]  # one fault as `name k=v ...`
+    faults: Callable[[random.Random, str], str]  # one fault (task) as `name k=v ...`
     capacity: int = 32
     watchdog: float = 10.0
+    frame_s: float = 1.5             # s: a typical frame's travel in automatic mode (without its pause)
+    bounce_max: float = 0.03         # s: the longest contact bounce drawn; holds are rounded to 10 ms, so
+                                     # a bounce stays a scan under the 50 ms debounce
+
+
+START_S = 0.5          # s: the first action after power-up (the PLC has read its sensors once)
+
+
+@dataclass
+class _Story:
+    """What the script has done so far, as far as the generator can know it without the plant:
+    the frames recorded since the last reset (an estimate: a bounce records nothing)."""
+
+    frames: int = 0
 
 
 def generate(console: Console, rng: random.Random, task: str, seconds: float) -> Script:
-    """A random operator script of about `seconds`: phrases (teach frames, play them back,
-    reset, fill the memory, power cycle, a fault...) with actions at any moment inside them."""
+    """A random operator script of about `seconds`, told as stories an operator lives at the
+    console: record a program (sometimes after a reset, the pause chosen per frame), run it and
+    interrupt it (a stop and a second run, the spare input turned off and a stop, leaving
+    automatic mode mid-frame or mid-pause, a power cycle and a press after it, step presses, a
+    press of any length), a playback longer than the watchdog, the memory filled beyond its
+    capacity, a plant fault. Interrupts come at any moment of a run, and often in the first
+    scans of a frame or of a pause (a phase boundary), where a program's order of statements
+    shows."""
     w = _Writer(rng, {console.mode: 0, console.spare: 0, console.button: 0})
+    w.t = START_S
+    story = _Story()
     faulted = False
     while w.t < seconds:
         r = rng.random()
-        manual = not w.switches.get(console.mode)
-        if r < 0.28:                                   # teach 1..4 frames
-            if not manual:
-                w.set(console.mode, 0)
-                w.wait(rng.uniform(0.1, 0.6))
-            for _ in range(rng.randint(1, 4)):
-                console.teach(w, task)
-                if rng.random() < 0.5:
-                    w.set(console.spare, rng.randint(0, 1))
-                w.press(console.button, rng.uniform(0.1, 0.4), rng.uniform(0.2, 0.7))
-        elif r < 0.36:                                 # a long playback: longer than the watchdog
-            if manual:
-                w.set(console.mode, 1)
-                w.wait(rng.uniform(0.1, 0.5))
-            w.press(console.button, rng.uniform(0.1, 0.35), 0.0)
-            w.wait(rng.uniform(1.2, 2.0) * console.watchdog)
-        elif r < 0.55:                                 # play back, with actions during it
-            if console.step and rng.random() < 0.4:
-                w.set(console.step, rng.randint(0, 1))
-            if rng.random() < 0.8:
-                w.set(console.spare, int(rng.random() < 0.75))
-            if manual:
-                w.set(console.mode, 1)
-                w.wait(rng.uniform(0.1, 0.5))
-            w.press(console.button, rng.uniform(0.1, 0.35), 0.0)
-            end = w.t + rng.uniform(2.0, 3 * console.watchdog)
-            while True:
-                w.wait(rng.expovariate(1 / 3.0))
-                if w.t >= end:
-                    break
-                a = rng.random()
-                if a < 0.3:
-                    w.flip(console.spare)
-                elif a < 0.6:
-                    w.press(console.button, hold_time(rng) if rng.random() < 0.3 else rng.uniform(0.1, 0.3), 0.0)
-                elif a < 0.7 and console.step:
-                    w.flip(console.step)
-                elif a < 0.75:
-                    console.teach(w, task)             # the position switches in automatic mode
-                elif a < 0.85:
-                    w.set(console.mode, 0)             # leave automatic mode (mid-frame, mid-pause)
-                    break
-                else:
-                    w.events.append(Event(round(w.t, 2), POWER, f"{rng.uniform(0.2, 1.5):.2f}"))
-                    w.wait(2.0)
-        elif r < 0.63:                                 # a press of any length, in any mode
-            w.press(console.button, hold_time(rng), rng.uniform(0.2, 1.0))
-        elif r < 0.68 and manual:                      # a 3-s hold: reset
-            w.press(console.button, rng.uniform(3.3, 4.5), rng.uniform(0.3, 1.0))
-        elif r < 0.75:
-            w.flip(console.spare)
-        elif r < 0.80:
-            w.flip(console.mode)
-        elif r < 0.85:                                 # power cycle, memory retained
-            w.events.append(Event(round(w.t, 2), POWER, f"{rng.uniform(0.2, 2.0):.2f}"))
-            w.wait(rng.uniform(2.0, 3.0))
-        elif r < 0.88 and manual:                      # fill the frame memory and go beyond
-            for _ in range(console.capacity + rng.randint(0, 3)):
-                w.press(console.button, 0.12, 0.12)
-            w.wait(2.5)
-        elif r < 0.91 and not faulted:
+        if story.frames < 2 or r < 0.22:
+            _record(w, console, task, story)
+        elif r < 0.62:
+            _run(w, console, task, story)
+        elif r < 0.70:
+            _long_run(w, console)
+        elif r < 0.76:
+            _power_cycle(w, console)
+        elif r < 0.80 and not faulted:
             faulted = True
-            w.events.append(Event(round(w.t, 2), FAULT, console.faults(rng)))
-            w.wait(0.5)
-        elif r < 0.95 and console.step:
-            w.flip(console.step)
+            if rng.random() < 0.5:
+                _ensure_mode(w, console, 1)
+                w.press(console.button, rng.uniform(0.1, 0.3), 0.0)
+                w.wait(rng.uniform(0.0, 2 * console.frame_s))
+            w.events.append(Event(round(w.t, 2), FAULT, console.faults(rng, task)))
+            w.wait(rng.uniform(0.5, 1.5 * console.watchdog))
+            if rng.random() < 0.6:                     # what the operator does about it: presses,
+                for _ in range(rng.randint(1, 3)):     # in automatic mode or after leaving it
+                    if rng.random() < 0.3:
+                        w.flip(console.mode)
+                        w.wait(rng.uniform(0.2, 1.5))
+                    w.press(console.button, rng.uniform(0.1, 0.3), rng.uniform(0.5, 3.0))
+        elif r < 0.83:
+            _fill_memory(w, console, story)
+        elif r < 0.90:                                 # a press of any length, in any mode
+            if rng.random() < 0.5:
+                w.flip(console.mode)
+                w.wait(rng.uniform(0.1, 1.0))
+            w.press(console.button, hold_time(rng, console.bounce_max), rng.uniform(0.2, 1.0))
+            if w.switches.get(console.mode) == 0 and w.events[-1].hold >= 3.0:
+                story.frames = 0
+        elif r < 0.95:                                 # the spare input any time; the step switch in
+            manual = w.switches.get(console.mode, 0) == 0  # manual mode (flipped mid-run it is free)
+            w.flip(console.step if console.step and manual and rng.random() < 0.4 else console.spare)
+            w.wait(rng.uniform(0.1, 1.0))
         else:
             w.wait(rng.uniform(0.5, 1.5 * console.watchdog))
     events = sorted(w.events, key=lambda e: e.time)
     return Script(tuple(events), round(max(w.t, seconds) + 3.0, 2))
 
 
-def without(script: Script, drop: set[int]) -> Script:
-    return Script(tuple(e for i, e in enumerate(script.events) if i not in drop), script.duration)
+def _ensure_mode(w: _Writer, console: Console, mode: int) -> None:
+    if w.switches.get(console.mode, 0) != mode:
+        w.set(console.mode, mode)
+        w.wait(w.rng.uniform(0.05, 0.6))
 
 
-def with_event(script: Script, i: int, e: Event) -> Script:
+def _record(w: _Writer, console: Console, task: str, story: _Story) -> None:
+    """Manual mode, sometimes a reset first (a 3-s hold), then 1..4 frames, the spare input
+    set before each (the pause it records) and now and then a bounce or a long press."""
+    rng = w.rng
+    _ensure_mode(w, console, 0)
+    if story.frames and rng.random() < 0.35:
+        w.press(console.button, rng.uniform(3.3, 4.5), rng.uniform(0.2, 0.8))
+        story.frames = 0
+    for _ in range(rng.randint(1, 4) if story.frames else rng.randint(2, 5)):
+        console.teach(w, task)
+        if rng.random() < 0.6:
+            w.set(console.spare, rng.randint(0, 1))
+        hold = hold_time(rng, console.bounce_max) if rng.random() < 0.15 else rng.uniform(0.1, 0.4)
+        w.press(console.button, hold, rng.uniform(0.2, 0.7))
+        if hold >= 3.0:
+            story.frames = 0
+        elif hold >= 0.05:
+            story.frames = min(story.frames + 1, console.capacity)
+
+
+def _start(w: _Writer, console: Console) -> None:
+    """Into automatic mode and SB1 pressed: a start (the spare input mostly on, as Task 3's
+    start needs it; the step switch now and then)."""
+    rng = w.rng
+    if w.switches.get(console.mode, 0) == 1 and rng.random() < 0.7:
+        w.set(console.mode, 0)                         # a run may still go on: leaving automatic stops it
+        w.wait(rng.uniform(0.1, 0.5))
+    if console.step and w.switches.get(console.mode, 0) == 0 and rng.random() < 0.4:
+        w.set(console.step, int(rng.random() < 0.6))
+    if rng.random() < 0.7:
+        w.set(console.spare, int(rng.random() < 0.85))
+    _ensure_mode(w, console, 1)
+    w.press(console.button, rng.uniform(0.1, 0.35), 0.0)
+
+
+def _moment(w: _Writer, console: Console) -> float:
+    """How long into a run the next interrupt comes: anywhere in the next frames, or (one
+    time in three) in the first scans of a phase as far as the generator can tell it (a
+    frame's travel ends about every frame_s, a short pause is 0.5 s)."""
+    rng = w.rng
+    if rng.random() < 0.35:
+        base = rng.choice((0.5, 1.0, 3.0)) + console.frame_s * rng.randint(0, 2)
+        return base + rng.uniform(0.0, 0.08)
+    return rng.expovariate(1 / (1.5 * console.frame_s))
+
+
+def _run(w: _Writer, console: Console, task: str, story: _Story) -> None:
+    """A start, then 1..3 interrupts at any moment of the run, and time for what follows."""
+    rng = w.rng
+    _start(w, console)
+    stepping = bool(console.step) and w.switches.get(console.step or "", 0) == 1
+    if stepping and rng.random() < 0.7:                # step mode: the presses that start the frames,
+        for _ in range(rng.randint(2, 7)):             # some during a frame or its pause (ignored)
+            w.wait(rng.uniform(0.2, console.frame_s + 3.5))
+            if rng.random() < 0.15:
+                w.flip(console.spare)
+            w.press(console.button, rng.uniform(0.1, 0.3), 0.0)
+    for _ in range(rng.randint(1, 3)):
+        w.wait(_moment(w, console))
+        a = rng.random()
+        if stepping and a < 0.3:                       # step mode: the presses that start frames
+            for _ in range(rng.randint(1, 4)):
+                w.press(console.button, rng.uniform(0.1, 0.3), rng.uniform(0.2, 1.5 * console.frame_s + 3.5))
+        elif a < 0.30:                                 # a stop, and often a second run after it
+            w.press(console.button, rng.uniform(0.1, 0.3), 0.0)
+            if rng.random() < 0.6:
+                w.wait(rng.uniform(0.3, 3.0))
+                if rng.random() < 0.3:
+                    w.flip(console.spare)
+                w.press(console.button, rng.uniform(0.1, 0.3), 0.0)
+        elif a < 0.50:                                 # the spare input flipped: often a stop after it,
+            w.flip(console.spare)                      # or flipped back a little later
+            b = rng.random()
+            if b < 0.6:
+                w.wait(rng.uniform(0.1, 2.0 * console.frame_s))
+                w.press(console.button, rng.uniform(0.1, 0.3), 0.0)
+            elif b < 0.85:
+                w.wait(rng.uniform(0.2, 3.0 * console.frame_s + 1.0))
+                w.flip(console.spare)
+        elif a < 0.64:                                 # leave automatic mode (mid-frame, mid-pause)
+            w.set(console.mode, 0)
+            if rng.random() < 0.4:
+                console.teach(w, task)
+            if rng.random() < 0.5:
+                w.wait(rng.uniform(0.1, 2.0))
+                w.set(console.mode, 1)
+                w.wait(rng.uniform(0.1, 1.0))
+                w.press(console.button, rng.uniform(0.1, 0.3), 0.0)
+            else:
+                return
+        elif a < 0.76:                                 # a power cycle, and sometimes a press after it
+            w.events.append(Event(round(w.t, 2), POWER, f"{round(rng.uniform(0.2, 1.5), 2):g}"))
+            w.wait(rng.uniform(1.7, 3.0))
+            if rng.random() < 0.5:
+                w.press(console.button, rng.uniform(0.1, 0.3), 0.0)
+        elif a < 0.86:                                 # a press of any length
+            hold = hold_time(rng, console.bounce_max)
+            w.press(console.button, hold, 0.0)
+        else:                                          # the position switches moved in automatic mode
+            console.teach(w, task)
+    w.wait(rng.uniform(1.0, 3.0 * console.frame_s + 3.0))
+
+
+def _long_run(w: _Writer, console: Console) -> None:
+    """A playback longer than every watchdog, untouched."""
+    _start(w, console)
+    w.wait(w.rng.uniform(1.2, 2.0) * console.watchdog)
+
+
+def _power_cycle(w: _Writer, console: Console) -> None:
+    """The PLC switched off and on, in either mode, memory retained."""
+    if w.rng.random() < 0.3:
+        w.flip(console.mode)
+        w.wait(w.rng.uniform(0.1, 1.0))
+    w.events.append(Event(round(w.t, 2), POWER, f"{round(w.rng.uniform(0.2, 2.0), 2):g}"))
+    w.wait(w.rng.uniform(2.0, 3.0))
+
+
+def _fill_memory(w: _Writer, console: Console, story: _Story) -> None:
+    """The frame memory filled and presses beyond it (the full-memory blink)."""
+    rng = w.rng
+    _ensure_mode(w, console, 0)
+    for _ in range(console.capacity - story.frames):
+        w.press(console.button, 0.12, 0.12)
+    story.frames = console.capacity
+    for _ in range(rng.randint(0, 3)):                 # refused presses, the spare input changed between
+        if rng.random() < 0.5:
+            w.flip(console.spare)
+        w.press(console.button, rng.uniform(0.1, 0.3), rng.uniform(0.2, 2.5))
+    w.wait(rng.uniform(0.5, 2.5))
+    if rng.random() < 0.5:                             # and the 32 frames played
+        _long_run(w, console)
+
+
+def _switch_at(script: Script, name: str, t: float) -> int:
+    value = 0
+    for e in script.events:
+        if e.time > t:
+            break
+        if e.name == name and not e.is_press:
+            value = int(float(e.value))
+    return value
+
+
+def aim(console: Console, rng: random.Random, task: str, script: Script, times: Sequence[float]) -> Script:
+    """`script` with one or two actions added at the moments its model answer's stand changed
+    (`times`: a frame started, a mechanism arrived, a link came to rest, HL1 changed), in that
+    very scan, a scan or two after, or within the second after: a press, the spare input flipped
+    (and often back), automatic mode left (and often entered again, with a press), a power
+    cycle. Phase boundaries are where the order of a program's statements shows; a random
+    script reaches them only by chance."""
+    times = [t for t in times if START_S <= t < script.duration - 2.0]
+    if not times:
+        return script
     events = list(script.events)
-    events[i] = e
-    return Script(tuple(sorted(events, key=lambda x: x.time)), script.duration)
+    for _ in range(rng.randint(1, 2)):
+        t = rng.choice(times) + rng.choice((0.0, 0.01, 0.02, rng.uniform(0.0, 0.3), rng.uniform(0.3, 1.2)))
+        t = round(t, 2)
+        a = rng.random()
+        if a < 0.35:
+            value = 1 - _switch_at(Script(tuple(events), script.duration), console.spare, t)
+            events.append(Event(t, console.spare, str(value)))
+            b = rng.random()
+            if b < 0.35:                               # and back a little later
+                events.append(Event(round(t + rng.uniform(0.3, 2.0), 2), console.spare, str(1 - value)))
+            elif b < 0.8:                              # and a press after it
+                events.append(Event(round(t + rng.uniform(0.2, 2.0), 2), console.button, "1",
+                                    round(rng.uniform(0.1, 0.3), 2)))
+        elif a < 0.6:
+            events.append(Event(t, console.button, "1", round(rng.uniform(0.1, 0.3), 2)))
+        elif a < 0.8:
+            mode = _switch_at(Script(tuple(events), script.duration), console.mode, t)
+            events.append(Event(t, console.mode, str(1 - mode)))
+            if rng.random() < 0.5:
+                back = round(t + rng.uniform(0.3, 2.0), 2)
+                events.append(Event(back, console.mode, str(mode)))
+                events.append(Event(round(back + rng.uniform(0.2, 0.8), 2), console.button, "1",
+                                    round(rng.uniform(0.1, 0.3), 2)))
+        else:
+            events.append(Event(t, POWER, f"{round(rng.uniform(0.2, 1.5), 2):g}"))
+    events.sort(key=lambda e: e.time)
+    last = max(e.time + e.hold for e in events)
+    return Script(tuple(events), round(max(script.duration, last + 3.0), 2))
 
 
-__all__ = ["Console", "END", "Event", "Exploration", "FAULT", "Observed", "POWER", "Script", "fault_params",
-           "generate", "hold_time", "replace", "script_from_rows", "with_event", "without"]
+__all__ = ["BLINKING", "BLINK_END_TOL", "Console", "Exploration", "Observed", "START_S", "aim", "blink_spans",
+           "generate", "hold_time", "lamp_pattern", "lamp_timing", "show_lamp"]
