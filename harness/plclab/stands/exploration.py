@@ -119,7 +119,7 @@ MP9C = Exploration(
              "SA3": ("rotation left", "rotation right"), "SA4": ("arm backward", "arm forward"),
              "SA5": ("arm up", "arm down"), "SA6": ("continuous", "step by step"),
              "I07": ("spare input off", "spare input on")},
-    timing_tol=0.06, max_drift=1.0, drift_rate=0.02, episode_s=45.0, episodes=70, tick_s=0.01)
+    timing_tol=0.06, max_drift=1.0, drift_rate=0.02, episode_s=45.0, episodes=90, tick_s=0.01)
 
 # --------------------------------------------------------------------------- TUR-10
 
@@ -214,4 +214,4 @@ TUR10 = Exploration(
     buttons=("SB1",) + tuple(f"SA{k}_{d}" for k in (1, 2, 3, 4, 5) for d in ("FWD", "BWD")),
     meaning={"SA7": ("manual", "automatic"), "SA6": ("normal speed", "low speed"),
              "I15": ("spare input off", "spare input on")},
-    timing_tol=0.2, max_drift=5.0, drift_rate=0.12, episode_s=60.0, episodes=36, tick_s=0.01)
+    timing_tol=0.2, max_drift=5.0, drift_rate=0.12, episode_s=60.0, episodes=50, tick_s=0.01)
