@@ -126,6 +126,7 @@ MP9C = Exploration(
 TUR10_BAND = 40          # codes: rest positions compared within this band
 TUR10_TOP_SPEED = 6000   # codes/s: a link at full reference (1500, the drive's 4 codes/s per unit)
 _SLOW, _STILL = 700, 50  # |reference| above _STILL moves; up to _SLOW is the low speed
+_AUTO_STILL = 400        # in automatic mode: |reference| above this moves (the regulator's profile is free)
 
 
 def _tur10_teach(w: _Writer, task: str) -> None:
@@ -160,16 +161,24 @@ TUR10_CONSOLE = Console(mode="SA7", button="SB1", spare="I15", step=None, teach=
                         faults=_tur10_fault, capacity=32, watchdog=20.0, frame_s=2.0)
 
 
-def _level(reference: float) -> int:
+def _level(reference: float, automatic: bool = False) -> int:
+    """How a link moves: 0 at rest, 1 slowly, 2 fast, signed. In automatic mode the speed
+    profile of a move is the program's regulator's (and a move of a few dozen codes, a frame
+    recorded where the link had coasted a little further, peaks at a reference anywhere near
+    any threshold), so there a link moves (2) only above _AUTO_STILL and is at rest below."""
     a = abs(reference)
-    lvl = 0 if a <= _STILL else 1 if a <= _SLOW else 2
+    if automatic:
+        lvl = 0 if a <= _AUTO_STILL else 2
+    else:
+        lvl = 0 if a <= _STILL else 1 if a <= _SLOW else 2
     return lvl if reference >= 0 else -lvl
 
 
 def _tur10_observe(plant: Any, previous: Any) -> dict[str, Any]:
     out: dict[str, Any] = {}
+    automatic = bool(plant.console_bits.get("SA7"))
     for k, d in plant.drives.items():
-        lvl = _level(d.reference)
+        lvl = _level(d.reference, automatic)
         prev = previous.get(f"link{k}") if previous else None
         if lvl == 0 and prev is not None and prev[0] == 0:
             out[f"link{k}"] = prev                 # at rest: where it stopped

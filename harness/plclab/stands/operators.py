@@ -276,14 +276,16 @@ def generate(console: Console, rng: random.Random, task: str, seconds: float) ->
             _long_run(w, console)
         elif r < 0.76:
             _power_cycle(w, console)
-        elif r < 0.80 and not faulted:
+        elif r < 0.81 and not faulted:
             faulted = True
-            if rng.random() < 0.5:
-                _ensure_mode(w, console, 1)
-                w.press(console.button, rng.uniform(0.1, 0.3), 0.0)
+            running = rng.random() < 0.6
+            if running:
+                _start(w, console)
                 w.wait(rng.uniform(0.0, 2 * console.frame_s))
             w.events.append(Event(round(w.t, 2), FAULT, console.faults(rng, task)))
-            w.wait(rng.uniform(0.5, 1.5 * console.watchdog))
+            # a run with a fault: long enough for the frame watchdog, mostly
+            w.wait(rng.uniform(1.05, 1.5) * console.watchdog if running and rng.random() < 0.7
+                   else rng.uniform(0.5, 1.5 * console.watchdog))
             if rng.random() < 0.6:                     # what the operator does about it: presses,
                 for _ in range(rng.randint(1, 3)):     # in automatic mode or after leaving it
                     if rng.random() < 0.3:
@@ -327,6 +329,8 @@ def _record(w: _Writer, console: Console, task: str, story: _Story) -> None:
         console.teach(w, task)
         if rng.random() < 0.6:
             w.set(console.spare, rng.randint(0, 1))
+        if rng.random() < 0.12:                        # the contact bounces first
+            w.press(console.button, rng.uniform(0.005, console.bounce_max), rng.uniform(0.1, 0.4))
         hold = hold_time(rng, console.bounce_max) if rng.random() < 0.15 else rng.uniform(0.1, 0.4)
         w.press(console.button, hold, rng.uniform(0.2, 0.7))
         if hold >= 3.0:
@@ -462,7 +466,8 @@ def _switch_at(script: Script, name: str, t: float) -> int:
 def aim(console: Console, rng: random.Random, task: str, script: Script, times: Sequence[float]) -> Script:
     """`script` with one or two actions added at the moments its model answer's stand changed
     (`times`: a frame started, a mechanism arrived, a link came to rest, HL1 changed), in that
-    very scan, a scan or two after, or within the second after: a press, the spare input flipped
+    very scan, a scan or two before or after, within the half second before or the second
+    after: a press, the spare input flipped
     (and often back), automatic mode left (and often entered again, with a press), a power
     cycle. Phase boundaries are where the order of a program's statements shows; a random
     script reaches them only by chance."""
@@ -471,7 +476,8 @@ def aim(console: Console, rng: random.Random, task: str, script: Script, times: 
         return script
     events = list(script.events)
     for _ in range(rng.randint(1, 2)):
-        t = rng.choice(times) + rng.choice((0.0, 0.01, 0.02, rng.uniform(0.0, 0.3), rng.uniform(0.3, 1.2)))
+        t = rng.choice(times) + rng.choice((0.0, 0.01, 0.02, -0.02, -rng.uniform(0.0, 0.5), rng.uniform(0.0, 0.3),
+                                            rng.uniform(0.3, 1.2)))
         t = round(t, 2)
         a = rng.random()
         if a < 0.35:
