@@ -50,6 +50,11 @@ COUNTER_DEBOUNCE = (
     ("Held := DebounceTimer.Q;\n", "Held := PressedScans >= DEBOUNCE_SCANS;\n"),
     ("    BOUNCE_TIME : TIME := T#50ms;\n", "    DEBOUNCE_SCANS : INT := {scans};  (* 50 ms of scans *)\n"),
 )
+PAUSE_IF = (
+    ("        Cp.Frames[Cp.Count].Pause := SEL(G := {spare}, IN0 := SHORT_PAUSE, IN1 := LONG_PAUSE);\n",
+     "        IF {spare} THEN\n            Cp.Frames[Cp.Count].Pause := T#3000ms;\n        ELSE\n"
+     "            Cp.Frames[Cp.Count].Pause := T#0.5s;\n        END_IF;\n"),
+)
 WATCHDOG_COUNTER = (
     ("VAR\n    Timer : TON;\nEND_VAR\nTimer(IN := Watch AND NOT Fault, PT := Timeout);\nTripped := Timer.Q AND NOT Fault;\n",
      "VAR\n    Scans : DINT;               (* scans the frame has been watched *)\nEND_VAR\n"
@@ -62,7 +67,7 @@ WATCHDOG_COUNTER = (
 
 
 def _fmt(edits: tuple, **kw: str) -> tuple:
-    return tuple((e[0], e[1].format(**kw)) + tuple(e[2:]) for e in edits)
+    return tuple((e[0].format(**kw), e[1].format(**kw)) + tuple(e[2:]) for e in edits)
 
 
 MP9C = (
@@ -127,9 +132,7 @@ MP9C = (
              ("    Valves : INT;\n", "    Valves : INT;\n    StartLate : BOOL;\n"))),
     Fixture("mp9c", "task2_alt_pause_if", "task2", True,
             "other structure: the pause chosen with IF, the times written inline.",
-            (("        Cp.Frames[Cp.Count].Pause := SEL(G := I07, IN0 := SHORT_PAUSE, IN1 := LONG_PAUSE);\n",
-              "        IF I07 THEN\n            Cp.Frames[Cp.Count].Pause := T#3000ms;\n        ELSE\n"
-              "            Cp.Frames[Cp.Count].Pause := T#0.5s;\n        END_IF;\n"),)),
+            _fmt(PAUSE_IF, spare="I07")),
     Fixture("mp9c", "task2_alt_counter_debounce", "task2", True,
             "other timers: SB1 debounced by counting scans instead of a TON.",
             _fmt(COUNTER_DEBOUNCE, scans="5")),
@@ -198,9 +201,7 @@ TUR10 = (
               "VAR CONSTANT\n    MAX_FRAMES : INT := 32;\nEND_VAR\nVAR\n    Next : ARRAY[1..5] OF INT;   (* the references of the next scan *)\nEND_VAR\n"))),
     Fixture("tur10", "task2_alt_pause_if", "task2", True,
             "other structure: the pause chosen with IF, the times written inline.",
-            (("        Cp.Frames[Cp.Count].Pause := SEL(G := I15, IN0 := SHORT_PAUSE, IN1 := LONG_PAUSE);\n",
-              "        IF I15 THEN\n            Cp.Frames[Cp.Count].Pause := T#3000ms;\n        ELSE\n"
-              "            Cp.Frames[Cp.Count].Pause := T#0.5s;\n        END_IF;\n"),)),
+            _fmt(PAUSE_IF, spare="I15")),
     Fixture("tur10", "task2_alt_counter_debounce", "task2", True,
             "other timers: SB1 debounced by counting scans instead of a TON.",
             _fmt(COUNTER_DEBOUNCE, scans="3")),

@@ -417,7 +417,7 @@ def test_cli_grades_a_class_of_traffic_logs(tmp_path, capsys):
     out = tmp_path / "out"
     assert main(["grade-class", "thermo", "scada2", str(folder), "--out", str(out), "--jobs", "2"]) == 0
     printed = capsys.readouterr().out.splitlines()
-    assert f"[6/6] " in "\n".join(printed)
+    assert "[6/6] " in "\n".join(printed)
     assert "ben: FAIL   3 of 5 requirements passed" in [line.split("] ", 1)[1] for line in printed if "] " in line]
     assert (f"zed: FAIL   the traffic log cannot be read: {folder / 'zed.csv'}:1: error: not a plclab traffic "
             "log: the header must be time_s,unit,request,response,what") in [line.split("] ", 1)[1]

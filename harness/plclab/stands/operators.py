@@ -453,14 +453,10 @@ def _fill_memory(w: _Writer, console: Console, story: _Story) -> None:
         _long_run(w, console)
 
 
-def _switch_at(script: Script, name: str, t: float) -> int:
-    value = 0
-    for e in script.events:
-        if e.time > t:
-            break
-        if e.name == name and not e.is_press:
-            value = int(float(e.value))
-    return value
+def _switch_at(events: Sequence[Event], name: str, t: float) -> int:
+    """The value console switch `name` has at `t` after `events` (in any order; power-up 0)."""
+    sets = [e for e in events if e.name == name and not e.is_press and e.time <= t]
+    return int(float(max(sets, key=lambda e: e.time).value)) if sets else 0
 
 
 def aim(console: Console, rng: random.Random, task: str, script: Script, times: Sequence[float]) -> Script:
@@ -481,7 +477,7 @@ def aim(console: Console, rng: random.Random, task: str, script: Script, times: 
         t = round(t, 2)
         a = rng.random()
         if a < 0.35:
-            value = 1 - _switch_at(Script(tuple(events), script.duration), console.spare, t)
+            value = 1 - _switch_at(events, console.spare, t)
             events.append(Event(t, console.spare, str(value)))
             b = rng.random()
             if b < 0.35:                               # and back a little later
@@ -492,7 +488,7 @@ def aim(console: Console, rng: random.Random, task: str, script: Script, times: 
         elif a < 0.6:
             events.append(Event(t, console.button, "1", round(rng.uniform(0.1, 0.3), 2)))
         elif a < 0.8:
-            mode = _switch_at(Script(tuple(events), script.duration), console.mode, t)
+            mode = _switch_at(events, console.mode, t)
             events.append(Event(t, console.mode, str(1 - mode)))
             if rng.random() < 0.5:
                 back = round(t + rng.uniform(0.3, 2.0), 2)
