@@ -569,6 +569,10 @@ class Lab:
         rate_wall, rate_virt = time.monotonic(), s.now
         while not self._stop.is_set():
             self._drain()
+            if self.session is not s:      # an input script's reset swapped the session: pace the new one
+                s = self.session
+                rate_wall, rate_virt = time.monotonic(), s.now
+                self._rebase = True
             if self._rebase:
                 self._rebase = False
                 base_wall, base_virt = time.monotonic(), s.now - s.tick
