@@ -38,3 +38,51 @@ def test_after_an_input_script_the_stand_runs_at_the_speed_the_header_says(lab_p
     t1, w1 = clock_and_wall(page)
     rate = (t1 - t0) / (w1 - w0)
     assert 0.7 <= rate <= 1.4, f"the plant ran at x{rate:.1f} after the script while the header says x1"
+
+
+def frame_rows(page) -> list[tuple[str, str]]:
+    """Each recorded frame's number and how the table marks it (current / done / '')."""
+    rows = page.locator("#frame-table tbody tr").evaluate_all(
+        "rows => rows.map(r => [r.cells[0].textContent, r.className])")
+    return [tuple(r) for r in rows]
+
+
+def test_mp9c_step_mode_shows_the_frame_done_while_it_waits_for_the_next_press(lab_page):
+    lp = lab_page("mp9c", speed=2, variant="baseline")
+    page = lp.page
+    status = page.locator("#frames-status")
+    flip(page, "SA5", True)
+    on(lamp(page, "SQ2"))
+    tap_sb1(page)                                     # frame 1: arm down
+    flip(page, "SA5", False)
+    on(lamp(page, "SQ1"))
+    tap_sb1(page)                                     # frame 2: arm up
+    expect(status).to_have_text("2 frame(s); stopped (next: frame 1)", timeout=WAIT)
+    flip(page, "SA6", True)                           # step by step
+    flip(page, "SA1", True)                           # automatic
+    tap_sb1(page)                                     # step: frame 1
+    on(lamp(page, "SQ2"))
+    expect(status).to_have_text("2 frame(s); frame 1 done; waiting for the next SB1 press (step mode; next: frame 2)",
+                                timeout=WAIT)
+    assert frame_rows(page) == [("1", "done"), ("2", "")]
+    assert page.locator("#frame-table tr[aria-current='true']").count() == 0
+    tap_sb1(page)                                     # step: frame 2
+    on(lamp(page, "SQ1"))
+    expect(status).to_have_text("2 frame(s); frame 2 done; waiting for the next SB1 press (step mode; next: frame 1)",
+                                timeout=WAIT)
+    assert frame_rows(page) == [("1", ""), ("2", "done")]
+
+
+def test_tur10_pause_after_a_frame_is_not_shown_as_executing_it(lab_page):
+    lp = lab_page("tur10", speed=2, variant="baseline")
+    page = lp.page
+    sb1 = lp.lab.session.labels["SB1"]
+    flip(page, "SA7", False)
+    tap_sb1(page, address=sb1)                        # frame 1: where the links are
+    tap_sb1(page, address=sb1)                        # frame 2: the same place
+    flip(page, "SA7", True)
+    tap_sb1(page, address=sb1)                        # start: each frame is reached at once, then its pause
+    status = page.locator("#frames-status")
+    expect(status).to_have_text(re.compile(r"2 frame\(s\); frame 1 done, its pause \(then frame 2\)"), timeout=WAIT)
+    assert frame_rows(page) == [("1", "done"), ("2", "")]
+    expect(status).to_have_text("2 frame(s); frame 2 done, its pause (then frame 1)", timeout=WAIT)

@@ -175,8 +175,11 @@ def _fault_param(look: Look, fault: str, param: Any) -> FaultParam:
 
 def recorded_program(s: Session) -> Any:
     """The control program in the PLC's frame memory, raw: (frames [(data words, pause ns or
-    None)], the frame pointer, whether playback runs), or None when the program has no frame
-    memory where the stand's observables say (FrameCount: `Main.Cp.Count`)."""
+    None)], the frame pointer, the playback phase), or None when the program has no frame
+    memory where the stand's observables say (FrameCount: `Main.Cp.Count`). The phase is
+    'frame' (frame Ptr being executed), 'pause' (the pause after frame Ptr), 'wait' (step
+    mode: frame Ptr waits for the next press), 'between' (running, neither known) or
+    'stopped' (read from the playback record's InFrame, State and Running, where it has them)."""
     count_path = s.observables.get("FrameCount")
     ptr_path = s.observables.get("FramePtr")
     if not count_path:
@@ -190,14 +193,20 @@ def recorded_program(s: Session) -> Any:
     for frame in frames[:max(0, min(count, len(frames)))]:
         pause = getattr(frame, "PAUSE", None)
         rows.append(([int(v) for v in frame.DATA], int(pause) if isinstance(pause, int) else None))
-    ptr = running = None
+    ptr = None
+    phase = "stopped"
     if ptr_path:
         try:
             seq = s.plc.read(ptr_path.rsplit(".", 1)[0])
-            ptr, running = int(seq.PTR), bool(getattr(seq, "RUNNING", False) or getattr(seq, "INFRAME", False))
+            ptr = int(seq.PTR)
+            state = getattr(seq, "STATE", None)
+            if bool(getattr(seq, "INFRAME", False)):
+                phase = "frame"
+            elif bool(getattr(seq, "RUNNING", False)):
+                phase = {2: "pause", 3: "wait"}.get(state, "between") if isinstance(state, int) else "between"
         except Exception:    # noqa: BLE001
             pass
-    return rows, ptr, running
+    return rows, ptr, phase
 
 
 def _pause_text(pause: Any) -> str:
@@ -205,12 +214,25 @@ def _pause_text(pause: Any) -> str:
 
 
 def _frame_table(s: Session, columns: list[str], decode: Callable[[list[int]], list[str]]) -> Any:
+    """The table the page shows: the frames decoded, the one being executed (`current`), the
+    one last done while the robot pauses or waits for a step press (`done`), the next one."""
     raw = recorded_program(s)
     if raw is None:
         return None
-    rows, ptr, running = raw
-    return {"columns": ["frame", *columns, "pause"], "current": ptr if running else None, "next": ptr,
-            "rows": [[str(i), *decode(data), _pause_text(pause)] for i, (data, pause) in enumerate(rows, 1)]}
+    rows, ptr, phase = raw
+    count = len(rows)
+    current = done = None
+    nxt = ptr
+    if phase == "frame":
+        current = ptr
+    elif phase == "pause" and ptr is not None:          # the pause after frame Ptr: Ptr is done
+        done = ptr
+        nxt = 1 if ptr >= count else ptr + 1
+    elif phase == "wait" and ptr is not None:           # Ptr already moved on to the next frame
+        done = count if ptr <= 1 else ptr - 1
+    return {"columns": ["frame", *columns, "pause"], "current": current, "done": done, "next": nxt,
+            "phase": phase, "rows": [[str(i), *decode(data), _pause_text(pause)]
+                                     for i, (data, pause) in enumerate(rows, 1)]}
 
 
 # --------------------------------------------------------------------------- MP-9C

@@ -823,11 +823,16 @@ function renderFrames(f) {
   body.replaceChildren(...f.rows.map((r, i) => {
     const tr = el("tr", {}, ...r.map((c) => el("td", { text: c })));
     if (f.current === i + 1) { tr.className = "current"; tr.setAttribute("aria-current", "true"); }
+    else if (f.done === i + 1) { tr.className = "done"; tr.title = "the frame last done"; }
     return tr;
   }));
+  const n = `${f.rows.length} frame(s); `;
   $("#frames-status").textContent = !f.rows.length ? "no frame recorded (a short SB1 press in manual mode records one)"
-    : f.current ? `${f.rows.length} frame(s); executing frame ${f.current}`
-    : `${f.rows.length} frame(s); stopped (next: frame ${f.next})`;
+    : f.current ? `${n}executing frame ${f.current}`
+    : f.phase === "pause" ? `${n}frame ${f.done} done, its pause (then frame ${f.next})`
+    : f.phase === "wait" ? `${n}frame ${f.done} done; waiting for the next SB1 press (step mode; next: frame ${f.next})`
+    : f.phase === "between" ? `${n}running, between frames (next: frame ${f.next})`
+    : `${n}stopped (next: frame ${f.next})`;
 }
 
 // ------------------------------------------------------------------ trends
