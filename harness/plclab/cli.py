@@ -508,7 +508,7 @@ def build_parser() -> argparse.ArgumentParser:
     c.add_argument("stand", choices=stands + ("cnc",))
     c.add_argument("--program", nargs="+", metavar="FILE.st", help="run these ST files instead of the variant")
     c.add_argument("--variant", choices=("baseline", "task1", "task2", "task3", "full"),
-                   help="default: the most complete program there is")
+                   help="default: the starting program a student gets (the robots: Appendix 1, as the real stand has it loaded)")
     c.add_argument("--port", type=_port, default=8080, metavar="P", help="web page port (default 8080; 0: any free)")
     c.add_argument("--bind", default="127.0.0.1", metavar="ADDR", help="address to listen on (default 127.0.0.1)")
     c.add_argument("--speed", type=float, default=1.0, metavar="X", help="x0.1 .. x50 (x1: real time)")

@@ -86,3 +86,39 @@ def test_tur10_pause_after_a_frame_is_not_shown_as_executing_it(lab_page):
     expect(status).to_have_text(re.compile(r"2 frame\(s\); frame 1 done, its pause \(then frame 2\)"), timeout=WAIT)
     assert frame_rows(page) == [("1", "done"), ("2", "")]
     expect(status).to_have_text("2 frame(s); frame 2 done, its pause (then frame 1)", timeout=WAIT)
+
+
+def test_the_lab_runs_the_starting_program_unless_told_otherwise():
+    from plclab.lab import open_lab
+    from plclab.stands import get_stand
+    for stand in ("mp9c", "tur10"):
+        server = open_lab(stand, port=0, modbus_port=None)
+        assert server.lab.variant == get_stand(stand).starting_variant == "baseline"
+        assert server.lab.program_name == "baseline (shipped)"
+        server.lab.stop()
+    server = open_lab("mp9c", variant="task3", port=0, modbus_port=None)
+    assert server.lab.program_name == "task3 (shipped)"
+    server.lab.stop()
+
+
+def test_a_start_press_the_program_refuses_says_what_it_reads_of_the_console(lab_page):
+    lp = lab_page("mp9c", speed=2, variant="full")    # Task 3: I0.7 enables automatic execution
+    page = lp.page
+    flip(page, "SA5", True)
+    on(lamp(page, "SQ2"))
+    tap_sb1(page)                                     # frame 1: arm down
+    flip(page, "SA5", False)
+    on(lamp(page, "SQ1"))
+    tap_sb1(page)                                     # frame 2: arm up
+    flip(page, "SA1", True)
+    tap_sb1(page)                                     # start, with I0.7 off: refused by the program
+    why = page.get_by_role("status", name="why playback did not start")
+    expect(why).to_have_text("SB1 pressed in automatic mode: the program started nothing (L1..L7 unchanged 1 s "
+                             "after the release). It reads SA1 on (automatic), SA6 off (continuous), I0.7 off; "
+                             "2 frame(s) recorded. Is one of them off that the program needs on?", timeout=WAIT)
+    expect(page.locator("#actions")).to_contain_text("SB1 pressed in automatic mode: the program started nothing")
+    expect(page.locator("#frames-status")).to_have_text("2 frame(s); stopped (next: frame 1)")
+    flip(page, "I0.7", True)
+    tap_sb1(page)                                     # now it starts
+    expect(page.locator("#frames-status")).to_contain_text("executing frame", timeout=WAIT)
+    expect(why).to_be_hidden()

@@ -56,7 +56,7 @@ class Lab:
         self.stand = stand
         self.module = stand_module(stand)
         self.panel: Panel = PANELS[stand]
-        variant = variant or self.module.STAND.richest_variant
+        variant = variant or self.module.STAND.starting_variant    # as the real stand: Appendix 1 loaded
         self.variant = variant
         self.program_files = list(program_files)      # where --program came from (reload re-reads them)
         self.uploaded: Optional[list[tuple[str, str]]] = None   # the last program a page loaded
@@ -135,6 +135,7 @@ class Lab:
         self._extra_unknown.clear()
         self._trend_sent, self._events_sent, self._actions_sent = {}, 0, 0
         self._trimmed_at = 0.0
+        self.start_refused, self._start_watch = None, None
         self.epoch += 1
         self.script = (name, list(steps), 0)
         s.log(f"input script {name}: {len(steps)} step(s), the stand reset")
@@ -313,8 +314,67 @@ class Lab:
         else:
             self.session.console.release(control.input)
             self.held.discard(control.input)
+        self._watch_start(control.input, down)
         self.console_levels[label] = int(down)
         self._rebase = True            # the pace changes while a button is held (see `pace`)
+
+    # ------------------------------------------------------------------ a start press refused
+    start_refused: Optional[str] = None    # why the last start press started nothing (the page shows it)
+    _start_watch: Any = None               # (output change counts at the press, deadline or None)
+
+    def _watch_start(self, name: str, down: bool) -> None:
+        """A press of the stand's start button in automatic mode is watched: when none of the
+        outputs a start changes has changed `within` s of its release, the lab says so and
+        what the program reads of the console then (the StandSpec's StartPress: I/O only)."""
+        from plclab.stands.base import stand_spec
+        start = stand_spec(self.stand).start
+        if start is None or name != start.button:
+            return
+        s = self.session
+        if down:
+            self.start_refused = None
+            switch, level = start.mode
+            if int(bool(s.value(switch))) != level:
+                self._start_watch = None           # manual mode: a press records a frame
+                return
+            self._start_watch = ({o: s.trace.change_count(o) for o in start.outputs if o in s.trace}, None)
+        elif self._start_watch is not None:
+            self._start_watch = (self._start_watch[0], s.now + start.within)
+
+    def _check_start(self) -> None:
+        counts, deadline = self._start_watch
+        s = self.session
+        if any(s.trace.change_count(o) != n for o, n in counts.items()):
+            self._start_watch = None               # an output changed: playback started (or stopped)
+            return
+        if deadline is None or s.now < deadline:
+            return
+        self._start_watch = None
+        from plclab.stands.base import stand_spec
+        start = stand_spec(self.stand).start
+        assert start is not None
+        label = {c.input: c.label for c in self.panel.controls}
+        read = []
+        for name, off, on in start.reads:
+            try:
+                level = int(bool(s.value(name)))
+            except PlcLabError:
+                continue
+            read.append(f"{label.get(name, name)} {'on' if level else 'off'}"
+                        + (f" ({on if level else off})" if (off, on) != ("off", "on") else ""))
+        frames, ask = "", " Is one of them off that the program needs on?"
+        try:
+            count = int(s.value("FrameCount"))
+            frames = f"; {count} frame(s) recorded" if count else "; no frame recorded"
+            ask = ask if count else " Record frames first (manual mode)."
+        except Exception:        # noqa: BLE001 - a program without the shipped frame memory
+            pass
+        first, last = start.outputs[0], start.outputs[-1]
+        text = (f"{label.get(start.button, start.button)} pressed in automatic mode: the program started "
+                f"nothing ({first}..{last} unchanged {start.within:g} s after the release). "
+                f"It reads {', '.join(read)}{frames}.{ask}")
+        self.start_refused = text
+        s.log(text)
 
     def pace(self) -> float:
         """The speed the plant runs at now: x1 while a push button is held, whatever the
@@ -641,6 +701,8 @@ class Lab:
                 s.run(s.tick)
                 self._sample_extras(extras)
         self.scans_run += n
+        if self._start_watch is not None:
+            self._check_start()
         if s.now - self._trimmed_at >= TRIM_EVERY_S:
             self._trim()
 
@@ -710,7 +772,7 @@ class Lab:
         snap: dict[str, Any] = {
             "type": "state", "seq": self.seq, "t": round(s.now - s.tick, 6), "tick": s.tick,
             "speed": self.speed, "paused": self.paused, "actual_speed": round(self.actual_speed, 2),
-            "held": sorted(self.held), "pace": self.pace(),
+            "held": sorted(self.held), "pace": self.pace(), "start_refused": self.start_refused,
             "program": self.program_name, "loads": self.loads, "epoch": self.epoch,
             "script": self._script_state(),
             "trace_from": round(s.trace.start_ns / 1e9, 3), "trace_keep": TRACE_KEEP_S,

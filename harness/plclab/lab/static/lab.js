@@ -446,6 +446,9 @@ function render(s) {
     speed.value = String(s.speed);
   }
   $("#program-name").textContent = s.program;
+  const refused = $("#start-refused");
+  refused.hidden = !s.start_refused;
+  if (refused.textContent !== (s.start_refused || "")) refused.textContent = s.start_refused || "";
   renderScript(s.script);
   if (s.loads !== lab.loads) {               // another program: the online listing is read again
     const shown = lab.pous !== null && lab.pous !== undefined;
