@@ -122,3 +122,75 @@ def test_a_start_press_the_program_refuses_says_what_it_reads_of_the_console(lab
     tap_sb1(page)                                     # now it starts
     expect(page.locator("#frames-status")).to_contain_text("executing frame", timeout=WAIT)
     expect(why).to_be_hidden()
+
+
+TWO_LINES = "(two lines)\nG21 G90 G17\nG01 X10 Y0 F300\nY10\n"
+
+
+def click_button(page, label: str) -> None:
+    """A short click of a push button (pointer down, 100 ms, up)."""
+    b = page.get_by_role("button", name=label, exact=True)
+    b.hover()
+    page.mouse.down()
+    page.wait_for_timeout(100)
+    page.mouse.up()
+
+
+def path_points(page) -> int:
+    return int(page.locator("#cnc-path").get_attribute("data-points") or 0)
+
+
+def test_cnc_states_names_emergency_stop_missed_steps_and_the_path_after_a_reload(lab_page):
+    lp = lab_page("cnc", speed=5)
+    page = lp.page
+    page.get_by_role("button", name="Load part program").click()
+    frame = page.locator("#cnc-frame")
+    expect(frame).to_have_text("frame 0 of 4 (square 20 mm, evaluation function, evalfn)", timeout=WAIT)
+    click_button(page, "SB1")
+    expect(frame).to_contain_text("frame 2 of 4", timeout=WAIT)
+    click_button(page, "SB2")                                          # feed hold: said so, not "running"
+    state = page.locator("#cnc-state")
+    expect(state).to_have_text("feed hold (SB1 continues)", timeout=WAIT)
+    cut = path_points(page)
+    assert cut > 10
+    page.reload()                                                      # the path cut so far is drawn again
+    page.wait_for_selector("#plc-state[data-state='RUN']")
+    page.wait_for_function(f"Number(document.querySelector('#cnc-path').dataset.points || 0) >= {cut}", timeout=WAIT)
+    click_button(page, "SB1")                                          # continue to the end
+    expect(state).to_have_text("program end", timeout=60_000)
+    # a shorter part after it: its own name, and no frame number beyond its own frames
+    page.get_by_label("part program").fill(TWO_LINES)
+    page.get_by_role("button", name="Load part program").click()
+    expect(frame).to_have_text("frame 0 of 2 (two lines, evalfn)", timeout=WAIT)
+    # SB3 latches as a mushroom button does: pressed until pressed again
+    sb3 = page.get_by_role("button", name="SB3", exact=True)
+    sb3.click()
+    expect(sb3).to_have_attribute("aria-pressed", "true", timeout=WAIT)
+    on(lamp(page, "HL2"))
+    t0 = plant_time(page)
+    page.wait_for_function(f"parseFloat(document.querySelector('#clock').textContent.slice(4)) >= {t0 + 1}",
+                           timeout=WAIT)
+    expect(sb3).to_have_attribute("aria-pressed", "true")
+    assert lp.lab.session.plant.console_bits["SB3"] == 0                # still pressed (normally closed: 0)
+    sb3.click()
+    expect(sb3).to_have_attribute("aria-pressed", "false", timeout=WAIT)
+    # a drive that misses steps: counted for this part, and from 0 again once the fault is cleared
+    page.get_by_label("fault", exact=True).select_option("slow_drive")
+    page.get_by_label("axis").select_option("X")
+    page.get_by_label("rate").fill("100")
+    page.get_by_role("button", name="Inject").click()
+    page.get_by_label("part program").fill("(square)\nG21 G90 G17\nG01 X20 Y0 F300\nY20\nX0\nY0\n")
+    page.get_by_role("button", name="Load part program").click()
+    expect(frame).to_have_text("frame 0 of 4 (square, evalfn)", timeout=WAIT)
+    expect(page.locator("#cnc-missed")).to_have_text("missed steps X 0  Y 0  Z 0")
+    click_button(page, "SB1")
+    missed = page.locator("#cnc-missed")
+    expect(missed).to_contain_text(re.compile(r"missed steps X [1-9]"), timeout=WAIT)
+    verdict = page.locator("#cnc-verdict")
+    expect(verdict).to_have_text("OUT OF BOUND", timeout=WAIT)         # the steps lost: the path leaves the contour
+    assert verdict.get_attribute("fill") == "#b91c1c"
+    box, svg = verdict.bounding_box(), page.locator("#mimic").bounding_box()
+    assert box["x"] + box["width"] <= svg["x"] + svg["width"], (box, svg)   # not clipped by the drawing's edge
+    click_button(page, "SB2")
+    page.get_by_role("button", name="Clear faults").click()
+    expect(missed).to_have_text("missed steps X 0  Y 0  Z 0", timeout=WAIT)

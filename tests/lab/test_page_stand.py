@@ -28,7 +28,7 @@ def test_tur10_jog_buttons_move_a_link_only_while_held(lab_page):
     fwd.hover()
     page.mouse.down()
     expect(fwd).to_have_attribute("aria-pressed", "true")
-    expect(page.locator("#speed-shown")).to_have_text("x1 while SA1_FWD held (then x5)", timeout=WAIT)
+    expect(page.locator("#speed-shown")).to_have_text("x1 while SA1 forward held (then x5)", timeout=WAIT)
     expect(page.locator("#dac-1")).not_to_have_text("DAC 0", timeout=WAIT)
     page.mouse.move(5, 5)                                   # off the button: let go
     expect(fwd).to_have_attribute("aria-pressed", "false")

@@ -48,7 +48,9 @@ class CncPart:
         st = _state(s)
         st.update(frames=program.frames, method=method, name=name, executed=None, err={}, bound={},
                   origin=tuple(s.plant.axes[a].steps for a in "XYZ"), contour_id=st.get("contour_id", 0) + 1,
-                  ix=_count(s, "CNT_X"), iy=_count(s, "CNT_Y"))
+                  ix=_count(s, "CNT_X"), iy=_count(s, "CNT_Y"), path_all=[],
+                  missed0=s.plant.missed(),            # missed steps counted from this part on
+                  fresh=True)                          # not started yet: the PLC's Frame and ProgramEnd are the last part's
         return f"{len(program.frames)} frames of {name} loaded ({method})"
 
 
@@ -57,7 +59,21 @@ def _count(s: Session, name: str) -> int:
 
 
 def _state(s: Session) -> dict:
-    return s.__dict__.setdefault("lab_cnc", {"frames": [], "contour_id": 0, "err": {}, "bound": {}})
+    return s.__dict__.setdefault("lab_cnc", {"frames": [], "contour_id": 0, "err": {}, "bound": {}, "path_all": []})
+
+
+MAX_KEPT_POINTS = 20000     # tool path points kept for a page that (re)connects (thinned beyond)
+
+# The shipped program's cycle state (PRG_CncStand.State): what the drawing says the table does.
+CYCLE_STATES = {0: "idle", 1: "running", 2: "feed hold (SB1 continues)", 3: "single block: stopped after the frame (SB1 continues)",
+                4: "stopped: emergency stop or limit (SB1 restarts)", 5: "measuring the blank"}
+
+
+def _keep_path(st: dict, path: list) -> None:
+    kept = st.setdefault("path_all", [])
+    kept.extend(path)
+    if len(kept) > MAX_KEPT_POINTS:
+        del kept[1:-1:2]
 
 
 def _read(s: Session, name: str, default: Any) -> Any:
@@ -121,7 +137,12 @@ def cnc_mimic(s: Session) -> dict[str, Any]:
     st = _state(s)
     frames = st["frames"]
     frame = int(_read(s, "Frame", 0) or 0)
-    if frames and frame >= 1 and st.get("executed") is None and _read(s, "HL1", False):   # as the PLC runs them
+    running = bool(_read(s, "HL1", False))
+    if st.get("fresh") and running:
+        st["fresh"] = False
+    if st.get("fresh"):                  # loaded, not yet started: no frame of it executed, no end
+        frame = 0
+    if frames and frame >= 1 and st.get("executed") is None and running:   # as the PLC runs them
         from plclab.stands.cnc import executed_frames
         try:
             st["executed"] = executed_frames(s, frames, st["origin"])
@@ -144,10 +165,19 @@ def cnc_mimic(s: Session) -> dict[str, Any]:
     path = [[round(x * h, 4), round(y * h, 4)] for x, y in points[::step]]
     if points and (len(points) - 1) % step:
         path.append([round(points[-1][0] * h, 4), round(points[-1][1] * h, 4)])
+    _keep_path(st, path)
+    # missed steps since the part was loaded or the faults were last cleared (a new start)
+    if st.get("faulted") and not p.faults:
+        st["missed0"] = p.missed()
+    st["faulted"] = bool(p.faults)
+    base = st.get("missed0") or {}
+    missed = {a: n - base.get(a, 0) for a, n in p.missed().items()}
+    cycle = _read(s, "State", None)
     return {
         "x": round(p.position_mm("X"), 4), "y": round(p.position_mm("Y"), 4), "z": round(p.position_mm("Z"), 4),
-        "steps": {a: p.axes[a].steps for a in "XYZ"}, "missed": p.missed(), "override": p.override,
-        "frame": frame, "frames": len(frames), "end": bool(_read(s, "ProgramEnd", False)),
+        "steps": {a: p.axes[a].steps for a in "XYZ"}, "missed": missed, "override": p.override,
+        "cycle": CYCLE_STATES.get(cycle) if isinstance(cycle, int) else None,
+        "frame": frame, "frames": len(frames), "end": not st.get("fresh") and bool(_read(s, "ProgramEnd", False)),
         "part": st.get("name"), "method": st.get("method"), "contour_id": st["contour_id"],
         "path": path,
         "error_mm": round(worst[1], 5), "error_frame": worst[0], "bound_mm": round(bound, 5) if bound else None,
@@ -160,7 +190,8 @@ def cnc_contour(s: Session) -> dict:
     """The contour drawn under the tool path (the page asks when `contour_id` changes)."""
     st = _state(s)
     frames = st.get("executed") or st["frames"]
-    return {"contour_id": st["contour_id"], "contour": _polyline(frames) if frames else []}
+    return {"contour_id": st["contour_id"], "contour": _polyline(frames) if frames else [],
+            "path": list(st.get("path_all", []))}       # the path cut so far: a reloaded page draws it again
 
 
 def _polyline(frames: list) -> list[list[float]]:
@@ -180,8 +211,10 @@ def _backlash(s: Session, value: int) -> None:
 
 CNC_LOOK = Look(
     hints={"SB1": "start the part program", "SB2": "stop / feed hold", "SA1": "single block",
-           "SB3": "emergency stop (held: pressed)", "HL1": "program running", "HL2": "fault / emergency stop"},
+           "SB3": "emergency stop: latches when pressed, press again to release", "HL1": "program running",
+           "HL2": "fault / emergency stop"},
     buttons=frozenset({"SB1", "SB2", "SB3"}),
+    latching=frozenset({"SB3"}),          # a mushroom button: stays pressed until released
     lamp_groups=("lamps",),
     fault_texts={"slow_drive": "a drive misses steps above a rate"},
     fault_params={("slow_drive", "axis"): (("X", "Y", "Z"), "X"), ("slow_drive", "rate"): ((), "1000")},

@@ -310,7 +310,8 @@ class Lab:
             raise LabError(f"{label} is a switch: it is set on or off, not pressed")
         if down:
             self.session.console.hold(control.input)
-            self.held.add(control.input)
+            if not control.latching:          # a latched button is no hold of the student's time
+                self.held.add(control.input)
         else:
             self.session.console.release(control.input)
             self.held.discard(control.input)
@@ -769,10 +770,12 @@ class Lab:
         fault = plc.fault
         if fault is not None:            # on the header's clock (the PLC's restarts at every load)
             fault = dataclasses.replace(fault, time_ns=fault.time_ns + round(s.now * 1e9) - plc.now_ns)
+        forced_labels = self._forced_labels()
         snap: dict[str, Any] = {
             "type": "state", "seq": self.seq, "t": round(s.now - s.tick, 6), "tick": s.tick,
             "speed": self.speed, "paused": self.paused, "actual_speed": round(self.actual_speed, 2),
             "held": sorted(self.held), "pace": self.pace(), "start_refused": self.start_refused,
+            "held_labels": [c.label for c in self.panel.controls if c.input in self.held],   # as the console prints them
             "program": self.program_name, "loads": self.loads, "epoch": self.epoch,
             "script": self._script_state(),
             "trace_from": round(s.trace.start_ns / 1e9, 3), "trace_keep": TRACE_KEEP_S,
@@ -781,7 +784,7 @@ class Lab:
             "plc": {"state": plc.state, "fault": str(fault) if fault else None,
                     "pou": fault.pou if fault else None, "file": fault.file if fault else None,
                     "line": fault.line if fault else None},
-            "io": self._io(),
+            "io": self._io(forced_labels),
             "mimic": self.panel.mimic(s),
         }
         # what is new since the last snapshot; a full one (a page connecting) has it all, and
@@ -799,7 +802,7 @@ class Lab:
             snap["registers"] = self.registers()
         snap["watch"] = self._watch_values()
         snap["forced"] = {p: _force_text(v) for p, v in self.forces.values.items()}
-        snap["forced_labels"] = self._forced_labels()
+        snap["forced_labels"] = forced_labels
         values = self._monitor_values(full)
         if values is not _SAME and values is not None:
             snap["monitor"] = {"pou": self.monitor.pou, "instance": self.monitor.instance, "values": values}
@@ -843,11 +846,19 @@ class Lab:
         wall, speed, virt = self._pace
         return virt + (time.monotonic() - wall) * speed
 
-    def _io(self) -> dict[str, int]:
+    def _io(self, forced: Sequence[str] = ()) -> dict[str, int]:
         s = self.session
         io = {}
         for c in self.panel.controls:        # the console as the operator set it (seen while paused too)
+            if c.kind == "button":           # a button's level: pressed (1) or not, whatever its contact
+                io[c.label] = self.console_levels.setdefault(c.label, 0)
+                continue
             io[c.label] = self.console_levels.setdefault(c.label, int(bool(s.value(c.signal))))
+            if c.label in forced:            # forced: what the PLC reads, not where the switch is
+                try:
+                    io[c.label] = int(bool(s.plc.read(c.signal)))
+                except PlcLabError:
+                    pass
         for k in self.panel.knobs:
             io[k.label] = self.console_levels.setdefault(k.label, k.initial)
         for lamp in self.panel.lamps:

@@ -28,6 +28,7 @@ class Control:
     input: str            # the plant's console name: 'SA5', 'SA1_FWD', 'I07'
     kind: str             # 'switch' | 'button'
     hint: str = ""        # what the contact does, shown beside it
+    latching: bool = False   # a button that stays pressed until pressed again (an emergency stop)
 
     @property
     def signal(self) -> str:
@@ -99,7 +100,7 @@ class Panel:
         """The static part of the page, sent once when a page connects."""
         return {
             "stand": self.stand,
-            "controls": [{"label": c.label, "kind": c.kind, "hint": c.hint, "signal": c.signal}
+            "controls": [{"label": c.label, "kind": c.kind, "hint": c.hint, "signal": c.signal, "latching": c.latching}
                          for c in self.controls],
             "lamps": [{"label": lamp.label, "hint": lamp.hint, "group": lamp.group} for lamp in self.lamps],
             "faults": [{"name": f.name, "text": f.text,
@@ -129,6 +130,7 @@ class Look:
     labels: Mapping[str, str] = field(default_factory=dict)     # console input -> printed label
     hints: Mapping[str, str] = field(default_factory=dict)      # GVL label -> what it does
     buttons: frozenset[str] = frozenset()                       # push buttons; other inputs are switches
+    latching: frozenset[str] = frozenset()                      # push buttons that latch (mushroom buttons)
     lamp_groups: tuple[str, ...] = ("lamps",)                   # spec groups drawn as lamps, in order
     fault_texts: Mapping[str, str] = field(default_factory=dict)   # short text (default: the spec's)
     # (fault, parameter) -> (choices, default); a parameter not here is a number field
@@ -148,6 +150,7 @@ def derive_panel(spec: StandSpec, look: Look) -> Panel:
     params = {(f.name, p.name) for f in spec.faults for p in f.params}
     knobs = {k.label for k in look.knobs}
     stale = [*(k for k in look.labels if k not in spec.console), *(b for b in look.buttons if b not in spec.console),
+             *(b for b in look.latching if b not in look.buttons),
              *(k for k in look.hints if k not in set(spec.console) | shown),
              *(k for k in look.fault_texts if k not in {f.name for f in spec.faults}),
              *(f"{f}.{p}" for f, p in look.fault_params if (f, p) not in params),
@@ -155,7 +158,7 @@ def derive_panel(spec: StandSpec, look: Look) -> Panel:
     if stale:
         raise PlcLabError(f"lab panel of {spec.name}: {', '.join(stale)} not in the stand's StandSpec")
     controls = tuple(Control(look.labels.get(i, i), i, "button" if i in look.buttons else "switch",
-                             look.hints.get(i, "")) for i in spec.console if i not in knobs)
+                             look.hints.get(i, ""), i in look.latching) for i in spec.console if i not in knobs)
     lamps = tuple(Lamp(name, look.hints.get(name, ""), LAMP_GROUPS[group])
                   for group in look.lamp_groups for name in getattr(spec, group))
     faults = tuple(Fault(f.name, look.fault_texts.get(f.name, f.doc),

@@ -345,7 +345,8 @@ class LabServer:
             elif op in ("press", "release"):
                 label = str(msg["label"])
                 await asyncio.wrap_future(lab.call(lambda: lab.press(label, op == "press"), console=True))
-                (client.held.add if op == "press" else client.held.discard)(label)
+                if not lab.panel.control(label).latching:     # a latched button stays when the page goes
+                    (client.held.add if op == "press" else client.held.discard)(label)
             elif op == "speed":
                 await asyncio.wrap_future(lab.call(lambda: lab.set_speed(msg["value"])))
             elif op == "unscript":

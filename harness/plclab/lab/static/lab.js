@@ -158,6 +158,24 @@ function onHello(h) {
   buildTrendList();
 }
 
+// what the console's push buttons do, said for the stand on the page
+const HOLD_NOTE = "Round buttons are push buttons: pressed while you hold them (mouse, finger, space or enter key). " +
+  "While you hold one the plant runs in real time (x1) whatever the speed, so a hold lasts as long in the plant as you hold it";
+const HOLD_NOTES = {
+  mp9c: " (SB1: a click records a frame or starts / stops playback, a 3-s hold resets).",
+  tur10: " (SB1: a click records a frame or starts / stops playback, a 3-s hold resets; SA1..SA5 forward / backward " +
+    "move their link while held).",
+  cnc: " (SB1 starts or continues the part program, SB2 holds the feed). SB3, the emergency stop, is a mushroom " +
+    "button: a click latches it pressed, another click releases it.",
+};
+
+// a part program's name: its first comment (the handout's programs start with one), else a number
+function partName(text) {
+  const comment = /^\s*\(([^)]+)\)/m.exec(text);
+  lab.parts = (lab.parts || 0) + 1;
+  return comment && comment[1].trim() ? comment[1].trim().slice(0, 60) : `part ${lab.parts}`;
+}
+
 function buildControls(panel) {
   const box = $("#controls");
   box.replaceChildren();
@@ -170,6 +188,13 @@ function buildControls(panel) {
         const on = b.getAttribute("aria-checked") !== "true";
         send("set", { label: c.label, value: on ? 1 : 0 }).catch((e) => notice(e.message));
       });
+    } else if (c.latching) {              // a mushroom button: a press latches it, the next one releases it
+      b = el("button", { type: "button", class: "push latch", "aria-pressed": "false", "aria-label": c.label,
+        "data-label": c.label, "data-latch": "1" }, el("span", { text: c.label }));
+      b.addEventListener("click", () => {
+        const pressed = b.getAttribute("aria-pressed") === "true";
+        send(pressed ? "release" : "press", { label: c.label }).catch((e) => notice(e.message));
+      });
     } else {
       b = el("button", { type: "button", class: "push", "aria-pressed": "false", "aria-label": c.label, "data-label": c.label },
         el("span", { text: c.label }));
@@ -180,6 +205,7 @@ function buildControls(panel) {
     box.append(el("div", { class: "control" }, b, hint));
   }
   $("#hold-note").hidden = !panel.controls.some((c) => c.kind === "button");
+  $("#hold-note").textContent = HOLD_NOTE + (HOLD_NOTES[panel.stand] || "");
   // settings that are not contacts (the CNC's feed override RP1 and backlash): a slider each
   const knobs = $("#knobs");
   knobs.replaceChildren();
@@ -197,12 +223,20 @@ function buildControls(panel) {
   $("#part").hidden = !part;
   if (part) {
     $("#part-text").value = part.example;
-    $("#part-method").replaceChildren(...part.methods.map((m) => el("option", { value: m, text: m })));
-    $("#part-load").onclick = () => send("part", { text: $("#part-text").value, name: "part.nc", method: $("#part-method").value })
+    $("#part-method").replaceChildren(...part.methods.map((m) => el("option", { value: m, text: m, title: METHODS[m] || "" })));
+    $("#part-load").onclick = () => send("part", { text: $("#part-text").value, name: partName($("#part-text").value),
+      method: $("#part-method").value })
       .then(() => say("#part-message", "part program loaded: press SB1 to run it", true))
       .catch((e) => say("#part-message", e.message, false));
   }
 }
+
+// the interpolation methods, as the handout names them (a tooltip on the choice and the drawing)
+const METHODS = {
+  evalfn: "evalfn: the evaluation-function method (a step on X or Y by the sign of the deviation function)",
+  dda: "dda: the digital differential analyser (pulses from accumulators that overflow)",
+  integration: "integration: digital integration (accumulated increments per interpolation cycle)",
+};
 
 // A push button stays pressed while the pointer (mouse, finger, pen) or the space / enter key
 // holds it, as on the stand: it is let go on pointerup, when the pointer leaves it, when the
@@ -425,17 +459,21 @@ function onState(s) {
 
 function render(s) {
   const badge = $("#plc-state");
-  badge.textContent = s.plc.state;
-  badge.dataset.state = s.plc.state;
+  const pausedRun = s.paused && s.plc.state === "RUN";      // the PLC in RUN, the lab's clock stopped
+  badge.textContent = pausedRun ? "RUN, paused" : s.plc.state;
+  badge.dataset.state = pausedRun ? "PAUSED" : s.plc.state;
+  badge.title = pausedRun ? "the PLC is in RUN mode but the lab's clock is paused: no scan runs until Run (or Single scan)"
+    : s.plc.state === "FAULT" ? "the PLC stopped on a fault: see the line below" : "";
   const fd = $("#fault-detail");
   if (s.plc.fault) {
     fd.hidden = false;
     fd.textContent = s.plc.fault;
   } else fd.hidden = true;
   $("#clock").textContent = `t = ${s.t.toFixed(2)} s`;
+  const held = s.held_labels || [];
   $("#speed-shown").textContent = s.paused ? "paused"
-    : s.held && s.held.length ? `x1 while ${s.held.join(", ")} held (then x${s.speed})`
-    : `x${s.speed}` + (s.actual_speed && s.actual_speed < s.speed * 0.9 ? ` (reaching x${s.actual_speed})` : "");
+    : held.length && s.speed !== 1 ? `x1 while ${held.join(", ")} held (then x${s.speed})`
+    : `x${s.speed}` + (!held.length && s.actual_speed && s.actual_speed < s.speed * 0.9 ? ` (reaching x${s.actual_speed})` : "");
   $("#pause").textContent = s.paused ? "Run" : "Pause";
   $("#pause").setAttribute("aria-pressed", s.paused ? "true" : "false");
   $("#scan").disabled = !s.paused;
@@ -462,7 +500,17 @@ function render(s) {
     for (const node of document.querySelectorAll(`[aria-label="${CSS.escape(label)}"]`)) {
       if (node.dataset.knob !== undefined) {
         if (document.activeElement !== node && node.value !== String(v)) { node.value = String(v); node.oninput(); }
-      } else if (node.getAttribute("role") === "switch") node.setAttribute("aria-checked", v ? "true" : "false");
+      } else if (node.dataset.latch) {
+        node.setAttribute("aria-pressed", v ? "true" : "false");
+      } else if (node.getAttribute("role") === "switch") {
+        node.setAttribute("aria-checked", v ? "true" : "false");
+        const forced = (s.forced_labels || []).includes(label);     // the value the PLC reads, marked forced
+        const title = forced ? `${label} forced to ${v ? "on" : "off"} (watch and force table): the PLC reads this, not the switch` : "";
+        if (node.title !== title) node.title = title;
+        const tag = node.querySelector(".forced-tag");
+        if (forced && !tag) node.append(el("span", { class: "forced-tag", text: " forced" }));
+        else if (!forced && tag) tag.remove();
+      }
       else if (node.dataset.state !== undefined) node.dataset.state = v ? "on" : "off";
     }
   }
