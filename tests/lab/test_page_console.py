@@ -194,3 +194,30 @@ def test_cnc_states_names_emergency_stop_missed_steps_and_the_path_after_a_reloa
     click_button(page, "SB2")
     page.get_by_role("button", name="Clear faults").click()
     expect(missed).to_have_text("missed steps X 0  Y 0  Z 0", timeout=WAIT)
+
+
+def test_a_fault_line_leads_to_its_statement_and_says_what_next_and_a_grade_survives_a_reload(lab_page):
+    from test_page import FAULTY
+    lp = lab_page("mp9c", speed=2)
+    page = lp.page
+    page.get_by_label("Load ST files").set_input_files(
+        files=[{"name": "faulty.st", "mimeType": "text/plain", "buffer": FAULTY.encode()}])
+    expect(page.locator("#plc-state")).to_have_text("FAULT", timeout=WAIT)
+    detail = page.locator("#fault-detail")
+    expect(detail).to_contain_text("Next: correct the program and load it again, or Restart PLC")
+    opener = detail.get_by_role("button", name="open faulty.st:4 in Program online")
+    expect(opener).to_have_css("text-decoration-line", "underline")          # it looks like the link it is
+    opener.click()
+    expect(page.get_by_label("POU", exact=True)).to_have_value("Faulty", timeout=WAIT)
+    expect(page.locator("#src-4")).to_have_class(re.compile(r"\btarget-line\b"))
+    page.get_by_role("button", name="Grade task1").click()
+    table = page.get_by_role("table", name="grade task1")
+    expect(table).to_be_visible(timeout=120_000)
+    unchecked = table.locator("tr", has=page.locator("td", has_text="NOT CHECKED")).first
+    expect(unchecked).to_contain_text("not checked: the scenario stopped first: the PLC stopped with a runtime fault")
+    rows = table.locator("tbody tr").count()
+    page.reload()                                                            # the lab keeps the last grade
+    page.wait_for_selector("#plc-state[data-state='FAULT']")
+    table = page.get_by_role("table", name="grade task1")
+    expect(table.locator("tbody tr")).to_have_count(rows, timeout=WAIT)
+    expect(page.locator("#grade-message")).to_contain_text("requirements passed: FAIL (program: faulty.st)")

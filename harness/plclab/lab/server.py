@@ -105,6 +105,7 @@ class LabServer:
         self._grade_lock: Optional[asyncio.Lock] = None
         self._grade_runs = 0
         self.grade_files: dict[str, Path] = {}
+        self.last_grade: Optional[dict] = None       # the last grade's table (a reloaded page shows it)
         self.token = secrets.token_urlsafe(24)       # what a state-changing request must carry
         self.session_id = secrets.token_hex(6)       # a page that sees it change knows the lab restarted
 
@@ -281,7 +282,8 @@ class LabServer:
             twido = f"{self.bind}:{self.modbus.port}"
         return {"type": "hello", "stand": lab.stand, "title": lab.module.STAND.title, "panel": lab.panel.describe(),
                 "speeds": list(SPEEDS), "tasks": grade_tasks, "checks": checks, "twido": twido, "pages": len(self.clients) + 1,
-                "trend_names": lab.trend_names, "trend_window": lab.panel.trend_window, "can_reload": True, "session": self.session_id}
+                "trend_names": lab.trend_names, "trend_window": lab.panel.trend_window, "can_reload": True, "session": self.session_id,
+                "grade": self.last_grade}
 
     async def websocket(self, request: web.Request) -> web.StreamResponse:
         ws = web.WebSocketResponse(heartbeat=20.0, max_msg_size=MAX_MESSAGE)
@@ -541,7 +543,8 @@ class LabServer:
         if self._grade_lock.locked():
             return _refuse("grade: a grade is already running; wait for its table")
         async with self._grade_lock:
-            sources = await asyncio.wrap_future(self.lab.call(lambda: list(self.lab.session.sources)))
+            sources, program = await asyncio.wrap_future(self.lab.call(
+                lambda: (list(self.lab.session.sources), self.lab.program_name)))
             self._grade_runs += 1
             run = f"{self._grade_runs}-{task}"
             out_dir = self.lab.work_dir / "grade" / run
@@ -561,8 +564,10 @@ class LabServer:
         n_pass = sum(r.passed for r in report.rows)
         summary = (f"{n_pass} of {len(report.rows)} requirements passed: {'PASS' if report.passed else 'FAIL'}"
                    if not report.errors else "the program does not compile: FAIL")
-        return web.json_response({"ok": True, "title": report.title, "task": task, "passed": report.passed,
-                                  "errors": report.errors, "rows": rows, "summary": summary})
+        result = {"ok": True, "title": report.title, "task": task, "passed": report.passed,
+                  "errors": report.errors, "rows": rows, "summary": summary, "program": program}
+        self.last_grade = result                 # a reloaded page shows it again
+        return web.json_response(result)
 
     async def grade_file(self, request: web.Request) -> web.StreamResponse:
         key = f"{request.match_info['run']}/{request.match_info['file']}"

@@ -131,6 +131,7 @@ function onHello(h) {
                       "#register-message"]) $(id).replaceChildren();
     notice("the lab was restarted: a new session");
   }
+  if (h.grade && !$("#grade-result").children.length) renderGrade(h.grade);     // the last grade, kept by the lab
   document.title = `PLC Lab: ${h.title}`;
   $("#title").textContent = h.title;
   showPages(h.pages);
@@ -400,7 +401,15 @@ async function grade(task) {
     r = { ok: false, message: `the lab did not answer (${e.message})` };
   }
   if (!r.ok) { say("#grade-message", r.message, false); return; }
-  say("#grade-message", `${r.title.replace(/[.:\s]+$/, "")}: ${r.summary}`, r.passed);
+  renderGrade(r);
+}
+
+// A grade's table (also the last one again, when the page is reloaded: the lab keeps it)
+function renderGrade(r) {
+  const task = r.task;
+  $("#grade-result").replaceChildren();
+  say("#grade-message", `${r.title.replace(/[.:\s]+$/, "")}: ${r.summary}` + (r.program ? ` (program: ${r.program})` : ""),
+    r.passed);
   const out = $("#grade-result");
   if (r.errors.length) {
     out.append(el("ol", {}, ...r.errors.map((e) => el("li", { class: "bad", text: e }))));
@@ -410,12 +419,12 @@ async function grade(task) {
     el("thead", {}, el("tr", {}, ...["id", "requirement", "result", "why", "trace"].map((x) => el("th", { text: x })))));
   const body = el("tbody");
   for (const row of r.rows) {
-    const why = row.result === "FAIL"
-      ? [row.expected && `expected: ${row.expected}`, row.observed && `observed: ${row.observed}`,
+    const why = row.result !== "PASS"          // FAIL, and NOT CHECKED / ERROR with their reason
+      ? [row.expected && `expected: ${row.expected}`, row.observed && (row.result === "FAIL" ? `observed: ${row.observed}` : row.observed),
          row.time !== null && row.time !== undefined ? `at t = ${row.time.toFixed(2)} s` : ""].filter(Boolean).join("; ")
       : "";
     const links = el("td");
-    if (row.result === "FAIL") {
+    if (row.result !== "PASS") {
       for (const t of row.traces) links.append(el("a", { href: t.url, download: t.name, text: t.name }), " ");
     }
     const whyCell = el("td", { text: why });
@@ -467,8 +476,15 @@ function render(s) {
   const fd = $("#fault-detail");
   if (s.plc.fault) {
     fd.hidden = false;
-    fd.textContent = s.plc.fault;
-  } else fd.hidden = true;
+    if (fd.dataset.fault !== s.plc.fault) {          // the fault, a way to its statement, and what to do next
+      fd.dataset.fault = s.plc.fault;
+      const where = s.plc.file ? `${s.plc.file.split("/").pop()}:${s.plc.line}` : null;
+      fd.replaceChildren(el("span", { class: "fault-text", text: s.plc.fault }), " ",
+        ...(where ? [el("button", { type: "button", class: "link fault-open", text: `open ${where} in Program online` })] : []),
+        el("span", { class: "fault-next", text: " Next: correct the program and load it again, or Restart PLC " +
+          "to run it once more (the PLC stays in FAULT, every output off, until one of them)." }));
+    }
+  } else { fd.hidden = true; delete fd.dataset.fault; }
   $("#clock").textContent = `t = ${s.t.toFixed(2)} s`;
   const held = s.held_labels || [];
   $("#speed-shown").textContent = s.paused ? "paused"
