@@ -180,6 +180,8 @@ function partName(text) {
 function buildControls(panel) {
   const box = $("#controls");
   box.replaceChildren();
+  // forward / backward pairs (TUR-10's jog buttons) keep to one row
+  box.classList.toggle("paired", panel.controls.some((c) => / forward$/.test(c.label)));
   for (const c of panel.controls) {
     let b;
     if (c.kind === "switch") {
@@ -1022,7 +1024,8 @@ function renderRegisters(regs) {
         input.onkeydown = (e) => { if (e.key === "Enter") b.click(); };
         write.append(input, b);
       }
-      body.append(el("tr", {}, el("td", { text: `%MW${r.address}` }), el("td", { text: r.name, title: r.description }),
+      const title = [r.description, r.valid && `valid: ${r.valid}`, r.rule].filter(Boolean).join("; ");
+      body.append(el("tr", {}, el("td", { text: `%MW${r.address}` }), el("td", { text: r.name, title }),
         el("td", { "aria-label": `value of %MW${r.address}`, "data-register": String(r.address) }),
         el("td", { text: r.access }), el("td", { text: r.valid }), el("td", { text: r.rule }), write));
     }
