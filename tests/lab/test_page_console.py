@@ -221,3 +221,53 @@ def test_a_fault_line_leads_to_its_statement_and_says_what_next_and_a_grade_surv
     table = page.get_by_role("table", name="grade task1")
     expect(table.locator("tbody tr")).to_have_count(rows, timeout=WAIT)
     expect(page.locator("#grade-message")).to_contain_text("requirements passed: FAIL (program: faulty.st)")
+
+
+def test_header_words_paused_badge_plant_events_tooltips_and_a_forced_switch(lab_page):
+    lp = lab_page("tur10", speed=1)
+    page = lp.page
+    fwd = page.get_by_role("button", name="SA1 forward", exact=True)
+    fwd.hover()
+    page.mouse.down()
+    expect(fwd).to_have_attribute("aria-pressed", "true")
+    expect(page.locator("#mimic")).to_be_visible()
+    page.wait_for_function("document.querySelector('#dac-1').textContent !== 'DAC 0'", timeout=WAIT)
+    expect(page.locator("#speed-shown")).to_have_text("x1")             # at x1 nothing else to say
+    page.mouse.up()
+    # what a student does not know is explained where it shows
+    tips = page.locator("#mimic title").all_text_contents()
+    assert any("the raceme is the robot's wrist" in t for t in tips), tips
+    assert any(t.startswith("the sensor bus: the five position sensors share one set of PLC inputs") for t in tips), tips
+    # paused: the badge says so too
+    page.get_by_role("button", name="Pause").click()
+    expect(page.locator("#plc-state")).to_have_text("RUN, paused", timeout=WAIT)
+    expect(page.locator("#plc-state")).to_have_attribute("data-state", "PAUSED")
+    page.get_by_role("button", name="Run").click()
+    expect(page.locator("#plc-state")).to_have_text("RUN", timeout=WAIT)
+    # a plant fault in words
+    page.get_by_label("fault", exact=True).select_option("stuck_drive")
+    page.get_by_label("axis").select_option("2")
+    page.get_by_role("button", name="Inject").click()
+    expect(page.locator("#events")).to_contain_text("fault injected: stuck_drive (axis 2)", timeout=WAIT)
+    expect(page.locator("#actions")).to_contain_text("fault injected: stuck_drive (axis 2)")
+    assert "{" not in page.locator("#events").inner_text() + page.locator("#actions").inner_text()
+    # a forced switch shows the value the PLC reads, marked forced
+    sa7 = switch(page, "SA7")
+    expect(sa7).to_have_attribute("aria-checked", "false")
+    lab = lp.lab
+    address = lab.session.labels["SA7"]
+    lab.call(lambda: lab.force(address, "TRUE")).result(10)
+    expect(sa7).to_have_attribute("aria-checked", "true", timeout=WAIT)
+    expect(sa7).to_contain_text("forced")
+    expect(sa7).to_have_attribute("title", re.compile(r"SA7 forced to on"))
+    lab.call(lambda: lab.unforce(None)).result(10)
+    expect(sa7).to_have_attribute("aria-checked", "false", timeout=WAIT)
+    expect(sa7).not_to_contain_text("forced")
+
+
+def test_cnc_interpolation_methods_are_explained(lab_page):
+    page = lab_page("cnc", speed=5).page
+    titles = page.locator("#part-method option").evaluate_all("os => os.map((o) => o.title)")
+    assert titles[0].startswith("evalfn: the evaluation-function method") and titles[1].startswith("dda: the digital"), titles
+    expect(page.locator("#hold-note")).to_contain_text("SB3, the emergency stop, is a mushroom button")
+    expect(page.locator("#hold-note")).not_to_contain_text("3-s hold")
