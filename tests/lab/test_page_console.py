@@ -271,3 +271,33 @@ def test_cnc_interpolation_methods_are_explained(lab_page):
     assert titles[0].startswith("evalfn: the evaluation-function method") and titles[1].startswith("dda: the digital"), titles
     expect(page.locator("#hold-note")).to_contain_text("SB3, the emergency stop, is a mushroom button")
     expect(page.locator("#hold-note")).not_to_contain_text("3-s hold")
+
+
+ORANGE_PIXELS = """(name) => {
+  const c = document.querySelector(`canvas[data-trend="${name}"]`);
+  const d = c.getContext("2d").getImageData(0, 0, c.width, c.height).data;
+  let n = 0;
+  for (let i = 0; i < d.length; i += 4) if (d[i] > 200 && d[i + 1] > 60 && d[i + 1] < 120 && d[i + 2] < 60 && d[i + 3] > 96) n++;
+  return n;
+}"""
+
+
+def test_thermo_modes_by_name_mode_and_setpoint_on_the_drawing_and_the_setpoint_over_the_temperature(lab_page):
+    lp = lab_page("thermo", speed=5)
+    page = lp.page
+    mode = page.get_by_label("new value of %MW0")
+    assert mode.locator("option").all_text_contents() == ["0 manual", "1 automatic-1", "2 automatic-2"]
+    expect(page.get_by_label("value of %MW0", exact=True)).to_have_text("0 (manual)", timeout=WAIT)
+    expect(page.locator("#thermo-mode")).to_have_text("mode %MW0 = 0, manual: %MW1 / %MW2 set the fan and the heater")
+    expect(page.locator("#thermo-setpoint")).to_have_text("setpoint 40 \u00b0C")
+    mode.select_option("1")
+    page.get_by_role("button", name="write %MW0").click()
+    expect(page.get_by_label("value of %MW0", exact=True)).to_have_text("1 (automatic-1)", timeout=WAIT)
+    expect(page.locator("#thermo-mode")).to_have_text("mode %MW0 = 1, automatic-1: the heater regulates to the setpoint",
+                                                      timeout=WAIT)
+    page.get_by_label("new value of %MW6").fill("55")
+    page.get_by_role("button", name="write %MW6").click()
+    expect(page.locator("#thermo-setpoint")).to_have_text("setpoint 55 \u00b0C", timeout=WAIT)
+    # the raw ADC trended in degC, the setpoint drawn over it on the same scale
+    expect(page.locator('#trend-list .name[title="TEMP_ADC"]')).to_have_text("TEMP_ADC (\u00b0C) + SETPOINT")
+    page.wait_for_function(f"({ORANGE_PIXELS})('TEMP_ADC') > 20", timeout=WAIT)

@@ -891,7 +891,9 @@ class Lab:
         from plclab.modbus.profiles import THERMO
         image = self.session.plc.image
         raw = image.snapshot("MW", 0, max(r.address for r in THERMO.registers) + 1)
+        from plclab.modbus.profiles import THERMO_MODES
         return [{"address": r.address, "name": r.name, "access": r.access.value,
+                 "choices": [[k, v] for k, v in sorted(THERMO_MODES.items())] if r.name == "mode" else None,
                  "valid": str(r.valid) if r.valid is not None else "",
                  "rule": f"writable only when {r.writable_when}" if r.writable_when else "",
                  "description": r.description, "value": r.as_value(raw[r.address])} for r in THERMO.registers]

@@ -85,6 +85,8 @@ class Panel:
     faults: tuple[Fault, ...]
     trends: tuple[str, ...]                          # signals trended when the page opens
     trend_window: float = 60.0                       # plant seconds a trend shows
+    trend_units: Mapping[str, tuple[float, str]] = field(default_factory=dict)   # signal -> (factor, unit)
+    trend_overlays: Mapping[str, str] = field(default_factory=dict)  # trend -> signal drawn over it
     mimic: Callable[[Session], dict[str, Any]] = field(repr=False, default=lambda s: {})
     frames: Callable[[Session], Any] = field(repr=False, default=_no_frames)   # the recorded program
     knobs: tuple[Knob, ...] = ()
@@ -109,6 +111,8 @@ class Panel:
             "knobs": [{"label": k.label, "lo": k.lo, "hi": k.hi, "unit": k.unit, "initial": k.initial, "hint": k.hint}
                       for k in self.knobs],
             "part": self.part.describe() if self.part is not None else None,
+            "trend_units": {k: list(v) for k, v in self.trend_units.items()},
+            "trend_overlays": dict(self.trend_overlays),
         }
 
     def knob(self, label: str) -> Knob:
@@ -137,6 +141,8 @@ class Look:
     fault_params: Mapping[tuple[str, str], tuple[tuple[str, ...], str]] = field(default_factory=dict)
     trends: tuple[str, ...] = ()
     trend_window: float = 60.0      # plant seconds a trend shows (thermo: its 300-s step response)
+    trend_units: Mapping[str, tuple[float, str]] = field(default_factory=dict)   # signal -> (factor, unit) shown
+    trend_overlays: Mapping[str, str] = field(default_factory=dict)  # trend -> a signal drawn over it (same unit)
     mimic: Callable[[Session], dict[str, Any]] = field(repr=False, default=lambda s: {})
     frames: Callable[[Session], Any] = field(repr=False, default=_no_frames)
     knobs: tuple[Knob, ...] = ()    # settings that are not contacts (their labels leave the console)
@@ -163,8 +169,8 @@ def derive_panel(spec: StandSpec, look: Look) -> Panel:
                   for group in look.lamp_groups for name in getattr(spec, group))
     faults = tuple(Fault(f.name, look.fault_texts.get(f.name, f.doc),
                          tuple(_fault_param(look, f.name, p) for p in f.params)) for f in spec.faults)
-    return Panel(spec.name, controls, lamps, faults, look.trends, look.trend_window, look.mimic, look.frames,
-                 look.knobs, look.part)
+    return Panel(spec.name, controls, lamps, faults, look.trends, look.trend_window, look.trend_units,
+                 look.trend_overlays, look.mimic, look.frames, look.knobs, look.part)
 
 
 def _fault_param(look: Look, fault: str, param: Any) -> FaultParam:
@@ -341,8 +347,15 @@ TUR10 = derive_panel(stand_spec("tur10"), Look(
 # --------------------------------------------------------------------------- thermo
 
 def _thermo_mimic(s: Session) -> dict[str, Any]:
+    from plclab.modbus.profiles import THERMO_MODES
     snap = s.plant.snapshot()
-    return {"temperature": snap["temperature_c"], "heater_w": snap["heater_w"], "fan_rpm": snap["fan_rpm"],
+    try:                             # the SCADA registers the program works with (%MW0, %MW6)
+        mode, setpoint = int(s.value("MODE")), int(s.value("SETPOINT"))
+    except (ScenarioFailure, PlcLabError, TypeError, ValueError):
+        mode = setpoint = None
+    return {"mode": mode, "mode_name": THERMO_MODES.get(mode, f"unknown ({mode})") if mode is not None else None,
+            "setpoint": setpoint,
+            "temperature": snap["temperature_c"], "heater_w": snap["heater_w"], "fan_rpm": snap["fan_rpm"],
             "heater_command": snap["heater_command"], "fan_command": snap["fan_command"],
             "heater_max_w": s.plant.params.heater_max_w, "fan_max_rpm": s.plant.params.fan_max_rpm,
             "faults": snap["faults"]}
@@ -354,6 +367,9 @@ THERMO = derive_panel(stand_spec("thermo"), Look(
                  "heater_dead": "heater burnt out"},
     trends=("TEMP_ADC", "SETPOINT", "HEATER", "FAN", "DISTURBANCE"),
     trend_window=600.0,
+    # the raw ADC shown in degC (10 counts per degC) on one scale with the setpoint, drawn over it
+    trend_units={"TEMP_ADC": (0.1, "\u00b0C"), "SETPOINT": (1.0, "\u00b0C"), "TEMPERATURE": (1.0, "\u00b0C")},
+    trend_overlays={"TEMP_ADC": "SETPOINT"},
     mimic=_thermo_mimic,
 ))
 

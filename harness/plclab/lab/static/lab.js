@@ -912,13 +912,24 @@ function buildTrendList() {
     const canvas = el("canvas", { width: "600", height: "44", "aria-label": `trend of ${name}`, "data-trend": name });
     const remove = el("button", { type: "button", "aria-label": `remove trend ${name}`, text: "x",
       onclick: () => chooseTrends(lab.trendNames.filter((n) => n !== name)) });
-    list.append(el("div", { class: "trend" }, el("span", { class: "name", title: name, text: name }), canvas, remove));
+    const unit = trendUnit(name), over = trendOverlay(name);
+    const shown = name + (unit ? ` (${unit[1]})` : "") + (over ? ` + ${over}` : "");
+    list.append(el("div", { class: "trend" }, el("span", { class: "name", title: name, text: shown,
+      "data-shown": shown }), canvas, remove));
   }
   $("#trend-add-button").onclick = () => {
     const name = $("#trend-add").value.trim();
     if (name) chooseTrends(lab.trendNames.concat([name]));
   };
   $("#trend-add").onkeydown = (e) => { if (e.key === "Enter") $("#trend-add-button").click(); };
+}
+
+// a trend shown in a unit of its own (thermo's raw ADC in degC: [factor, unit]), and the signal
+// drawn over it on the same scale (the setpoint over the temperature)
+function trendUnit(name) { const u = lab.hello && lab.hello.panel.trend_units; return (u && u[name]) || null; }
+function trendOverlay(name) {
+  const o = lab.hello && lab.hello.panel.trend_overlays;
+  return o && o[name] && lab.trendNames.includes(o[name]) ? o[name] : null;
 }
 
 function chooseTrends(names) {
@@ -960,13 +971,19 @@ function drawTrends() {
     const cw = Math.max(60, Math.round(canvas.clientWidth * dpr)), ch = Math.round(44 * dpr);
     if (canvas.width !== cw || canvas.height !== ch) { canvas.width = cw; canvas.height = ch; }
     const name = canvas.dataset.trend;
-    const pts = lab.trends.get(name) || [];
+    const scaled = (n) => {               // a signal's points in the unit shown
+      const u = trendUnit(n), k = u ? u[0] : 1;
+      return (lab.trends.get(n) || []).map(([t, v]) => [t, typeof v === "number" && k !== 1 ? Math.round(v * k * 1000) / 1000 : v]);
+    };
+    const pts = scaled(name);
+    const overName = trendOverlay(name);
+    const over = overName ? scaled(overName) : [];
     const ctx = canvas.getContext("2d");
     ctx.setTransform(dpr, 0, 0, dpr, 0, 0);
     const w = cw / dpr, h = ch / dpr, plot = w - 64;
     ctx.clearRect(0, 0, w, h);
     if (!pts.length) continue;
-    const nums = pts.map((p) => Number(p[1])).filter((v) => Number.isFinite(v));
+    const nums = pts.concat(over).map((p) => Number(p[1])).filter((v) => Number.isFinite(v));
     let lo = Math.min(...nums), hi = Math.max(...nums);
     if (nums.every((v) => v === 0 || v === 1)) { lo = 0; hi = 1; }      // a bit: low and high
     else if (hi - lo < 1e-9) { lo -= 1; hi += 1; }
@@ -984,6 +1001,20 @@ function drawTrends() {
     }
     ctx.lineTo(plot, last);
     ctx.stroke();
+    if (over.length) {                               // the overlaid signal, dashed, on the same scale
+      ctx.strokeStyle = "#ea580c";
+      ctx.setLineDash([4, 3]);
+      ctx.beginPath();
+      let lastO = null;
+      for (const [t, v] of over) {
+        const vy = y(Number(v));
+        if (lastO === null) ctx.moveTo(x(t), vy); else { ctx.lineTo(x(t), lastO); ctx.lineTo(x(t), vy); }
+        lastO = vy;
+      }
+      ctx.lineTo(plot, lastO);
+      ctx.stroke();
+      ctx.setLineDash([]);
+    }
     ctx.strokeStyle = "#e5e7eb";
     ctx.beginPath(); ctx.moveTo(plot + 2, 0); ctx.lineTo(plot + 2, h); ctx.stroke();
     ctx.fillStyle = "#111";
@@ -1005,7 +1036,15 @@ function renderRegisters(regs) {
     body.replaceChildren();
     for (const r of regs) {
       const write = el("td");
-      if (r.access === "read/write") {
+      if (r.access === "read/write" && r.choices) {        // the mode: chosen by name
+        const choose = el("select", { "aria-label": `new value of %MW${r.address}` },
+          ...r.choices.map(([v, n]) => el("option", { value: String(v), text: `${v} ${n}` })));
+        const b = el("button", { type: "button", text: "Write", "aria-label": `write %MW${r.address}` });
+        b.onclick = () => send("register", { address: r.address, value: Number(choose.value) })
+          .then(() => say("#register-message", `%MW${r.address} = ${choose.value} written`, true))
+          .catch((e) => say("#register-message", e.message, false));
+        write.append(choose, b);
+      } else if (r.access === "read/write") {
         const input = el("input", { type: "text", inputmode: "numeric", "aria-label": `new value of %MW${r.address}` });
         const b = el("button", { type: "button", text: "Write", "aria-label": `write %MW${r.address}` });
         b.onclick = () => {
@@ -1032,7 +1071,8 @@ function renderRegisters(regs) {
   }
   for (const r of regs) {
     const cell = body.querySelector(`[data-register="${r.address}"]`);
-    if (cell) cell.textContent = String(r.value);
+    const named = r.choices && r.choices.find(([v]) => v === r.value);
+    if (cell) cell.textContent = named ? `${r.value} (${named[1]})` : String(r.value);
   }
 }
 

@@ -261,7 +261,11 @@ const Mimic = (() => {
     parts.blades = s("g", {}, parts.fan);
     for (let i = 0; i < 4; i++) s("ellipse", { rx: 8, ry: 28, fill: "#64748b", transform: `rotate(${i * 90}) translate(0,-16)` }, parts.blades);
     parts.fanText = s("text", { class: "mimic-text", x: 330, y: 275, text: "" });
+    parts.mode = s("text", { id: "thermo-mode", class: "mimic-text", x: 10, y: 44, text: "" });
+    parts.setpoint = s("text", { id: "thermo-setpoint", class: "mimic-text", x: 420, y: 186, text: "" });
   }
+  const MODE_WORDS = { manual: "manual: %MW1 / %MW2 set the fan and the heater",
+    "automatic-1": "automatic-1: the heater regulates to the setpoint", "automatic-2": "automatic-2: the fan regulates to the setpoint" };
 
   function updateThermo(m, t) {
     const frac = Math.max(0, Math.min(1, (m.temperature - 20) / 60));
@@ -274,6 +278,9 @@ const Mimic = (() => {
     if (lastT !== null && t > lastT) fanAngle = (fanAngle + (m.fan_rpm / 60) * 360 * Math.min(t - lastT, 0.05)) % 360;
     parts.blades.setAttribute("transform", `rotate(${fanAngle})`);
     parts.fanText.textContent = `fan ${Math.round(m.fan_rpm)} rpm (command ${m.fan_command})` + (m.faults.includes("fan_stalled") ? " STALLED" : "");
+    parts.mode.textContent = m.mode_name === null || m.mode_name === undefined ? ""
+      : `mode %MW0 = ${m.mode}, ${MODE_WORDS[m.mode_name] || m.mode_name}`;
+    parts.setpoint.textContent = m.setpoint === null || m.setpoint === undefined ? "" : `setpoint ${m.setpoint} \u00b0C`;
   }
 
   // ---------------------------------------------------------------- CNC
