@@ -215,6 +215,13 @@ def test_a_fault_line_leads_to_its_statement_and_says_what_next_and_a_grade_surv
     expect(table).to_be_visible(timeout=120_000)
     unchecked = table.locator("tr", has=page.locator("td", has_text="NOT CHECKED")).first
     expect(unchecked).to_contain_text("not checked: the scenario stopped first: the PLC stopped with a runtime fault")
+    # a row's link to the program says the values there are live, and shows the graded run's
+    g1 = table.locator("tbody tr").filter(has=page.get_by_role("cell", name="G1", exact=True))
+    expect(g1).to_contain_text(re.compile(r"the graded run \(\w+\) at t = 0\.20 s: SA1=0 .*SB1=0 .*L1=0"))
+    g1.get_by_role("button", name="open faulty.st:4").click()
+    note = page.get_by_role("status", name="graded run")
+    expect(note).to_contain_text("Opened from grade row G1: the values beside the source are the lab's, live now, "
+                                 "not the graded run's. The graded run (", timeout=WAIT)
     rows = table.locator("tbody tr").count()
     page.reload()                                                            # the lab keeps the last grade
     page.wait_for_selector("#plc-state[data-state='FAULT']")

@@ -559,8 +559,10 @@ class LabServer:
             for p in paths:
                 self.grade_files[f"{run}/{p.name}"] = p
                 links[scenario].append({"name": p.name, "url": f"/grade/{run}/{p.name}"})
+        graded = await loop.run_in_executor(None, self._graded_values, report)
         rows = [{"id": r.id, "text": r.text, "result": r.result, "expected": r.expected, "observed": r.observed,
-                 "time": r.time, "scenario": r.scenario, "traces": links.get(r.scenario, [])} for r in report.rows]
+                 "time": r.time, "scenario": r.scenario, "traces": links.get(r.scenario, []),
+                 "graded": graded.get(r.id)} for r in report.rows]
         n_pass = sum(r.passed for r in report.rows)
         summary = (f"{n_pass} of {len(report.rows)} requirements passed: {'PASS' if report.passed else 'FAIL'}"
                    if not report.errors else "the program does not compile: FAIL")
@@ -568,6 +570,38 @@ class LabServer:
                   "errors": report.errors, "rows": rows, "summary": summary, "program": program}
         self.last_grade = result                 # a reloaded page shows it again
         return web.json_response(result)
+
+    def _graded_values(self, report: Any) -> dict[str, str]:
+        """For each row that did not pass at a known time: the console and the outputs as the
+        graded run had them then (read from its trace), in console labels; what a student
+        compares with the lab's live values when the row opens the program."""
+        from plclab.trace import read_csv
+        lab = self.lab
+        names = [c.label for c in lab.panel.controls] + [lamp.label for lamp in lab.panel.lamps]
+        labels = lab.session.labels
+        traces: dict[str, Any] = {}
+        out: dict[str, str] = {}
+        for r in report.rows:
+            if r.passed or r.time is None:
+                continue
+            csv = next((p for p in report.traces.get(r.scenario, []) if p.suffix == ".csv"), None)
+            if csv is None:
+                continue
+            try:
+                if csv not in traces:
+                    traces[csv] = read_csv(csv)
+                trace = traces[csv]
+                shown = []
+                for label in names:
+                    signal = next((c.signal for c in lab.panel.controls if c.label == label), label)
+                    address = labels.get(signal, signal)
+                    if address in trace:
+                        shown.append(f"{label}={_plain_value(trace.value_at(address, r.time))}")
+            except (PlcLabError, OSError, ValueError, LookupError):
+                continue
+            if shown:
+                out[r.id] = f"the graded run ({r.scenario}) at t = {r.time:.2f} s: " + " ".join(shown)
+        return out
 
     async def grade_file(self, request: web.Request) -> web.StreamResponse:
         key = f"{request.match_info['run']}/{request.match_info['file']}"
@@ -600,6 +634,12 @@ class LabServer:
 
 ALL_OPS = ("set", "press", "release", "speed", "pause", "run", "scan", "restart", "inject", "clear", "trends",
            "tree", "watch", "force", "unforce", "source", "monitor", "unscript", "register", "knob", "part", "contour")
+
+
+def _plain_value(value: Any) -> str:
+    if isinstance(value, bool):
+        return str(int(value))
+    return str(value)
 
 
 def _bit(value: Any) -> int:

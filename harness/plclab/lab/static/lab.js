@@ -431,9 +431,10 @@ function renderGrade(r) {
     }
     const whyCell = el("td", { text: why });
     const where = /(<[^>]+>|[^\s:]+\.st):(\d+)/.exec(`${row.observed || ""} ${row.expected || ""} ${row.text}`);
+    if (row.graded && row.result !== "PASS") whyCell.append(el("div", { class: "graded", text: row.graded }));
     if (where) {
       whyCell.append(" ", el("button", { type: "button", class: "link", text: `open ${where[1].split("/").pop()}:${where[2]}`,
-        onclick: () => openSource(where[1].trim(), Number(where[2])) }));
+        onclick: () => openSource(where[1].trim(), Number(where[2]), row) }));
     }
     body.append(el("tr", {}, el("td", { text: row.id }), el("td", { text: row.text }),
       el("td", { class: row.result, text: row.result }), whyCell, links));
@@ -642,7 +643,14 @@ async function showPou(name, instance) {
   await send("monitor", { pou: name, instance }).catch((e) => notice(e.message));
 }
 
-function openSource(file, line) {
+// `row`: opened from a grade row; the values beside the source are the lab's live ones, so the
+// graded run's are shown above it (its console and outputs at the row's time)
+function openSource(file, line, row) {
+  const note = $("#graded-note");
+  note.hidden = !row;
+  note.textContent = row ? `Opened from grade row ${row.id}: the values beside the source are the lab's, live now, ` +
+    `not the graded run's. ` + (row.graded ? `${row.graded[0].toUpperCase()}${row.graded.slice(1)}.` : "") +
+    (row.traces && row.traces.length ? " Its trace: the row's links." : "") : "";
   loadSource().then((pous) => {
     const pou = pous.find((p) => p.file === file && line >= p.line && line < p.line + p.lines.length)
       || pous.find((p) => p.display === file.split("/").pop() && line >= p.line && line < p.line + p.lines.length);
