@@ -11,6 +11,7 @@ import re
 
 from playwright.sync_api import expect
 from test_page import WAIT, flip, lamp, on, plant_time, switch, tap_sb1
+from test_script import replay
 
 SHORT_SCRIPT = ("time_s,name,value\n"
                 "0.2,SA1,0\n"
@@ -28,8 +29,7 @@ def test_after_an_input_script_the_stand_runs_at_the_speed_the_header_says(lab_p
     lp = lab_page("mp9c", speed=1)
     page = lp.page
     expect(page.locator("#clock")).not_to_have_text("t = 0.00 s", timeout=WAIT)
-    page.locator("#script-file").set_input_files(files=[{"name": "ops.csv", "mimeType": "text/csv",
-                                                          "buffer": SHORT_SCRIPT.encode()}])
+    replay(page, "ops.csv", SHORT_SCRIPT)
     expect(page.get_by_role("status", name="input script")).to_have_text(
         "ops.csv: finished (the console log lists each step)", timeout=WAIT)
     expect(page.locator("#speed-shown")).to_have_text("x1")
@@ -47,16 +47,21 @@ def frame_rows(page) -> list[tuple[str, str]]:
     return [tuple(r) for r in rows]
 
 
-def test_mp9c_step_mode_shows_the_frame_done_while_it_waits_for_the_next_press(lab_page):
-    lp = lab_page("mp9c", speed=2, variant="baseline")
-    page = lp.page
-    status = page.locator("#frames-status")
+def record_down_and_up(page) -> None:
+    """MP-9C, manual mode: frame 1 the arm down, frame 2 the arm up."""
     flip(page, "SA5", True)
     on(lamp(page, "SQ2"))
     tap_sb1(page)                                     # frame 1: arm down
     flip(page, "SA5", False)
     on(lamp(page, "SQ1"))
     tap_sb1(page)                                     # frame 2: arm up
+
+
+def test_mp9c_step_mode_shows_the_frame_done_while_it_waits_for_the_next_press(lab_page):
+    lp = lab_page("mp9c", speed=2, variant="baseline")
+    page = lp.page
+    status = page.locator("#frames-status")
+    record_down_and_up(page)
     expect(status).to_have_text("2 frame(s); stopped (next: frame 1)", timeout=WAIT)
     flip(page, "SA6", True)                           # step by step
     flip(page, "SA1", True)                           # automatic
@@ -104,12 +109,7 @@ def test_the_lab_runs_the_starting_program_unless_told_otherwise():
 def test_a_start_press_the_program_refuses_says_what_it_reads_of_the_console(lab_page):
     lp = lab_page("mp9c", speed=2, variant="full")    # Task 3: I0.7 enables automatic execution
     page = lp.page
-    flip(page, "SA5", True)
-    on(lamp(page, "SQ2"))
-    tap_sb1(page)                                     # frame 1: arm down
-    flip(page, "SA5", False)
-    on(lamp(page, "SQ1"))
-    tap_sb1(page)                                     # frame 2: arm up
+    record_down_and_up(page)
     flip(page, "SA1", True)
     tap_sb1(page)                                     # start, with I0.7 off: refused by the program
     why = page.get_by_role("status", name="why playback did not start")
