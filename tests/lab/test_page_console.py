@@ -106,7 +106,7 @@ def test_the_lab_runs_the_starting_program_unless_told_otherwise():
     server.lab.stop()
 
 
-def test_a_start_press_the_program_refuses_says_what_it_reads_of_the_console(lab_page):
+def test_a_start_press_the_program_refuses_says_what_it_reads_of_the_console(lab_page, shots):
     lp = lab_page("mp9c", speed=2, variant="full")    # Task 3: I0.7 enables automatic execution
     page = lp.page
     record_down_and_up(page)
@@ -117,6 +117,7 @@ def test_a_start_press_the_program_refuses_says_what_it_reads_of_the_console(lab
                              "after the release). It reads SA1 on (automatic), SA6 off (continuous), I0.7 off; "
                              "2 frame(s) recorded. Is one of them off that the program needs on?", timeout=WAIT)
     expect(page.locator("#actions")).to_contain_text("SB1 pressed in automatic mode: the program started nothing")
+    page.screenshot(path=str(shots / "lab-mp9c-start.png"))
     expect(page.locator("#frames-status")).to_have_text("2 frame(s); stopped (next: frame 1)")
     flip(page, "I0.7", True)
     tap_sb1(page)                                     # now it starts
@@ -308,3 +309,29 @@ def test_thermo_modes_by_name_mode_and_setpoint_on_the_drawing_and_the_setpoint_
     # the raw ADC trended in degC, the setpoint drawn over it on the same scale
     expect(page.locator('#trend-list .name[title="TEMP_ADC"]')).to_have_text("TEMP_ADC (\u00b0C) + SETPOINT")
     page.wait_for_function(f"({ORANGE_PIXELS})('TEMP_ADC') > 20", timeout=WAIT)
+
+
+def test_a_press_that_stops_playback_is_not_called_a_refused_start(tmp_path):
+    from plclab.lab.engine import Lab
+    lab = Lab("mp9c", variant="baseline", work_dir=tmp_path)
+    s = lab.session
+    s.run(s.tick)
+
+    def tap() -> None:
+        lab.press("SB1", True)
+        lab.advance(0.3)
+        lab.press("SB1", False)
+        lab.advance(1.5)
+    lab.set_control("SA5", 1)
+    lab.advance(2.0)
+    tap()                                             # frame 1: arm down
+    lab.set_control("SA5", 0)
+    lab.advance(2.0)
+    tap()                                             # frame 2: arm up
+    lab.set_control("SA1", 1)
+    lab.advance(0.5)
+    tap()                                             # start: playback runs
+    assert s.value("Running") and lab.start_refused is None
+    tap()                                             # stop: nothing to explain
+    assert not s.value("Running") and lab.start_refused is None
+    lab.stop()

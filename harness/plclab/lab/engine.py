@@ -335,12 +335,34 @@ class Lab:
         if down:
             self.start_refused = None
             switch, level = start.mode
-            if int(bool(s.value(switch))) != level:
-                self._start_watch = None           # manual mode: a press records a frame
+            if int(bool(s.value(switch))) != level or self._playing(start):
+                self._start_watch = None           # manual mode (a press records a frame), or a stop press
                 return
             self._start_watch = ({o: s.trace.change_count(o) for o in start.outputs if o in s.trace}, None)
         elif self._start_watch is not None:
             self._start_watch = (self._start_watch[0], s.now + start.within)
+
+    def _playing(self, start: Any) -> bool:
+        """Whether playback is under way (a press then stops it): the program says so where
+        the stand's observables name it (Running, InFrame); a program without them, when one
+        of the outputs a start moves changed in the last seconds (a frame, or its pause)."""
+        s = self.session
+        told = []
+        for name in ("Running", "InFrame"):
+            if name in s.observables:
+                try:
+                    told.append(bool(s.value(name)))
+                except Exception:     # noqa: BLE001 - a student's program need not have it
+                    pass
+        if told:
+            return any(told)
+        recent = round((s.now - start.within - 1.0) * 1e9)
+        for o in start.outputs:
+            if o in s.trace:
+                changes = s.trace.changes(o)
+                if len(changes) > 1 and changes[-1][0] >= recent:
+                    return True
+        return False
 
     def _check_start(self) -> None:
         counts, deadline = self._start_watch
