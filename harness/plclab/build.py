@@ -47,7 +47,7 @@ def build_outputs(stand: str, variant: str, xml: bool = True, xml_name: Optional
     check_sources(sources(s, variant))
     text = bundle(s, variant)
     if stand == "cnc":
-        from plclab.cnc.gcode import parse_file
+        from plclab.nc.gcode import parse_file
         from plclab.cnc.openplc import STEP_MM, openplc_bundle
 
         program = parse_file(part, tools, STEP_MM) if part is not None else None

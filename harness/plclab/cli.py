@@ -75,7 +75,7 @@ def _tool(text: str) -> tuple[int, float]:
 
 
 def _cmd_cnc(args: argparse.Namespace) -> int:
-    from plclab.cnc.gcode import GcodeError
+    from plclab.nc.gcode import GcodeError
     from plclab.cnc.run import run_cnc
 
     try:
@@ -215,7 +215,7 @@ def _cmd_console(args: argparse.Namespace) -> int:
     where = _host_port(args.where, "the console face") if args.where else ("127.0.0.1", CONSOLE_PORT)
     tape = None
     if args.part:
-        from plclab.cnc.gcode import GcodeError
+        from plclab.nc.gcode import GcodeError
         from plclab.cnc.openplc import part_tape
 
         if args.stand != "cnc":
@@ -248,7 +248,7 @@ def _cmd_build(args: argparse.Namespace) -> int:
         from plclab.stands import get_stand
         print(get_stand(args.stand).outline(args.variant), end="")
         return 0
-    from plclab.cnc.gcode import GcodeError
+    from plclab.nc.gcode import GcodeError
 
     try:
         paths = write_build(args.stand, args.variant, args.output, args.xml, part=args.part, method=args.method,

@@ -8,9 +8,9 @@ import pytest
 
 from plclab.build import build_outputs
 from plclab.cli import main
-from plclab.cnc.gcode import parse
+from plclab.nc.gcode import parse
 from plclab.cnc.openplc import OPENPLC_FINE_MS, part_tape, plant_params
-from plclab.cnc.toolpath import check_blocks
+from plclab.nc.toolpath import check_blocks
 from plclab.modbus.psm import psm_script
 from plclab.stands import cnc
 

@@ -7,7 +7,7 @@ The part program is parsed and loaded into the PLC's frame table as `plclab cnc`
 (plclab.stands.cnc.load_frames); the tool path is the table's positions the session's trace
 recorded (the step counters CNT_X / CNT_Y), read incrementally; the error of each visited
 point is its distance to the frame being executed (as the PLC got it, after tool-radius
-correction), and each frame's bound is the one `plclab cnc` checks (plclab.cnc.toolpath).
+correction), and each frame's bound is the one `plclab cnc` checks (plclab.nc.toolpath).
 """
 from __future__ import annotations
 
@@ -35,7 +35,7 @@ class CncPart:
         return {"methods": list(self.methods), "example": SQUARE}
 
     def load(self, s: Session, text: str, name: str, method: str) -> str:
-        from plclab.cnc.gcode import parse
+        from plclab.nc.gcode import parse
         from plclab.stands.cnc import load_frames
         if method not in self.methods:
             raise ValueError(f"method {method!r}: one of {', '.join(self.methods)}")
@@ -77,16 +77,16 @@ def _geometry(f: Any, h: float) -> tuple:
 
 
 def _distance(g: tuple, q: tuple[float, float]) -> float:
-    from plclab.cnc.toolpath import segment_distance
+    from plclab.nc.toolpath import segment_distance
     if g[0] == "arc":
         return abs(math.dist(q, g[1]) - g[2])
     return segment_distance(g[1], g[2], q)
 
 
 def _bound(st: dict, k: int, f: Any, h: float) -> float:
-    """Frame k's error bound, as `plclab cnc` checks it (plclab.cnc.toolpath.check_blocks)."""
+    """Frame k's error bound, as `plclab cnc` checks it (plclab.nc.toolpath.check_blocks)."""
     if k not in st["bound"]:
-        from plclab.cnc.toolpath import check_blocks
+        from plclab.nc.toolpath import check_blocks
         origin = tuple(round(v / h) for v in f.start)
         st["bound"][k] = check_blocks([f], [], h, st["method"], origin=origin)[0].bound_mm
     return st["bound"][k]

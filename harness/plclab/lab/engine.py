@@ -284,7 +284,7 @@ class Lab:
 
     def load_part(self, text: str, name: str, method: str) -> str:
         """A CNC part program into the PLC's frame table (plclab.lab.cncview)."""
-        from plclab.cnc.gcode import GcodeError
+        from plclab.nc.gcode import GcodeError
         try:
             return self.panel.part.load(self.session, text, name, method)
         except (GcodeError, ValueError) as e:
