@@ -118,7 +118,7 @@ def read_sources(paths: Iterable[str | Path]) -> list[tuple[str, str]]:
 
 def _read_project(path: str | Path, st_texts: list[tuple[str, str]]) -> tuple[str, list[Diagnostic]]:
     from plclab.errors import PlcLabError
-    from plclab.plcopen.project import source_from_xml
+    from plclab.frontend.plcxml import source_from_xml
 
     name = str(path)
     data, errs = _read_bytes(path)

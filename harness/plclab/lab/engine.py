@@ -936,7 +936,7 @@ def read_upload(files: Sequence[tuple[str, Any]]) -> tuple[list[tuple[str, str]]
     element of a drawing. Held to the memory limit of a program run (plclab.limits)."""
     from plclab.frontend import is_project_file
     from plclab.limits import memory_limited
-    from plclab.plcopen.project import source_from_xml       # imported before the limit (lxml maps a lot)
+    from plclab.frontend.plcxml import source_from_xml       # imported before the limit (lxml maps a lot)
     st_texts = [(n, t) for n, t in files if not is_project_file(n)]
     out: list[tuple[str, str]] = []
     errors: list[str] = []
