@@ -155,7 +155,7 @@ def _cmd_serve(args: argparse.Namespace) -> int:
             plant = None
     profile = None
     if stand_cfg.profile == "twido":
-        from plclab.modbus.profiles import twido_profile
+        from plclab.stands import twido_profile
         profile = twido_profile(args.stand)
     console = None if args.console == "none" else _host_port(args.console, "--console")
     opts = ServeOptions(srcs, stand_cfg, modbus, plant, stand_cfg.profile, profile, console)
@@ -189,15 +189,21 @@ def _cmd_hmi(args: argparse.Namespace) -> int:
                    commands=None if args.once else sys.stdin)
 
 
+def _plant_params(stand: str) -> dict:
+    """The parameters a plant run for OpenPLC starts with (PSM script, `plant --psm`): the cnc
+    stand's in step with `plclab build cnc`'s fine cycle, the others' none."""
+    if stand != "cnc":
+        return {}
+    from plclab.cnc.openplc import plant_params
+    return plant_params()
+
+
 def _cmd_plant(args: argparse.Namespace) -> int:
     from plclab.modbus.psm import run_plant
 
     psm = _host_port(args.psm, "--psm")
     console = None if args.console == "none" else _host_port(args.console, "--console")
-    params = {}
-    if args.stand == "cnc":                  # as the PSM script: in step with `plclab build cnc`
-        from plclab.cnc.openplc import plant_params
-        params = plant_params()
+    params = _plant_params(args.stand)
     return run_plant(args.stand, psm, console, traceback=bool(os.environ.get("PLCLAB_DEBUG")),
                      out=lambda line: print(line, flush=True), params=params)
 
@@ -205,7 +211,8 @@ def _cmd_plant(args: argparse.Namespace) -> int:
 def _cmd_psm_script(args: argparse.Namespace) -> int:
     from plclab.modbus.psm import psm_script
 
-    sys.stdout.write(psm_script(args.stand, console=_host_port(args.console, "--console")))
+    sys.stdout.write(psm_script(args.stand, console=_host_port(args.console, "--console"),
+                                plant=_plant_params(args.stand)))
     return 0
 
 

@@ -1,7 +1,9 @@
-"""How the lab shows the CNC stand (`plclab lab cnc`, docs/lab.md): its console, the feed
-override and backlash settings, the part program it runs, and the table's state for the
-drawing -- the contour, the tool path as it is cut, the contour error against the
-interpolator's bound, the drives' step counters and missed steps.
+"""What the lab shows of the CNC stand (`plclab lab cnc`, docs/lab.md) beyond its console: the
+feed override and backlash settings' actions, the part program it runs, and the table's state
+for the drawing -- the contour, the tool path as it is cut, the contour error against the
+interpolator's bound, the drives' step counters and missed steps. Its look (labels, hints,
+knobs) is in lab/panels.py with the other stands' looks, which uses this module and not the
+other way round.
 
 The part program is parsed and loaded into the PLC's frame table as `plclab cnc` does
 (plclab.stands.cnc.load_frames); the tool path is the table's positions the session's trace
@@ -14,7 +16,6 @@ from __future__ import annotations
 import math
 from typing import Any
 
-from plclab.lab.panels import Knob, Look
 from plclab.scenario import Session
 
 MAX_PATH_POINTS = 400       # tool path points sent per snapshot (the rest thinned out)
@@ -168,26 +169,11 @@ def _polyline(frames: list) -> list[list[float]]:
     return [[round(x, 4), round(y, 4)] for x, y in contour(frames, per_mm=4)]
 
 
-def _override(s: Session, value: int) -> None:
+def set_override(s: Session, value: int) -> None:
     s.plant.set_override(value)
     s.log(f"RP1 feed override {value} %")
 
 
-def _backlash(s: Session, value: int) -> None:
+def set_backlash(s: Session, value: int) -> None:
     s.plant.set_backlash(value)
     s.log(f"backlash {value} steps")
-
-
-CNC_LOOK = Look(
-    hints={"SB1": "start the part program", "SB2": "stop / feed hold", "SA1": "single block",
-           "SB3": "emergency stop (held: pressed)", "HL1": "program running", "HL2": "fault / emergency stop"},
-    buttons=frozenset({"SB1", "SB2", "SB3"}),
-    lamp_groups=("lamps",),
-    fault_texts={"slow_drive": "a drive misses steps above a rate"},
-    fault_params={("slow_drive", "axis"): (("X", "Y", "Z"), "X"), ("slow_drive", "rate"): ((), "1000")},
-    trends=("SB1", "HL1", "CNT_X", "CNT_Y"),
-    knobs=(Knob("RP1", 0, 150, "%", 100, "feed override", _override),
-           Knob("backlash", 0, 50, "steps", 0, "play of every axis's transmission", _backlash)),
-    part=CncPart(),
-    mimic=cnc_mimic,
-)

@@ -811,7 +811,8 @@ class Lab:
 
     # ------------------------------------------------------------------ thermo registers
     def registers(self) -> list[dict[str, Any]]:
-        from plclab.modbus.profiles import THERMO
+        from plclab.stands import twido_profile
+        THERMO = twido_profile("thermo")
         image = self.session.plc.image
         raw = image.snapshot("MW", 0, max(r.address for r in THERMO.registers) + 1)
         return [{"address": r.address, "name": r.name, "access": r.access.value,
@@ -824,8 +825,9 @@ class Lab:
         load makes a new process image; the map follows it). `external`: the map an
         external SCADA client writes through, each write (done or refused) in the lab's log."""
         from plclab.modbus.maps import TwidoMap
-        from plclab.modbus.profiles import THERMO
         from plclab.modbus.protocol import ModbusException
+        from plclab.stands import twido_profile
+        THERMO = twido_profile("thermo")
 
         lab = self
 
