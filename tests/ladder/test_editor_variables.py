@@ -398,3 +398,24 @@ def test_a_pou_without_variables_is_refused_in_st_too(tmp_path):
     pous = [Pou("FB_Empty", "functionBlock", ";", {}),
             Pou("main", "program", "X := NOT X;", {"localVars": [("X", "BOOL", None)]})]
     assert "POU FB_Empty: no variable defined in this POU" in refused(save(tmp_path, pous))
+
+
+def test_an_il_body_and_an_empty_drawing_are_refused_by_name(tmp_path):
+    """The Editor pastes an IL body as text for matiec's IL, which plclab does not read; a
+    drawing with nothing that writes code the Editor refuses to generate."""
+    data = project([Pou("main", "program", "X := NOT X;", {"localVars": [("X", "BOOL", None)]})], program="main")
+    path = tmp_path / "plc.xml"
+    path.write_bytes(data.replace(b"<ST>", b"<IL>").replace(b"</ST>", b"</IL>"))
+    assert "main (IL): IL bodies are not supported: write this POU in ST, LD or FBD" in refused(path)
+    empty = Pou("main", "program", Diagram(), {"localVars": [("X", "BOOL", None)]})
+    assert "main (LD): the body is empty (OpenPLC Editor refuses to generate it)" in refused(save(tmp_path, [empty]))
+
+
+def test_task_settings_as_the_editor_pastes_them(tmp_path):
+    """INTERVAL and PRIORITY pasted as written (a PLCopen v1 duration converted, as the Editor
+    converts it when it opens such a file); SINGLE names one variable, a list is refused."""
+    pou = Pou("main", "program", "N := N + 1;", {"localVars": [("N", "INT", None)]})
+    path = save(tmp_path, [pou], interval="PT0.02S")
+    assert "TASK task0 (INTERVAL := T#20ms, PRIORITY := 0);" in emitted(path)
+    path.write_bytes(path.read_bytes().replace(b'interval="PT0.02S"', b'single="[A, B]"'))
+    assert "task task0: SINGLE needs one BOOL variable" in refused(path)
