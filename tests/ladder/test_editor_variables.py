@@ -352,7 +352,7 @@ def test_a_function_drawn_in_ladder_returns_its_result(tmp_path):
     fc = Pou("FC_Both", "function", d, {"inputVars": [("A", "BOOL", None), ("B", "BOOL", None)]}, return_type="BOOL")
     prg = Pou("main", "program", "Q := FC_Both(X, Y);", {"localVars": [
         ("X", "BOOL", None, "%IX0.0"), ("Y", "BOOL", None, "%IX0.1"), ("Q", "BOOL", None, "%QX0.0")]})
-    path = save(tmp_path, [fc, prg])
+    path = save(tmp_path, [prg, fc])          # the function after its user: the Editor writes it first
     assert "FUNCTION FC_Both : BOOL\nVAR_INPUT\n" in emitted(path)
     st = """FUNCTION FC_Both : BOOL
 VAR_INPUT
