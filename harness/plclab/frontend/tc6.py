@@ -1,5 +1,5 @@
-"""The TC6 v2.01 XML a plc.xml is written in, as text: namespaces, element names, formatted
-text, types and values spelled as ST.
+"""The TC6 v2.01 XML a plc.xml is written in: namespaces, element names, formatted text (ST
+bodies, documentation) and a type spelled as ST.
 
 The one place both directions share: the front end reads a plc.xml with it (frontend.plcxml,
 frontend.graphical), the PLCopen writer (plcopen/) writes one with it.
@@ -20,6 +20,7 @@ NS = {"ppx": PPX, "xhtml": XHTML}
 ELEMENTARY_TAGS = ("BOOL", "BYTE", "WORD", "DWORD", "LWORD", "SINT", "INT", "DINT", "LINT", "USINT",
                    "UINT", "UDINT", "ULINT", "REAL", "LREAL", "TIME", "DATE", "DT", "TOD")
 
+
 def q(tag: str) -> str:
     """A TC6 element name with its namespace."""
     return f"{{{PPX}}}{tag}"
@@ -37,10 +38,10 @@ def read_formatted_text(el: Optional[etree._Element]) -> Optional[str]:
     return "".join(inner[0].itertext()) if inner else (el.text or "").strip()
 
 
-# --------------------------------------------------------------------------- AST -> XML
-
 def type_text(el: etree._Element, where: str) -> str:
-    """The ST spelling of a dataType-typed element (type, baseType, returnType)."""
+    """The ST spelling of a dataType-typed element (type, baseType, returnType), lengths kept:
+    how the blocks of a project and its variables are typed for the drawing's temporaries
+    (frontend.plcxml spells declarations as the Editor does)."""
     content = [c for c in el if isinstance(c.tag, str)]
     if len(content) != 1:
         raise PlcLabError(f"{where}: a type element needs exactly one child")
@@ -62,26 +63,6 @@ def type_text(el: etree._Element, where: str) -> str:
     if name in ELEMENTARY_TAGS:
         return name
     raise PlcLabError(f"{where}: type <{name}> has no ST form here")
-
-
-def value_text(el: etree._Element) -> str:
-    """The ST initializer of a value-typed element (initialValue, value)."""
-    content = [c for c in el if isinstance(c.tag, str)]
-    if not content:
-        return ""
-    c = content[0]
-    name = local(c)
-    if name == "simpleValue":
-        return c.get("value", "")
-    if name == "arrayValue":
-        items = []
-        for v in c.findall("ppx:value", NS):
-            rep = v.get("repetitionValue")
-            items.append(f"{rep}({value_text(v)})" if rep is not None else value_text(v))
-        return f"[{', '.join(items)}]"
-    if name == "structValue":
-        return "(" + ", ".join(f"{v.get('member')} := {value_text(v)}" for v in c.findall("ppx:value", NS)) + ")"
-    return ""
 
 
 def documented(line: str, doc: Optional[str], indent: str) -> str:
