@@ -5,8 +5,8 @@ so a failed build never leaves a half-written or unchecked program behind:
 1. the variant's ST sources check (diagnostics name the files as they are on disk);
 2. the bundle text, exactly what goes into the .st file, checks too;
 3. the XML project (if asked for) validates against the TC6 schema when the schema is on this
-   machine (see plclab.plcopen.schema), and reads back, through ST and the front end, to the
-   same program as the bundle.
+   machine (see plclab.plcopen.schema), and reads back, as OpenPLC Editor reads it (frontend.plcxml),
+   through ST and the front end, to the same program as the bundle.
 """
 from __future__ import annotations
 
@@ -17,7 +17,7 @@ from typing import Callable, Optional
 from plclab import plcopen
 from plclab.errors import PlcLabError
 from plclab.fileio import check_output, write_bytes
-from plclab.frontend import check_sources
+from plclab.frontend import check_sources, plcxml
 from plclab.frontend.checked import CheckedUnit
 from plclab.stands import bundle, get_stand, sources
 
@@ -47,7 +47,7 @@ def build_outputs(stand: str, variant: str, xml: bool = True, xml_name: Optional
     check_sources(sources(s, variant))
     text = bundle(s, variant)
     if stand == "cnc":
-        from plclab.cnc.gcode import parse_file
+        from plclab.nc.gcode import parse_file
         from plclab.cnc.openplc import STEP_MM, openplc_bundle
 
         program = parse_file(part, tools, STEP_MM) if part is not None else None
@@ -71,7 +71,11 @@ def xml_project(text: str, name: str, where: str,
     tree = plcopen.project_tree(checked, text, name)
     data = plcopen.to_bytes(tree)
     schema = plcopen.validate(tree, where)
-    st_again = plcopen.st_from_tree(plcopen.parse_xml(data, where))
+    try:
+        st_again = plcxml.st_from_tree(plcxml.parse_xml(data, where))   # as OpenPLC Editor reads it
+    except PlcLabError as e:
+        raise PlcLabError(f"{where}: OpenPLC Editor would not make the same program of this PLCopen XML: "
+                          f"{str(e).splitlines()[0]}") from None
     try:
         again = check_sources([(f"{where} (as ST)", st_again)])
     except PlcLabError as e:

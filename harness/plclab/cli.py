@@ -75,7 +75,7 @@ def _tool(text: str) -> tuple[int, float]:
 
 
 def _cmd_cnc(args: argparse.Namespace) -> int:
-    from plclab.cnc.gcode import GcodeError
+    from plclab.nc.gcode import GcodeError
     from plclab.cnc.run import run_cnc
 
     try:
@@ -155,7 +155,7 @@ def _cmd_serve(args: argparse.Namespace) -> int:
             plant = None
     profile = None
     if stand_cfg.profile == "twido":
-        from plclab.modbus.profiles import twido_profile
+        from plclab.stands import twido_profile
         profile = twido_profile(args.stand)
     console = None if args.console == "none" else _host_port(args.console, "--console")
     opts = ServeOptions(srcs, stand_cfg, modbus, plant, stand_cfg.profile, profile, console)
@@ -189,15 +189,21 @@ def _cmd_hmi(args: argparse.Namespace) -> int:
                    commands=None if args.once else sys.stdin)
 
 
+def _plant_params(stand: str) -> dict:
+    """The parameters a plant run for OpenPLC starts with (PSM script, `plant --psm`): the cnc
+    stand's in step with `plclab build cnc`'s fine cycle, the others' none."""
+    if stand != "cnc":
+        return {}
+    from plclab.cnc.openplc import plant_params
+    return plant_params()
+
+
 def _cmd_plant(args: argparse.Namespace) -> int:
     from plclab.modbus.psm import run_plant
 
     psm = _host_port(args.psm, "--psm")
     console = None if args.console == "none" else _host_port(args.console, "--console")
-    params = {}
-    if args.stand == "cnc":                  # as the PSM script: in step with `plclab build cnc`
-        from plclab.cnc.openplc import plant_params
-        params = plant_params()
+    params = _plant_params(args.stand)
     return run_plant(args.stand, psm, console, traceback=bool(os.environ.get("PLCLAB_DEBUG")),
                      out=lambda line: print(line, flush=True), params=params)
 
@@ -205,7 +211,8 @@ def _cmd_plant(args: argparse.Namespace) -> int:
 def _cmd_psm_script(args: argparse.Namespace) -> int:
     from plclab.modbus.psm import psm_script
 
-    sys.stdout.write(psm_script(args.stand, console=_host_port(args.console, "--console")))
+    sys.stdout.write(psm_script(args.stand, console=_host_port(args.console, "--console"),
+                                plant=_plant_params(args.stand)))
     return 0
 
 
@@ -215,7 +222,7 @@ def _cmd_console(args: argparse.Namespace) -> int:
     where = _host_port(args.where, "the console face") if args.where else ("127.0.0.1", CONSOLE_PORT)
     tape = None
     if args.part:
-        from plclab.cnc.gcode import GcodeError
+        from plclab.nc.gcode import GcodeError
         from plclab.cnc.openplc import part_tape
 
         if args.stand != "cnc":
@@ -248,7 +255,7 @@ def _cmd_build(args: argparse.Namespace) -> int:
         from plclab.stands import get_stand
         print(get_stand(args.stand).outline(args.variant), end="")
         return 0
-    from plclab.cnc.gcode import GcodeError
+    from plclab.nc.gcode import GcodeError
 
     try:
         paths = write_build(args.stand, args.variant, args.output, args.xml, part=args.part, method=args.method,

@@ -19,7 +19,7 @@ from __future__ import annotations
 import re
 from typing import Optional
 
-from plclab.cnc.gcode import Frame
+from plclab.nc.gcode import Frame
 from plclab.errors import PlcLabError
 
 OPENPLC_FINE_MS = 5            # ms: the fine cycle in OpenPLC (over 5 times the PSM exchange)
@@ -99,7 +99,7 @@ def part_tape(part: str, method: str = "evalfn", tools: Optional[dict[int, float
     """A part program for the stand's tape reader (`plclab console cnc --part`): the method's
     number, per frame the frame table's nine values in steps (plclab.plants.cnc: TAPE_WORDS
     order), and the part's notes. The same table `plclab cnc` and the bundle's --part load."""
-    from plclab.cnc.gcode import parse_file
+    from plclab.nc.gcode import parse_file
     from plclab.stands.cnc import FRAME_ARRAYS, MAX_FRAMES, frame_table
 
     program = parse_file(part, tools, STEP_MM)

@@ -8,8 +8,8 @@ from dataclasses import dataclass, replace
 from pathlib import Path
 from typing import Optional, Sequence
 
-from plclab.cnc.gcode import Frame, Program, parse_file
-from plclab.cnc.toolpath import HEADER, BlockResult, OffsetResult, check_blocks, check_offsets, path_mm
+from plclab.nc.gcode import Frame, Program, parse_file
+from plclab.nc.toolpath import HEADER, BlockResult, OffsetResult, check_blocks, check_offsets, path_mm
 from plclab.errors import PlcLabError
 from plclab.fileio import check_output, open_atomic, write_text
 

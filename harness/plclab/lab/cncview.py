@@ -1,20 +1,21 @@
-"""How the lab shows the CNC stand (`plclab lab cnc`, docs/lab.md): its console, the feed
-override and backlash settings, the part program it runs, and the table's state for the
-drawing -- the contour, the tool path as it is cut, the contour error against the
-interpolator's bound, the drives' step counters and missed steps.
+"""What the lab shows of the CNC stand (`plclab lab cnc`, docs/lab.md) beyond its console: the
+feed override and backlash settings' actions, the part program it runs, and the table's state
+for the drawing -- the contour, the tool path as it is cut, the contour error against the
+interpolator's bound, the drives' step counters and missed steps. Its look (labels, hints,
+knobs) is in lab/panels.py with the other stands' looks, which uses this module and not the
+other way round.
 
 The part program is parsed and loaded into the PLC's frame table as `plclab cnc` does
 (plclab.stands.cnc.load_frames); the tool path is the table's positions the session's trace
 recorded (the step counters CNT_X / CNT_Y), read incrementally; the error of each visited
 point is its distance to the frame being executed (as the PLC got it, after tool-radius
-correction), and each frame's bound is the one `plclab cnc` checks (plclab.cnc.toolpath).
+correction), and each frame's bound is the one `plclab cnc` checks (plclab.nc.toolpath).
 """
 from __future__ import annotations
 
 import math
 from typing import Any
 
-from plclab.lab.panels import Knob, Look
 from plclab.scenario import Session
 
 MAX_PATH_POINTS = 400       # tool path points sent per snapshot (the rest thinned out)
@@ -35,7 +36,7 @@ class CncPart:
         return {"methods": list(self.methods), "example": SQUARE}
 
     def load(self, s: Session, text: str, name: str, method: str) -> str:
-        from plclab.cnc.gcode import parse
+        from plclab.nc.gcode import parse
         from plclab.stands.cnc import load_frames
         if method not in self.methods:
             raise ValueError(f"method {method!r}: one of {', '.join(self.methods)}")
@@ -93,16 +94,16 @@ def _geometry(f: Any, h: float) -> tuple:
 
 
 def _distance(g: tuple, q: tuple[float, float]) -> float:
-    from plclab.cnc.toolpath import segment_distance
+    from plclab.nc.toolpath import segment_distance
     if g[0] == "arc":
         return abs(math.dist(q, g[1]) - g[2])
     return segment_distance(g[1], g[2], q)
 
 
 def _bound(st: dict, k: int, f: Any, h: float) -> float:
-    """Frame k's error bound, as `plclab cnc` checks it (plclab.cnc.toolpath.check_blocks)."""
+    """Frame k's error bound, as `plclab cnc` checks it (plclab.nc.toolpath.check_blocks)."""
     if k not in st["bound"]:
-        from plclab.cnc.toolpath import check_blocks
+        from plclab.nc.toolpath import check_blocks
         origin = tuple(round(v / h) for v in f.start)
         st["bound"][k] = check_blocks([f], [], h, st["method"], origin=origin)[0].bound_mm
     return st["bound"][k]
@@ -199,28 +200,11 @@ def _polyline(frames: list) -> list[list[float]]:
     return [[round(x, 4), round(y, 4)] for x, y in contour(frames, per_mm=4)]
 
 
-def _override(s: Session, value: int) -> None:
+def set_override(s: Session, value: int) -> None:
     s.plant.set_override(value)
     s.log(f"RP1 feed override {value} %")
 
 
-def _backlash(s: Session, value: int) -> None:
+def set_backlash(s: Session, value: int) -> None:
     s.plant.set_backlash(value)
     s.log(f"backlash {value} steps")
-
-
-CNC_LOOK = Look(
-    hints={"SB1": "start the part program", "SB2": "stop / feed hold", "SA1": "single block",
-           "SB3": "emergency stop: latches when pressed, press again to release", "HL1": "program running",
-           "HL2": "fault / emergency stop"},
-    buttons=frozenset({"SB1", "SB2", "SB3"}),
-    latching=frozenset({"SB3"}),          # a mushroom button: stays pressed until released
-    lamp_groups=("lamps",),
-    fault_texts={"slow_drive": "a drive misses steps above a rate"},
-    fault_params={("slow_drive", "axis"): (("X", "Y", "Z"), "X"), ("slow_drive", "rate"): ((), "1000")},
-    trends=("SB1", "HL1", "CNT_X", "CNT_Y"),
-    knobs=(Knob("RP1", 0, 150, "%", 100, "feed override", _override),
-           Knob("backlash", 0, 50, "steps", 0, "play of every axis's transmission", _backlash)),
-    part=CncPart(),
-    mimic=cnc_mimic,
-)

@@ -285,7 +285,7 @@ class Lab:
 
     def load_part(self, text: str, name: str, method: str) -> str:
         """A CNC part program into the PLC's frame table (plclab.lab.cncview)."""
-        from plclab.cnc.gcode import GcodeError
+        from plclab.nc.gcode import GcodeError
         try:
             return self.panel.part.load(self.session, text, name, method)
         except (GcodeError, ValueError) as e:
@@ -910,7 +910,8 @@ class Lab:
 
     # ------------------------------------------------------------------ thermo registers
     def registers(self) -> list[dict[str, Any]]:
-        from plclab.modbus.profiles import THERMO
+        from plclab.stands import twido_profile
+        THERMO = twido_profile("thermo")
         image = self.session.plc.image
         raw = image.snapshot("MW", 0, max(r.address for r in THERMO.registers) + 1)
         from plclab.modbus.profiles import THERMO_MODES
@@ -925,8 +926,9 @@ class Lab:
         load makes a new process image; the map follows it). `external`: the map an
         external SCADA client writes through, each write (done or refused) in the lab's log."""
         from plclab.modbus.maps import TwidoMap
-        from plclab.modbus.profiles import THERMO
         from plclab.modbus.protocol import ModbusException
+        from plclab.stands import twido_profile
+        THERMO = twido_profile("thermo")
 
         lab = self
 
@@ -1037,7 +1039,7 @@ def read_upload(files: Sequence[tuple[str, Any]]) -> tuple[list[tuple[str, str]]
     element of a drawing. Held to the memory limit of a program run (plclab.limits)."""
     from plclab.frontend import is_project_file
     from plclab.limits import memory_limited
-    from plclab.plcopen.project import source_from_xml       # imported before the limit (lxml maps a lot)
+    from plclab.frontend.plcxml import source_from_xml       # imported before the limit (lxml maps a lot)
     st_texts = [(n, t) for n, t in files if not is_project_file(n)]
     out: list[tuple[str, str]] = []
     errors: list[str] = []

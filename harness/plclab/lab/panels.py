@@ -16,6 +16,7 @@ from dataclasses import dataclass, field
 from typing import Any, Callable, Mapping
 
 from plclab.errors import PlcLabError
+from plclab.lab.cncview import CncPart, cnc_mimic, set_backlash, set_override
 from plclab.scenario import ScenarioFailure, Session
 from plclab.stands.base import StandSpec, stand_spec
 
@@ -373,8 +374,20 @@ THERMO = derive_panel(stand_spec("thermo"), Look(
     mimic=_thermo_mimic,
 ))
 
-from plclab.lab.cncview import CNC_LOOK  # noqa: E402 - the CNC's look builds on the classes above
-
-CNC = derive_panel(stand_spec("cnc"), CNC_LOOK)
+CNC = derive_panel(stand_spec("cnc"), Look(
+    hints={"SB1": "start the part program", "SB2": "stop / feed hold", "SA1": "single block",
+           "SB3": "emergency stop: latches when pressed, press again to release", "HL1": "program running",
+           "HL2": "fault / emergency stop"},
+    buttons=frozenset({"SB1", "SB2", "SB3"}),
+    latching=frozenset({"SB3"}),          # a mushroom button: stays pressed until released
+    lamp_groups=("lamps",),
+    fault_texts={"slow_drive": "a drive misses steps above a rate"},
+    fault_params={("slow_drive", "axis"): (("X", "Y", "Z"), "X"), ("slow_drive", "rate"): ((), "1000")},
+    trends=("SB1", "HL1", "CNT_X", "CNT_Y"),
+    knobs=(Knob("RP1", 0, 150, "%", 100, "feed override", set_override),
+           Knob("backlash", 0, 50, "steps", 0, "play of every axis's transmission", set_backlash)),
+    part=CncPart(),
+    mimic=cnc_mimic,
+))
 
 PANELS = {p.stand: p for p in (MP9C, TUR10, THERMO, CNC)}

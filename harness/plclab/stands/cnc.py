@@ -12,7 +12,7 @@ from dataclasses import dataclass, field, replace
 from pathlib import Path
 from typing import Callable, Optional, Sequence
 
-from plclab.cnc.gcode import Frame, parse
+from plclab.nc.gcode import Frame, parse
 from plclab.scenario import ScenarioFailure, Session
 from plclab.stands import Stand, Task, Variant
 from plclab.stands.base import Fault, FaultParam, StandSpec
@@ -352,7 +352,7 @@ BLANK_TOLERANCE_STEPS = 3      # the holes' centres are measured within a step: 
 
 def _require_on_contour(s: Session, run: "PartRun", method: str) -> None:
     """Every frame of `run` within its bound and at its end point (the scenario's verdict)."""
-    from plclab.cnc.toolpath import check_blocks
+    from plclab.nc.toolpath import check_blocks
 
     if not run.finished:
         raise ScenarioFailure(f"t={s.now:.2f} s: the part program did not end")

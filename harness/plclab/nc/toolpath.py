@@ -18,7 +18,7 @@ import math
 from dataclasses import dataclass
 from typing import Sequence
 
-from plclab.cnc.gcode import Frame
+from plclab.nc.gcode import Frame
 
 INTERPOLATION_CYCLE_S = 0.004      # PRG_CncStand: T = 4 fine cycles of 1 ms
 STEP_DRIVE_FEED = 600.0            # mm/min: the top feed the arcs' bound assumes with step/direction bits
