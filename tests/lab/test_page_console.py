@@ -311,28 +311,30 @@ def test_thermo_modes_by_name_mode_and_setpoint_on_the_drawing_and_the_setpoint_
     page.wait_for_function(f"({ORANGE_PIXELS})('TEMP_ADC') > 20", timeout=WAIT)
 
 
+def press_sb1(lab) -> None:
+    """SB1 on the engine (no page): held 0.3 s of plant time, then 1.5 s more run."""
+    lab.press("SB1", True)
+    lab.advance(0.3)
+    lab.press("SB1", False)
+    lab.advance(1.5)
+
+
 def test_a_press_that_stops_playback_is_not_called_a_refused_start(tmp_path):
     from plclab.lab.engine import Lab
     lab = Lab("mp9c", variant="baseline", work_dir=tmp_path)
     s = lab.session
     s.run(s.tick)
-
-    def tap() -> None:
-        lab.press("SB1", True)
-        lab.advance(0.3)
-        lab.press("SB1", False)
-        lab.advance(1.5)
     lab.set_control("SA5", 1)
     lab.advance(2.0)
-    tap()                                             # frame 1: arm down
+    press_sb1(lab)                                             # frame 1: arm down
     lab.set_control("SA5", 0)
     lab.advance(2.0)
-    tap()                                             # frame 2: arm up
+    press_sb1(lab)                                             # frame 2: arm up
     lab.set_control("SA1", 1)
     lab.advance(0.5)
-    tap()                                             # start: playback runs
+    press_sb1(lab)                                             # start: playback runs
     assert s.value("Running") and lab.start_refused is None
-    tap()                                             # stop: nothing to explain
+    press_sb1(lab)                                             # stop: nothing to explain
     assert not s.value("Running") and lab.start_refused is None
     lab.stop()
 
@@ -342,27 +344,21 @@ def test_tur10_a_refused_start_names_its_mode_switches_and_spare_input(tmp_path)
     lab = Lab("tur10", variant="full", work_dir=tmp_path)     # Task 3: I1.5 enables automatic execution
     s = lab.session
     s.run(s.tick)
-
-    def tap() -> None:
-        lab.press("SB1", True)
-        lab.advance(0.3)
-        lab.press("SB1", False)
-        lab.advance(1.5)
     lab.advance(1.0)
-    tap()                                             # frame 1: where the links are
+    press_sb1(lab)                                             # frame 1: where the links are
     lab.press("SA1 forward", True)
     lab.advance(1.0)
     lab.press("SA1 forward", False)
     lab.advance(0.5)
-    tap()                                             # frame 2: link 1 further forward
+    press_sb1(lab)                                             # frame 2: link 1 further forward
     lab.set_control("SA7", 1)
     lab.advance(0.5)
-    tap()
+    press_sb1(lab)
     assert lab.start_refused == ("SB1 pressed in automatic mode: the program started nothing (DRIVE1..DRIVE5 unchanged "
                                  "1 s after the release). It reads SA7 on (automatic), SA6 off (normal speed), I1.5 off; "
                                  "2 frame(s) recorded. Is one of them off that the program needs on?")
     lab.set_control("I1.5", 1)
     lab.advance(0.5)
-    tap()                                             # now it starts: nothing to explain
+    press_sb1(lab)                                             # now it starts: nothing to explain
     assert lab.start_refused is None
     lab.stop()
