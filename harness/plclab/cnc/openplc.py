@@ -28,26 +28,26 @@ STEP_MM = 0.01                 # the drives' step: GVL_CNC.StepMm's initial valu
 PER_LINE = 12                  # initial values per line of the bundle
 
 
-def plant_params() -> dict[str, float]:
-    """The PSM script's plant for this bundle: its pulse generator spreads a cycle's counts
-    over the program's interpolation cycle T."""
-    return {"pulse_cycle": NFINE * OPENPLC_FINE_MS / 1000.0}
+def plant_params(fine_ms: int = OPENPLC_FINE_MS) -> dict[str, float]:
+    """The PSM script's plant for the bundle of fine cycle `fine_ms`: its pulse generator
+    spreads a cycle's counts over the program's interpolation cycle T."""
+    from plclab.stands.cnc import fine_cycle_params
+    return {"pulse_cycle": fine_cycle_params(fine_ms)["pulse_cycle"]}
 
 
 def openplc_bundle(text: str, frames: Optional[list[Frame]] = None, method: str = "evalfn",
-                   diagonal: bool = False, part: str = "") -> str:
+                   diagonal: bool = False, part: str = "", fine_ms: int = OPENPLC_FINE_MS) -> str:
     """The bundle `text` (plclab.stands.bundle of the cnc stand) made for OpenPLC: the fine
-    cycle OPENPLC_FINE_MS, and with `frames` the part program `part` as the frame table's
-    initial values. Raises PlcLabError if the program is not the shape this relies on."""
-    from plclab.stands.cnc import FRAME_ARRAYS, MAX_FRAMES, frame_table
+    cycle `fine_ms` in the task and FINE_MS (plclab.stands.cnc.with_fine_cycle, the edit
+    `plclab cnc --fine-cycle` runs), and with `frames` the part program `part` as the frame
+    table's initial values. Raises PlcLabError if the program is not the shape this relies on."""
+    from plclab.stands.cnc import FRAME_ARRAYS, MAX_FRAMES, frame_table, with_fine_cycle
 
     _expect(text, r"NFINE : INT := (\d+);", str(NFINE), "NFINE")
     _expect(text, r"StepMm : LREAL := ([\d.]+);", str(STEP_MM), "StepMm")
-    text = _replace(text, r"(TASK FineTask \(INTERVAL := )T#1ms(, )", rf"\g<1>T#{OPENPLC_FINE_MS}ms\g<2>",
-                    "the FineTask of T#1ms")
-    text = _replace(text, r"(FINE_MS : LREAL := )1\.0;", rf"\g<1>{OPENPLC_FINE_MS:.1f};", "FINE_MS := 1.0")
-    note = [f"(* For OpenPLC: PRG_CncStand every {OPENPLC_FINE_MS} ms (FINE_MS = {OPENPLC_FINE_MS}.0), "
-            f"the PSM exchange needs about 1 ms a scan."]
+    text = with_fine_cycle([("bundle", text)], fine_ms)[0][1]
+    note = [f"(* For OpenPLC: PRG_CncStand every {fine_ms} ms (FINE_MS = {fine_ms}.0), the PSM exchange "
+            f"needs about 1 ms a scan;", f"   plclab cnc --fine-cycle {fine_ms} runs the twin at this cycle."]
     if frames is not None:
         if not frames:
             raise PlcLabError(f"{part}: no motion in the part program")

@@ -504,10 +504,11 @@ def _module_source(name: str) -> str:
 
 
 def psm_script(stand: str, *, psm: tuple[str, int] = (DEFAULT_HOST, PSM_PORT),
-               console: tuple[str, int] = (DEFAULT_HOST, CONSOLE_PORT)) -> str:
+               console: tuple[str, int] = (DEFAULT_HOST, CONSOLE_PORT), fine_ms: int | None = None) -> str:
     """The text of an OpenPLC PSM script (core/psm/main.py) that runs `stand`'s plant with
     run_plant(): the PLC Lab modules it needs are embedded, so it depends on no path of this
-    installation and needs nothing but a Python 3 (OpenPLC's own)."""
+    installation and needs nothing but a Python 3 (OpenPLC's own). `fine_ms`: the cnc
+    program's fine cycle (`plclab build cnc --fine-cycle`; default the build's 5 ms)."""
     if stand not in STANDS:
         raise PlcLabError(f"psm-script: unknown stand {stand!r} (one of {', '.join(STANDS)})")
     modules = _EMBEDDED + (f"plclab.plants.{stand}",) + _EMPTY_PACKAGES
@@ -527,7 +528,9 @@ def psm_script(stand: str, *, psm: tuple[str, int] = (DEFAULT_HOST, PSM_PORT),
     plant: dict[str, Any] = {}
     if stand == "cnc":                       # in step with `plclab build cnc`'s fine cycle
         from plclab.cnc.openplc import plant_params
-        plant = plant_params()
+        plant = plant_params() if fine_ms is None else plant_params(fine_ms)
+    elif fine_ms is not None:
+        raise PlcLabError(f"psm-script: --fine-cycle is for the cnc stand, not {stand}")
     return _SCRIPT.format(
         plant=plant, stand=stand, psm_host=psm[0], psm_port=psm[1], console_host=console[0], console_port=console[1],
         face="\n".join(face_lines), packages=packages, embedded="\n".join(lines),
