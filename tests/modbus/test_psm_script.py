@@ -277,19 +277,20 @@ def test_console_part_exits_non_zero_unless_every_frame_is_stored_and_acknowledg
         return subprocess.run([sys.executable, "-m", "plclab.cli", "console", "cnc", where, "--part", str(part),
                                *extra], capture_output=True, text=True, timeout=TIMEOUT)
     try:
-        plc = PlcSide(psm_port, ack=False)
-        r = console("--wait", "0.5")
-        assert r.returncode == 1 and r.stdout == ""
-        assert r.stderr == ("plclab: error: tape: the PLC stored 0 of 3 frames in 0.5 s: it acknowledged none "
-                            "(TAPE_ACK, %QW4; the cnc program must run in OpenPLC, idle, with this PSM script); "
-                            "the part is not loaded (SB1 runs nothing until every frame is stored)\n")
-        plc.close()
         plc = PlcSide(psm_port, ack=True, hl1=True)             # a part runs: HL1 lit
         time.sleep(0.1)
         r = console("--wait", "2")
         assert r.returncode == 1 and r.stderr.count("\n") == 1
         assert r.stderr.startswith("plclab: error: tape: not loaded: a part program is running or held (HL1 lit)")
-        assert plc.close() and not plc.stored                   # nothing was sent to the reader
+        plc.close().close()
+        assert not plc.stored                                   # nothing was put on the reader
+        plc = PlcSide(psm_port, ack=False)
+        r = console("--wait", "0.5")
+        assert r.returncode == 1 and r.stdout == ""
+        assert r.stderr == ("plclab: error: tape: the PLC stored 0 of 3 frames in 0.5 s: it acknowledged none "
+                            "(TAPE_ACK, %QW4; the cnc program must run in OpenPLC, idle, with this PSM script); "
+                            "SB1 runs nothing until every frame is stored (the tape stays on the reader)\n")
+        plc.close().close()
         plc = PlcSide(psm_port, ack=True)
         r = console("--wait", "5")
         assert r.returncode == 0, r.stderr

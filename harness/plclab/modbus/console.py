@@ -282,4 +282,4 @@ def _send_tape(client: ConsoleClient, face: Any, method: int, frames: list[tuple
                f"program must run in OpenPLC, idle, with this PSM script)")
     else:
         why = f"the PLC stored {stored} of {n} frames in {wait:g} s: it stopped acknowledging (TAPE_ACK, %QW4)"
-    raise ConsoleError(f"tape: {why}; the part is not loaded (SB1 runs nothing until every frame is stored)")
+    raise ConsoleError(f"tape: {why}; SB1 runs nothing until every frame is stored (the tape stays on the reader)")
