@@ -14,8 +14,8 @@ What caps the feed is PRG_CncStand's, one fine cycle of `fine_s` at a time:
   step per fine cycle (PRG_CncStand's FeedMax), whatever the direction;
 - DDA and digital integration on the pulse-count drive: PULSE_FEED_MAX steps/s, not the fine
   cycle (the pulse generator spreads a cycle's counts);
-- digital integration accelerates and decelerates (GVL_CNC.Accel): a short frame may not
-  reach the feed at all.
+- digital integration accelerates and decelerates (GVL_CNC.Accel), and so do DDA's arcs
+  (FB_CncIntegCircular): a short frame may not reach the feed at all.
 A rapid (G00) runs at that top rate; it has no programmed feed to miss.
 
 `measure_table` runs the twin (the shipped program) for the table of docs/cnc.md.
@@ -88,9 +88,11 @@ def slow_reason(frame, length_mm: float, feed: float, reached: float, method: st
     cap = top_feed(frame, method, drive, diagonal, fine_s, h)
     if feed > cap.low * (1 + 1e-9):
         return cap.why
-    if method == "integration":
+    if method == "integration" or (method == "dda" and frame.is_arc):
         ramp = (feed / 60.0) ** 2 / ACCEL_MM_S2
-        return (f"digital integration accelerates and decelerates at {ACCEL_MM_S2:g} mm/s^2 (GVL_CNC.Accel): "
+        who = "digital integration" if method == "integration" else \
+            "DDA runs an arc by digital integration (FB_CncIntegCircular), which"
+        return (f"{who} accelerates and decelerates at {ACCEL_MM_S2:g} mm/s^2 (GVL_CNC.Accel): "
                 f"{ramp:.3f} mm of the {length_mm:.3f} mm go to reaching and leaving F{feed:g}")
     cycle = 4 * fine_s
     return (f"the frame is short: its time is rounded to the interpolation cycle ({cycle * 1000:g} ms) "
