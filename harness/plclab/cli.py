@@ -260,7 +260,7 @@ def _cmd_build(args: argparse.Namespace) -> int:
     try:
         paths = write_build(args.stand, args.variant, args.output, args.xml, part=args.part, method=args.method,
                             tools=dict(args.tool or []), report=lambda line: print(line, file=sys.stderr),
-                            fine_cycle=args.fine_cycle)
+                            fine_cycle=args.fine_cycle, drive=args.drive)
     except GcodeError as e:              # already `file:line:col: error: ...`; nothing written
         print(e, file=sys.stderr)
         return 1
@@ -440,6 +440,8 @@ def build_parser() -> argparse.ArgumentParser:
                    help="cnc --part: the interpolator (default evalfn)")
     c.add_argument("--tool", type=_tool, action="append", metavar="DN=R", help="cnc --part: the tool-radius table")
     _fine_cycle_option(c, "cnc: PRG_CncStand's fine cycle, in its task and FINE_MS (default 5, what OpenPLC holds)")
+    c.add_argument("--drive", choices=("step", "pulse"),
+                   help="cnc: step/direction bits (default) or pulse counts (GVL_CNC.PulseDrive: higher feeds)")
     c.set_defaults(func=_cmd_build)
 
     c = sub.add_parser("handout", help="the student's starting program, I/O map and task sheet (no solution)")

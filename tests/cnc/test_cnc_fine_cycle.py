@@ -191,3 +191,31 @@ def test_run_scenario_at_the_openplc_fine_cycle(tmp_path, capsys):
     5 ms, 120 mm/min: 40 s of plant time."""
     assert main(["run", "cnc", "--fine-cycle", "5", "--csv", str(tmp_path / "t.csv")]) == 0
     assert capsys.readouterr().out.splitlines()[-1] == "scenario demo passed (40.0 s of plant time)"
+
+
+def test_the_openplc_build_reaches_a_high_feed_on_the_pulse_count_drive(tmp_path):
+    """What docs/openplc.md tells a user who needs more than 120 mm/min in OpenPLC: DDA on
+    the pulse-count drive (`plclab build cnc full --part P --method dda --drive pulse`). The
+    bundle, run as OpenPLC runs it (5 ms, the PSM script's pulse generator), cuts
+    G01 X20 Y20 F6000 in L / V = 0.283 s; on the step drive the same bundle takes 28.28 mm
+    at 120 mm/min, 14.1 s."""
+    from plclab.build import build_outputs
+    from plclab.cnc.openplc import plant_params
+
+    part = tmp_path / "fast.nc"
+    part.write_text("G21 G90 G17\nG01 X20 Y20 F6000\n", encoding="utf-8")
+    frames = parse(part.read_text(encoding="utf-8")).frames
+    took = {}
+    for drive in ("pulse", "step"):
+        text = build_outputs("cnc", "full", xml=False, part=str(part), method="dda", drive=drive).st_text
+        assert ("PulseDrive : BOOL := TRUE;" in text) == (drive == "pulse")
+        s = cnc.session(program=[("cnc_full.st", text)], **plant_params())
+        run = cnc.PartRun(frames, s.plant.step_mm, start=s.now)
+        s.plant.press("SB1")                                 # the operator, on the console face
+        cnc.record_until(s, run, "ProgramEnd", timeout=30.0, release=("SB1", s.now + 0.02))
+        assert s.plc.read("ProgramEnd") and run.points[-1][2:] == (2000, 2000, 0)
+        assert not any(s.plant.missed().values())
+        took[drive] = run.points[-1][0] - run.start
+    t = 4 * 0.005
+    assert abs(took["pulse"] - 28.2843 / 100.0) <= 2 * t + 0.005, took
+    assert abs(took["step"] - 28.2843 / 2.0) <= t + 0.005, took

@@ -36,11 +36,14 @@ def plant_params(fine_ms: int = OPENPLC_FINE_MS) -> dict[str, float]:
 
 
 def openplc_bundle(text: str, frames: Optional[list[Frame]] = None, method: str = "evalfn",
-                   diagonal: bool = False, part: str = "", fine_ms: int = OPENPLC_FINE_MS) -> str:
+                   diagonal: bool = False, part: str = "", fine_ms: int = OPENPLC_FINE_MS,
+                   drive: str = "step") -> str:
     """The bundle `text` (plclab.stands.bundle of the cnc stand) made for OpenPLC: the fine
     cycle `fine_ms` in the task and FINE_MS (plclab.stands.cnc.with_fine_cycle, the edit
     `plclab cnc --fine-cycle` runs), and with `frames` the part program `part` as the frame
-    table's initial values. Raises PlcLabError if the program is not the shape this relies on."""
+    table's initial values; `drive` "pulse": GVL_CNC.PulseDrive starts TRUE (the pulse-count
+    drive, DDA and digital integration up to PULSE_FEED_MAX). Raises PlcLabError if the
+    program is not the shape this relies on."""
     from plclab.stands.cnc import FRAME_ARRAYS, MAX_FRAMES, frame_table, with_fine_cycle
 
     _expect(text, r"NFINE : INT := (\d+);", str(NFINE), "NFINE")
@@ -48,12 +51,18 @@ def openplc_bundle(text: str, frames: Optional[list[Frame]] = None, method: str 
     text = with_fine_cycle([("bundle", text)], fine_ms)[0][1]
     note = [f"(* For OpenPLC: PRG_CncStand every {fine_ms} ms (FINE_MS = {fine_ms}.0), the PSM exchange "
             f"needs about 1 ms a scan;", f"   plclab cnc --fine-cycle {fine_ms} runs the twin at this cycle."]
+    if drive not in ("step", "pulse"):
+        raise PlcLabError(f"build: unknown drive {drive!r} (step or pulse)")
+    if frames is None and drive == "pulse":
+        at = text.find("\nCONFIGURATION ")
+        text = text[:at] + _replace(text[at:], r"^(\s*PulseDrive : BOOL);", r"\g<1> := TRUE;", "PulseDrive", re.M)
+        note.append("   The pulse-count drive (PulseDrive := TRUE): counts on %QW, spread by the PSM script.")
     if frames is not None:
         if not frames:
             raise PlcLabError(f"{part}: no motion in the part program")
         if len(frames) > MAX_FRAMES:
             raise PlcLabError(f"{part}: {len(frames)} frames: the frame table holds {MAX_FRAMES}")
-        table = frame_table(frames, STEP_MM, method, diagonal)
+        table = frame_table(frames, STEP_MM, method, diagonal, drive)
         at = text.find("\nCONFIGURATION ")
         if at < 0:
             raise PlcLabError("build: the cnc program has no CONFIGURATION for the frame table")
@@ -67,8 +76,8 @@ def openplc_bundle(text: str, frames: Optional[list[Frame]] = None, method: str 
                 else rf"^(\s*{name} : \w+);"
             text = _replace(text, pattern, lambda m, init=init: f"{m.group(1)} := {init};", name, re.M)
         text = head + text
-        note.append(f"   Part program {part}: {len(frames)} frames in the frame table (GVL_CNC), method {method}; "
-                    f"SB1 on the console face runs it.")
+        note.append(f"   Part program {part}: {len(frames)} frames in the frame table (GVL_CNC), method {method}"
+                    + (", the pulse-count drive" if drive == "pulse" else "") + "; SB1 on the console face runs it.")
     first_end = text.index("*)") + 2                   # after the bundle's own first comment
     return text[:first_end] + "\n" + "\n".join(note) + " *)" + text[first_end:]
 
