@@ -219,3 +219,18 @@ def test_the_openplc_build_reaches_a_high_feed_on_the_pulse_count_drive(tmp_path
     t = 4 * 0.005
     assert abs(took["pulse"] - 28.2843 / 100.0) <= 2 * t + 0.005, took
     assert abs(took["step"] - 28.2843 / 2.0) <= t + 0.005, took
+
+
+def test_the_docs_feed_tables_are_what_the_twin_measures():
+    """docs/cnc.md and docs/openplc.md show the reachable feeds the twin measures now
+    (plclab.cnc.feeds.measure_table), not numbers written by hand."""
+    from pathlib import Path
+
+    from plclab.cnc.feeds import measure_table
+
+    measured = "\n".join(measure_table())
+    docs = Path(__file__).resolve().parents[2] / "docs"
+    for name in ("cnc.md", "openplc.md"):
+        text = (docs / name).read_text(encoding="utf-8")
+        block = text.split("<!-- feeds table: python -m plclab.cnc.feeds -->\n")[1]
+        assert block.split("\n<!-- end of the feeds table -->")[0] == measured, name
