@@ -177,6 +177,10 @@ def test_build_and_the_twin_run_one_program_at_one_cycle(tmp_path):
     assert "TASK FineTask (INTERVAL := T#2ms, PRIORITY := 0);" in twin[-1][1]
     assert "FINE_MS : LREAL := 2.0;" in dict(twin)[next(n for n, _ in twin if n.endswith("PRG_CncStand.st"))]
     assert plant_params(2) == {"pulse_cycle": 0.008}
+    from plclab.modbus.psm import psm_script
+    assert "PLANT = {'pulse_cycle': 0.008}" in psm_script("cnc", fine_ms=2)    # the PSM script in step
+    with pytest.raises(PlcLabError, match="--fine-cycle is for the cnc stand"):
+        psm_script("mp9c", fine_ms=2)
     assert "T#5ms" in build_outputs("cnc", "full", xml=False).st_text            # the OpenPLC default
     with pytest.raises(PlcLabError, match=r"--fine-cycle 0: the fine cycle is 1\.\.20 whole ms"):
         cnc.with_fine_cycle(sources(cnc.STAND, "full"), 0)
