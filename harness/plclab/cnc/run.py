@@ -8,7 +8,7 @@ from dataclasses import dataclass, replace
 from pathlib import Path
 from typing import Optional, Sequence
 
-from plclab.cnc.feeds import REACHED_TOLERANCE, reached_feed, slow_reason, top_feed
+from plclab.cnc.feeds import REACHED_TOLERANCE, reached_feed, slow_reason
 from plclab.cnc.gcode import Frame, Program, parse_file
 from plclab.cnc.toolpath import HEADER, BlockResult, OffsetResult, check_blocks, check_offsets, path_mm
 from plclab.errors import PlcLabError
