@@ -4,7 +4,7 @@ virtual time; per frame the contour error against its bound; the tool path as CS
 from __future__ import annotations
 
 import math
-from dataclasses import dataclass, replace
+from dataclasses import dataclass, field, replace
 from pathlib import Path
 from typing import Optional, Sequence
 
@@ -24,12 +24,12 @@ class CncResult:
     finished: bool
     lines: list[str]
     files: list[Path]
-    feeds: list["FrameFeed"] = None      # type: ignore[assignment]  # per frame: programmed and reached
+    feeds: list["FrameFeed"] = field(default_factory=list)     # per frame: programmed and reached
 
     @property
     def slow(self) -> list["FrameFeed"]:
         """The frames whose reached feed is below the programmed one (by REACHED_TOLERANCE)."""
-        return [f for f in self.feeds or [] if f.slow]
+        return [f for f in self.feeds if f.slow]
 
     @property
     def ok(self) -> bool:
@@ -57,7 +57,8 @@ def run_cnc(part: str, method: str = "evalfn", step_mm: float = 0.01, feed: Opti
         raise PlcLabError(f"--step {step_mm}: the drives' step must be 0.001..1 mm")
     if feed is not None and feed <= 0:
         raise PlcLabError(f"--feed {feed}: the feed must be > 0 mm/min")
-    fine_ms = cnc.check_fine_ms(fine_cycle if fine_cycle is not None else round(cnc.FINE_CYCLE_S * 1000))
+    if fine_cycle is not None:
+        cnc.check_fine_ms(fine_cycle)    # else the program's own cycle (the shipped one's: 1 ms)
     for target in (csv, vcd, plot, svg):
         if target:
             check_output(target)         # a bad output is refused before the run
@@ -73,11 +74,11 @@ def run_cnc(part: str, method: str = "evalfn", step_mm: float = 0.01, feed: Opti
         frames = [f if f.kind == 0 else replace(f, feed=feed) for f in frames]
     if not frames:
         raise PlcLabError(f"{part}: no motion in the part program")
-    s = cnc.session(variant, program=srcs, step_mm=step_mm, fine_ms=fine_ms)
+    s = cnc.session(variant, program=srcs, step_mm=step_mm, fine_ms=fine_cycle)
     _check_travel(frames, s.plant)
     length = sum(math.dist(f.start, f.end) if not f.is_arc else 2 * math.pi * math.hypot(f.i, f.j)
                  for f in frames)
-    fine_s = fine_ms / 1000.0
+    fine_s = cnc.fine_cycle_s(s)
     slowest = min(min(f.feed, 60.0 * step_mm / fine_s / math.sqrt(2)) for f in frames) / 60.0
     run = cnc.run_part(s, frames, method, diagonal, timeout=10.0 + 3.0 * length / slowest, drive=drive)
     blocks = check_blocks(run.executed, run.points, step_mm, method, start_time=run.start, drive=drive,
@@ -85,7 +86,7 @@ def run_cnc(part: str, method: str = "evalfn", step_mm: float = 0.01, feed: Opti
     offsets = check_offsets(frames, run.executed, step_mm)
     feeds = [frame_feed(f, b, method, drive, diagonal, fine_s, step_mm) for f, b in zip(run.executed, blocks)]
     lines = list(gcode.notes) + [f"{part}: {len(frames)} frames, method {method}, step {step_mm:g} mm, "
-                                   f"drive {drive}, fine cycle {fine_ms} ms", FRAME_HEADER]
+                                   f"drive {drive}, fine cycle {fine_s * 1000:g} ms", FRAME_HEADER]
     for b, fd in zip(blocks, feeds):
         lines.append(frame_row(b, fd))
         if fd.slow:
