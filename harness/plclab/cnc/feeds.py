@@ -1,4 +1,4 @@
-"""The path feed the CNC stand can reach (docs/cnc.md, "Reachable feeds"), and why a frame
+"""The path feed the CNC stand can reach (docs/cnc.md, "Fine cycle and reachable feeds"), and why a frame
 ran below its programmed feed: what `plclab cnc` says under a frame whose reached feed
 (path length over the frame's time) is more than REACHED_TOLERANCE below the programmed one.
 
