@@ -1,6 +1,7 @@
-"""The path feed the CNC stand can reach (docs/cnc.md, "Fine cycle and reachable feeds"), and why a frame
-ran below its programmed feed: what `plclab cnc` says under a frame whose reached feed
-(path length over the frame's time) is more than REACHED_TOLERANCE below the programmed one.
+"""The path feed the CNC stand can reach (docs/cnc.md, "Fine cycle and reachable feeds"),
+and why a frame ran below its programmed feed: what `plclab cnc` says under a frame whose
+reached feed (path length over the frame's time) is more than REACHED_TOLERANCE below the
+programmed one.
 
 What caps the feed is PRG_CncStand's, one fine cycle of `fine_s` at a time:
 - evaluation function: at most one iteration per fine cycle, each one step of one axis:

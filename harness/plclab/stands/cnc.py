@@ -1,6 +1,7 @@
 """The CNC stand (docs/cnc.md): an X-Y-Z table with step/direction drives run by
-PRG_CncStand in a 1 ms fine-cycle task (or another: with_fine_cycle, `--fine-cycle MS`), executing a part program's frames with the
-evaluation-function, DDA or digital-integration interpolators of textbook chapter 4.
+PRG_CncStand in a 1 ms fine-cycle task (or another: with_fine_cycle, `--fine-cycle MS`),
+executing a part program's frames with the evaluation-function, DDA or digital-integration
+interpolators of textbook chapter 4.
 
 `run_part` loads a part program's frames into the PLC's frame table (GVL_CNC), presses
 SB1 and records the table's path, frame by frame; `plclab cnc` and the scenarios use it.
