@@ -63,3 +63,19 @@ def test_cnc_part_program_cut_over_its_contour_with_error_bound_override_hold_an
     let_time_pass(page, 1.0)
     assert page.locator("#cnc-steps").text_content() == held, "the table moved on during a feed hold"
     assert "program end" not in page.locator("#cnc-state").text_content()
+
+
+def test_cnc_page_runs_the_fine_cycle_openplc_runs(lab_page):
+    """The FINE_MS setting: the program's task and FINE_MS at 5 ms (as `plclab cnc
+    --fine-cycle 5` and the OpenPLC build), downloaded again; the pulse generator follows."""
+    lp = lab_page("cnc", speed=5)
+    page, lab = lp.page, lp.lab
+    assert lab.session.tick == 0.001
+    page.get_by_label("FINE_MS", exact=True).fill("5")
+    expect(page.locator("#actions")).to_contain_text("fine cycle 5 ms (FineTask and FINE_MS; the program restarted)",
+                                                     timeout=WAIT)
+    s = lab.session
+    assert s.tick == 0.005 and s.plant.pulse_cycle == 0.02
+    assert any("FINE_MS : LREAL := 5.0;" in text for _name, text in s.sources)
+    page.get_by_role("button", name="Load part program").click()
+    expect(page.locator("#part-message")).to_have_text("part program loaded: press SB1 to run it", timeout=WAIT)

@@ -100,12 +100,13 @@ def _distance(g: tuple, q: tuple[float, float]) -> float:
     return segment_distance(g[1], g[2], q)
 
 
-def _bound(st: dict, k: int, f: Any, h: float) -> float:
+def _bound(s: Session, st: dict, k: int, f: Any, h: float) -> float:
     """Frame k's error bound, as `plclab cnc` checks it (plclab.nc.toolpath.check_blocks)."""
     if k not in st["bound"]:
         from plclab.nc.toolpath import check_blocks
         origin = tuple(round(v / h) for v in f.start)
-        st["bound"][k] = check_blocks([f], [], h, st["method"], origin=origin)[0].bound_mm
+        from plclab.stands.cnc import fine_cycle_s
+        st["bound"][k] = check_blocks([f], [], h, st["method"], origin=origin, fine_s=fine_cycle_s(s))[0].bound_mm
     return st["bound"][k]
 
 
@@ -161,7 +162,7 @@ def cnc_mimic(s: Session) -> dict[str, Any]:
             st["err"][frame] = max(st["err"].get(frame, 0.0), d)
             error_now = d
     worst = max(st["err"].items(), key=lambda kv: kv[1], default=(None, 0.0))
-    bound = _bound(st, worst[0], contour[worst[0] - 1], h) if worst[0] and contour else None
+    bound = _bound(s, st, worst[0], contour[worst[0] - 1], h) if worst[0] and contour else None
     step = max(1, len(points) // MAX_PATH_POINTS)
     path = [[round(x * h, 4), round(y * h, 4)] for x, y in points[::step]]
     if points and (len(points) - 1) % step:
@@ -208,3 +209,24 @@ def set_override(s: Session, value: int) -> None:
 def set_backlash(s: Session, value: int) -> None:
     s.plant.set_backlash(value)
     s.log(f"backlash {value} steps")
+
+
+def set_fine_cycle(s: Session, value: int) -> None:
+    """PRG_CncStand's fine cycle, as `plclab cnc --fine-cycle` runs it (5 ms: the OpenPLC
+    build's): the program's task and FINE_MS, downloaded again (a cold start; the table stays
+    where it is), and the plant's pulse generator in step with it."""
+    from plclab.errors import PlcLabError
+    from plclab.plants.base import PlantError
+    from plclab.stands.cnc import fine_cycle_params, with_fine_cycle
+
+    try:
+        srcs = with_fine_cycle(s.sources, value)
+    except PlcLabError as e:
+        raise PlantError(str(e)) from None
+    s.tick_ns = None                          # the task's own interval
+    s.load_program(srcs)
+    for name, v in fine_cycle_params(value).items():
+        setattr(s.plant, name, v)
+    _state(s)["bound"] = {}                   # the arcs' bounds follow the interpolation cycle
+    s.log(f"fine cycle {value} ms (FineTask and FINE_MS; the program restarted)")
+

@@ -16,7 +16,7 @@ from dataclasses import dataclass, field
 from typing import Any, Callable, Mapping
 
 from plclab.errors import PlcLabError
-from plclab.lab.cncview import CncPart, cnc_mimic, set_backlash, set_override
+from plclab.lab.cncview import CncPart, cnc_mimic, set_backlash, set_fine_cycle, set_override
 from plclab.scenario import ScenarioFailure, Session
 from plclab.stands.base import StandSpec, stand_spec
 
@@ -385,7 +385,8 @@ CNC = derive_panel(stand_spec("cnc"), Look(
     fault_params={("slow_drive", "axis"): (("X", "Y", "Z"), "X"), ("slow_drive", "rate"): ((), "1000")},
     trends=("SB1", "HL1", "CNT_X", "CNT_Y"),
     knobs=(Knob("RP1", 0, 150, "%", 100, "feed override", set_override),
-           Knob("backlash", 0, 50, "steps", 0, "play of every axis's transmission", set_backlash)),
+           Knob("backlash", 0, 50, "steps", 0, "play of every axis's transmission", set_backlash),
+           Knob("FINE_MS", 1, 20, "ms", 1, "fine cycle (5: as OpenPLC runs it)", set_fine_cycle)),
     part=CncPart(),
     mimic=cnc_mimic,
 ))
