@@ -163,7 +163,7 @@ def test_a_reached_feed_is_ok_and_a_short_integration_frame_names_its_ramps(tmp_
         "frame 1 reached 289 of F300 mm/min (96%): digital integration accelerates and decelerates at 200 mm/s^2")
 
 
-def test_build_and_the_twin_run_one_program_at_one_cycle(tmp_path):
+def test_build_and_the_twin_run_one_program_at_one_cycle(tmp_path, capsys):
     """`plclab build cnc --fine-cycle 2` writes the task and FINE_MS the twin runs with
     `--fine-cycle 2`; a cycle out of range is one line."""
     from plclab.build import build_outputs
@@ -177,10 +177,10 @@ def test_build_and_the_twin_run_one_program_at_one_cycle(tmp_path):
     assert "TASK FineTask (INTERVAL := T#2ms, PRIORITY := 0);" in twin[-1][1]
     assert "FINE_MS : LREAL := 2.0;" in dict(twin)[next(n for n, _ in twin if n.endswith("PRG_CncStand.st"))]
     assert plant_params(2) == {"pulse_cycle": 0.008}
-    from plclab.modbus.psm import psm_script
-    assert "PLANT = {'pulse_cycle': 0.008}" in psm_script("cnc", fine_ms=2)    # the PSM script in step
-    with pytest.raises(PlcLabError, match="--fine-cycle is for the cnc stand"):
-        psm_script("mp9c", fine_ms=2)
+    assert main(["psm-script", "cnc", "--fine-cycle", "2"]) == 0                 # the PSM script in step
+    assert "PLANT = {'pulse_cycle': 0.008}" in capsys.readouterr().out
+    assert main(["psm-script", "mp9c", "--fine-cycle", "2"]) != 0
+    assert "--fine-cycle is for the cnc stand" in capsys.readouterr().err
     assert "T#5ms" in build_outputs("cnc", "full", xml=False).st_text            # the OpenPLC default
     with pytest.raises(PlcLabError, match=r"--fine-cycle 0: the fine cycle is 1\.\.20 whole ms"):
         cnc.with_fine_cycle(sources(cnc.STAND, "full"), 0)

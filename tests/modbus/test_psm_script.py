@@ -275,7 +275,7 @@ def test_console_part_exits_non_zero_unless_every_frame_is_stored_and_acknowledg
 
     def console(*extra):
         return subprocess.run([sys.executable, "-m", "plclab.cli", "console", "cnc", where, "--part", str(part),
-                               *extra], capture_output=True, text=True, timeout=TIMEOUT)
+                               *extra], capture_output=True, text=True, timeout=TIMEOUT + 20)
     try:
         plc = PlcSide(psm_port, ack=True, hl1=True)             # a part runs: HL1 lit
         time.sleep(0.1)
@@ -292,7 +292,7 @@ def test_console_part_exits_non_zero_unless_every_frame_is_stored_and_acknowledg
                             "SB1 runs nothing until every frame is stored (the tape stays on the reader)\n")
         plc.close().close()
         plc = PlcSide(psm_port, ack=True)
-        r = console("--wait", "5")
+        r = console("--wait", "15")
         assert r.returncode == 0, r.stderr
         assert r.stdout.splitlines()[0] == "tape: 3 frames stored and acknowledged by the PLC; SB1 runs them"
         assert plc.stored == [1, 2, 3]
