@@ -20,10 +20,12 @@ from __future__ import annotations
 import contextlib
 import contextvars
 import hashlib
+import io
 import os
 import shutil
 import subprocess
 import sys
+import sysconfig
 import tempfile
 from pathlib import Path
 from typing import Any, Iterator, Optional
@@ -93,41 +95,99 @@ def c_compiler() -> Optional[str]:
     return None
 
 
-def build(source: str) -> Optional[Path]:
-    """The shared library of `source`, from the cache or compiled now; None without a
-    compiler or when the build fails."""
+def build(cprog: CProgram) -> Optional[tuple[Any, Any]]:
+    """(ffi, lib) of a generated program: a CPython extension module (cffi's API mode: the
+    fastest calls) where Python's headers are installed, else a plain shared library loaded
+    through cffi's ABI mode; from the cache, or compiled now. None without a compiler or
+    when the build fails."""
     cc = c_compiler()
     if cc is None:
         _inform("cc", "no C compiler (cc) found for the native scan path")
         return None
-    key = hashlib.sha256("\0".join((source, cc, *CFLAGS)).encode()).hexdigest()[:32]
+    include = sysconfig.get_paths().get("include") or ""
+    api = bool(include) and os.path.exists(os.path.join(include, "Python.h"))
+    ext = (sysconfig.get_config_var("EXT_SUFFIX") or ".so") if api else ".so"
+    key = hashlib.sha256("\0".join((cprog.source, cprog.cdef, cc, *CFLAGS, ext, include,
+                                     f"api={api}")).encode()).hexdigest()[:32]
+    modname = f"_plclab_native_{key}"
+    loaded = _LOADED.get(modname)
+    if loaded is not None:
+        return loaded
     out_dir = cache_dir()
-    lib = out_dir / f"plc_{key}.so"
-    if lib.exists():
-        return lib
+    lib_path = out_dir / f"{modname}{ext}"
+    if not lib_path.exists() and not _compile(cprog, cc, api, include, modname, out_dir, lib_path):
+        return None
+    try:
+        loaded = _load(cprog, api, modname, lib_path)
+    except Exception as e:       # a damaged cache file: built again once
+        try:
+            lib_path.unlink()
+        except OSError:
+            pass
+        if not _compile(cprog, cc, api, include, modname, out_dir, lib_path):
+            return None
+        try:
+            loaded = _load(cprog, api, modname, lib_path)
+        except Exception:
+            _inform("load", f"the native library did not load ({e})")
+            return None
+    _LOADED[modname] = loaded
+    return loaded
+
+
+_LOADED: dict[str, tuple[Any, Any]] = {}
+
+
+def _compile(cprog: CProgram, cc: str, api: bool, include: str, modname: str, out_dir: Path,
+             lib_path: Path) -> bool:
+    import cffi
     try:
         out_dir.mkdir(parents=True, exist_ok=True)
         work = Path(tempfile.mkdtemp(prefix="build-", dir=out_dir))
     except OSError as e:
         _inform("cache", f"cannot write the native cache {out_dir}: {e.strerror}")
-        return None
+        return False
     try:
-        src = work / "plc.c"
-        src.write_text(source)
-        tmp_lib = work / "plc.so"
-        r = subprocess.run([cc, *CFLAGS, "-o", str(tmp_lib), str(src), "-lm"], capture_output=True,
+        src = work / f"{modname}.c"
+        if api:
+            ffi = cffi.FFI()
+            ffi.cdef(cprog.cdef)
+            ffi.set_source(modname, cprog.source)
+            with contextlib.redirect_stdout(io.StringIO()):      # cffi says "generating ..."
+                ffi.emit_c_code(str(src))
+            extra = [f"-I{include}"]
+        else:
+            src.write_text(cprog.source)
+            extra = []
+        tmp_lib = work / lib_path.name
+        r = subprocess.run([cc, *CFLAGS, *extra, "-o", str(tmp_lib), str(src), "-lm"], capture_output=True,
                            text=True, timeout=BUILD_TIMEOUT_S)
         if r.returncode != 0:
             first = (r.stderr.strip().splitlines() or ["?"])[0]
             _inform("build", f"the native build failed ({first})")
-            return None
-        os.replace(tmp_lib, lib)          # atomic: another process sees all of it or nothing
-        return lib
+            return False
+        os.replace(tmp_lib, lib_path)          # atomic: another process sees all of it or nothing
+        return True
     except (OSError, subprocess.SubprocessError) as e:
         _inform("build", f"the native build failed ({e})")
-        return None
+        return False
     finally:
         shutil.rmtree(work, ignore_errors=True)
+
+
+def _load(cprog: CProgram, api: bool, modname: str, lib_path: Path) -> tuple[Any, Any]:
+    if api:
+        import importlib.machinery
+        import importlib.util
+        loader = importlib.machinery.ExtensionFileLoader(modname, str(lib_path))
+        spec = importlib.util.spec_from_file_location(modname, str(lib_path), loader=loader)
+        module = importlib.util.module_from_spec(spec)
+        loader.exec_module(module)
+        return module.ffi, module.lib
+    import cffi
+    ffi = cffi.FFI()
+    ffi.cdef(cprog.cdef)
+    return ffi, ffi.dlopen(str(lib_path))
 
 
 def program_for(compiled: Any) -> Optional["NativeProgram"]:
@@ -145,12 +205,9 @@ def program_for(compiled: Any) -> Optional["NativeProgram"]:
         _inform(f"unsupported:{e}", f"the native scan path does not cover {e}")
         cprog = None
     if cprog is not None:
-        lib = build(cprog.source)
-        if lib is not None:
-            try:
-                result = NativeProgram(cprog, lib)
-            except Exception as e:        # cffi refused the declarations: a bug of cgen
-                _inform("load", f"the native library did not load ({e})")
+        built = build(cprog)
+        if built is not None:
+            result = NativeProgram(cprog, *built)
     try:
         compiled._native = result
     except AttributeError:
@@ -161,12 +218,8 @@ def program_for(compiled: Any) -> Optional["NativeProgram"]:
 class NativeProgram:
     """A loaded native library and the mirror classes of its structs."""
 
-    def __init__(self, cprog: CProgram, lib_path: Path):
-        import cffi
-        self.cprog = cprog
-        self.ffi = cffi.FFI()
-        self.ffi.cdef(cprog.cdef)
-        self.lib = self.ffi.dlopen(str(lib_path))
+    def __init__(self, cprog: CProgram, ffi: Any, lib: Any):
+        self.cprog, self.ffi, self.lib = cprog, ffi, lib
         self._classes: dict[tuple[str, Any], type] = {}
 
     def attach(self, plc: Any) -> Any:
@@ -177,17 +230,67 @@ class NativeProgram:
         st = ffi.new("State *")
         keep = [st]
         g = self.mirror(cprog.layouts["GLOBALS"], st.g, plc.compiled.namespace["G"], keep)
-        sites = cprog.sites
-        for inst in plc.instances:
-            key = type(inst.obj)._ST_NAME.upper()
-            sname = cprog.program_structs[key]
-            p = ffi.new(f"{sname} *")
-            keep.append(p)
-            proxy = self.mirror(cprog.layouts[sname], p[0], inst.obj, keep)
-            proxy._run = _runner(getattr(lib, cprog.run_functions[key]), st, p, plc, sites)
-            inst.obj = proxy
+        keys = [type(inst.obj)._ST_NAME.upper() for inst in plc.instances]
+        if keys != cprog.instances:      # pragma: no cover - cgen follows PLC._setup_instances
+            raise RuntimeError(f"native instances {cprog.instances} are not the PLC's {keys}")
+        for i, inst in enumerate(plc.instances):
+            sname = cprog.program_structs[keys[i]]
+            inst.obj = self.mirror(cprog.layouts[sname], getattr(st, f"inst{i}"), inst.obj, keep)
         plc._native_keep = keep
+        plc._native_state = st
         return g
+
+    def io(self, plc: Any, copy_in: Any, copy_out: Any) -> tuple[Any, Any]:
+        """The image <-> variable copies of PLC._compile_io, done in C inside `scan` (one C
+        call a scan): `_copy_in` gathers the raw input values into a buffer, the C converts
+        them before the programs run and converts the outputs after; `_copy_out` puts them
+        in the image. The Python copy through the mirrors (`copy_in`) stays for the outputs
+        read back after a client wrote them."""
+        ffi, lib = self.ffi, self.lib
+        ins, outs = self.cprog.io_bindings
+        if [(b.area, b.index) for b in plc._inputs] != ins or [(b.area, b.index) for b in plc._outputs] != outs:
+            raise RuntimeError("native I/O bindings are not the PLC's")   # pragma: no cover
+        st = plc._native_state
+        obuf = ffi.new("uint64_t[]", max(1, len(outs)))
+        fresh = [False]           # obuf holds the outputs of the scan just run
+        raw_in: list[Any] = [()]  # the raw inputs gathered for the next scan
+        plc._native_io = (raw_in, obuf, fresh)
+        areas = plc.image.areas
+        ns: dict[str, Any] = {"st": st, "raw_in": raw_in, "obuf": obuf, "io_out": lib.io_out, "fresh": fresh,
+                              "unpack": ffi.unpack, "slow_in": copy_in}
+        for area in {a for a, _i in ins + outs}:
+            ns[f"a_{area}"] = areas[area]       # the area lists are never replaced
+        gather = "".join(f"a_{a}[{i}], " for a, i in ins)
+        lines = ["def _copy_in(external):", f"    raw_in[0] = ({gather})",
+                 "    if external:", "        slow_in(external)"]
+        lines += ["def _copy_out(areas):", "    if fresh[0]:", "        fresh[0] = False",
+                  "    else:", "        io_out(st, obuf)"]
+        if outs:
+            lines.append(f"    v = unpack(obuf, {len(outs)})")
+            for j, (a, i) in enumerate(outs):
+                lines.append(f"    a_{a}[{i}] = v[{j}]")
+        exec(compile("\n".join(lines) + "\n", "<plc-native-io>", "exec"), ns)
+        return ns["_copy_in"], ns["_copy_out"]
+
+    def schedule(self, plc: Any, sched: list) -> list:
+        """PLC._make_schedule's list as one entry: the C `scan` runs every instance whose
+        period divides the tick, between the input and output conversions."""
+        fn, sites = self.lib.scan, self.cprog.sites
+        periods = self.ffi.new("int64_t[]", [p for p, _r in sched] or [1])
+        st = plc._native_state
+        clock = plc.scan_clock
+
+        def run_all() -> None:
+            raw_in, obuf, fresh = plc._native_io
+            try:
+                rc = fn(st, obuf, clock.now, plc.watchdog_s, plc.ticks, periods, *raw_in[0])
+            except (OverflowError, TypeError):     # a raw value past 64 bits: its low 64 bits
+                rc = fn(st, obuf, clock.now, plc.watchdog_s, plc.ticks, periods, *map(_wrap_raw, raw_in[0]))
+            if rc:
+                raise _fault(rc, st, sites, plc)
+            fresh[0] = True
+        plc._native_periods = periods
+        return [(1, run_all)]
 
     def mirror(self, layout: Layout, cdata: Any, pyobj: Any, keep: list) -> Any:
         cls = self._class(layout, type(pyobj), pyobj)
@@ -204,14 +307,10 @@ class NativeProgram:
         return cls
 
 
-def _runner(fn: Any, st: Any, p: Any, plc: Any, sites: list) -> Any:
-    clock = plc.scan_clock
-
-    def run() -> None:
-        rc = fn(st, p, clock.now, plc.watchdog_s)
-        if rc:
-            raise _fault(rc, st, sites, plc)
-    return run
+def _wrap_raw(x: int) -> int:
+    """A raw image value as the C reads it: its low 64 bits (the conversions mask it)."""
+    x = int(x) & 0xFFFFFFFFFFFFFFFF
+    return x - (1 << 64) if x >> 63 else x
 
 
 def _fault(rc: int, st: Any, sites: list, plc: Any) -> PlcFault:
@@ -319,7 +418,7 @@ def _make_class(layout: Layout, pytype: type, pyobj: Any) -> type:
                       f"    @{f.name}.setter\n    def {f.name}(self, v): _assign(self._k['{f.name}'], v)"]
     is_struct = layout.kind == "struct"
     base = "StructMirror" if is_struct else "object"
-    slots = "()" if is_struct else "('_p', '_k', '_names', '_run', '__weakref__')"
+    slots = "()" if is_struct else "('_p', '_k', '_names', '__weakref__')"
     src = f"class Mirror({base}):\n    __slots__ = {slots}\n" + "\n".join(lines) + "\n"
     if not is_struct:
         src += "    def __call__(self):\n        raise TypeError('a native block is called by the C code')\n"

@@ -172,7 +172,9 @@ class PLC:
             period = 1
             if inst.interval_ns:
                 period = max(1, inst.interval_ns // self.tick_ns)
-            sched.append((period, inst.obj._run))
+            sched.append((period, inst.obj._run if self.native is None else None))
+        if self.native is not None:
+            sched = self.native.schedule(self, sched)     # one C call runs them all
         return sched
 
     def _bind_located(self) -> list[LocatedBinding]:
@@ -278,6 +280,8 @@ class PLC:
         lines_out.append("    pass")
         exec(compile("\n".join(lines_in + lines_out) + "\n", "<plc-io>", "exec"), ns)
         self._copy_in, self._copy_out = ns["_copy_in"], ns["_copy_out"]
+        if self.native is not None:
+            self._copy_in, self._copy_out = self.native.io(self, self._copy_in, self._copy_out)
 
     def scan(self) -> bool:
         """Run one tick at the current PLC time; returns False if the PLC is (now) faulted."""
