@@ -27,6 +27,7 @@ import subprocess
 import sys
 import sysconfig
 import tempfile
+import threading
 from pathlib import Path
 from typing import Any, Iterator, Optional
 
@@ -35,7 +36,7 @@ from plclab.runtime.cgen import FAULT_KINDS, CProgram, Layout, Unsupported, emit
 from plclab.runtime.faults import PlcFault
 
 ENV = "PLCLAB_NATIVE"
-CFLAGS = ("-O2", "-shared", "-fPIC", "-fwrapv", "-ffp-contract=off", "-fno-fast-math", "-std=gnu11")
+CFLAGS = ("-O1", "-shared", "-fPIC", "-fwrapv", "-ffp-contract=off", "-fno-fast-math", "-std=gnu11")
 """-fwrapv: signed overflow wraps (as the Python path wraps); -ffp-contract=off: no fused
 multiply-add, every float operation rounds once."""
 BUILD_TIMEOUT_S = 120
@@ -72,6 +73,15 @@ def wanted(requested: Optional[bool] = None) -> bool:
     return setting() is not False
 
 
+def for_plc(compiled: Any, requested: Optional[bool] = None) -> Optional["NativeProgram"]:
+    """What a PLC loading `compiled` scans with: a NativeProgram, or None for the Python
+    path. `requested` True (or PLCLAB_NATIVE=1) builds now and waits; None builds in the
+    background once the program is loaded a second time (program_for)."""
+    if not wanted(requested):
+        return None
+    return program_for(compiled, wait=requested is True or setting() is True)
+
+
 def _inform(key: str, message: str) -> None:
     """One line, once per process, and only when the user asked for native."""
     if setting() is True and key not in _told:
@@ -95,28 +105,40 @@ def c_compiler() -> Optional[str]:
     return None
 
 
-def build(cprog: CProgram) -> Optional[tuple[Any, Any]]:
-    """(ffi, lib) of a generated program: a CPython extension module (cffi's API mode: the
-    fastest calls) where Python's headers are installed, else a plain shared library loaded
-    through cffi's ABI mode; from the cache, or compiled now. None without a compiler or
-    when the build fails."""
-    cc = c_compiler()
-    if cc is None:
-        _inform("cc", "no C compiler (cc) found for the native scan path")
-        return None
+def _key(cprog: CProgram, cc: str) -> tuple[str, bool, str, str]:
+    """(module name, API mode?, Python include dir, file suffix) of a program's library."""
     include = sysconfig.get_paths().get("include") or ""
     api = bool(include) and os.path.exists(os.path.join(include, "Python.h"))
     ext = (sysconfig.get_config_var("EXT_SUFFIX") or ".so") if api else ".so"
     key = hashlib.sha256("\0".join((cprog.source, cprog.cdef, cc, *CFLAGS, ext, include,
                                      f"api={api}")).encode()).hexdigest()[:32]
-    modname = f"_plclab_native_{key}"
+    return f"_plclab_native_{key}", api, include, ext
+
+
+def build(cprog: CProgram, wait: bool = True, later: bool = True) -> Optional[tuple[Any, Any]]:
+    """(ffi, lib) of a generated program: a CPython extension module (cffi's API mode: the
+    fastest calls) where Python's headers are installed, else a plain shared library loaded
+    through cffi's ABI mode; loaded from the cache, or compiled now. With `wait` False a
+    library not built yet is None now, and built in a background thread if `later` (a
+    later load finds it). None also without a compiler or when the build fails."""
+    cc = c_compiler()
+    if cc is None:
+        _inform("cc", "no C compiler (cc) found for the native scan path")
+        return None
+    modname, api, include, ext = _key(cprog, cc)
     loaded = _LOADED.get(modname)
     if loaded is not None:
         return loaded
     out_dir = cache_dir()
     lib_path = out_dir / f"{modname}{ext}"
-    if not lib_path.exists() and not _compile(cprog, cc, api, include, modname, out_dir, lib_path):
-        return None
+    if not lib_path.exists():
+        if not wait:
+            if later:
+                _build_later(cprog, cc, api, include, modname, out_dir, lib_path)
+            return None
+        with _BUILD_LOCK:
+            if not lib_path.exists() and not _compile(cprog, cc, api, include, modname, out_dir, lib_path):
+                return None
     try:
         loaded = _load(cprog, api, modname, lib_path)
     except Exception as e:       # a damaged cache file: built again once
@@ -124,7 +146,7 @@ def build(cprog: CProgram) -> Optional[tuple[Any, Any]]:
             lib_path.unlink()
         except OSError:
             pass
-        if not _compile(cprog, cc, api, include, modname, out_dir, lib_path):
+        if not wait or not _compile(cprog, cc, api, include, modname, out_dir, lib_path):
             return None
         try:
             loaded = _load(cprog, api, modname, lib_path)
@@ -133,6 +155,25 @@ def build(cprog: CProgram) -> Optional[tuple[Any, Any]]:
             return None
     _LOADED[modname] = loaded
     return loaded
+
+
+_BUILD_LOCK = threading.Lock()      # one build at a time in this process
+_STATE_LOCK = threading.Lock()
+_BUILDING: set[str] = set()
+
+
+def _build_later(cprog: CProgram, cc: str, api: bool, include: str, modname: str, out_dir: Path,
+                 lib_path: Path) -> None:
+    with _STATE_LOCK:
+        if modname in _BUILDING:
+            return
+        _BUILDING.add(modname)
+
+    def work() -> None:
+        with _BUILD_LOCK:
+            if not lib_path.exists():
+                _compile(cprog, cc, api, include, modname, out_dir, lib_path)
+    threading.Thread(target=work, name="plclab-native-build", daemon=True).start()
 
 
 _LOADED: dict[str, tuple[Any, Any]] = {}
@@ -190,29 +231,45 @@ def _load(cprog: CProgram, api: bool, modname: str, lib_path: Path) -> tuple[Any
     return ffi, ffi.dlopen(str(lib_path))
 
 
-def program_for(compiled: Any) -> Optional["NativeProgram"]:
-    """The native program of a compiled (Python path) program, built once per compiled
-    program; None when native cannot run it."""
+def program_for(compiled: Any, wait: bool = False) -> Optional["NativeProgram"]:
+    """The native program of a compiled (Python path) program, or None when native does not
+    run it (now). A library is built once per program (its C's hash): with `wait`, now;
+    else in the background from the second load of the same program on, so a program
+    loaded once (a unit test, one `plclab sim`) costs no build, and one loaded again and
+    again (grading, exploration, restarts) scans natively as soon as its build is done."""
     cached = getattr(compiled, "_native", None)
+    if isinstance(cached, NativeProgram):
+        return cached
     if cached is _FAILED:
         return None
-    if cached is not None:
-        return cached
-    result: Any = _FAILED
+    if isinstance(cached, CProgram):
+        cprog = cached
+    else:
+        try:
+            cprog = emit_c(compiled.checked)
+        except Unsupported as e:
+            _inform(f"unsupported:{e}", f"the native scan path does not cover {e}")
+            _remember(compiled, _FAILED)
+            return None
+    digest = hashlib.sha256(cprog.source.encode()).hexdigest()
+    _SEEN[digest] = _SEEN.get(digest, 0) + 1
+    built = build(cprog, wait=wait, later=_SEEN[digest] >= 2)
+    if built is None:
+        _remember(compiled, cprog)       # not now; a later load may find the library built
+        return None
+    result = NativeProgram(cprog, *built)
+    _remember(compiled, result)
+    return result
+
+
+_SEEN: dict[str, int] = {}
+
+
+def _remember(compiled: Any, value: Any) -> None:
     try:
-        cprog = emit_c(compiled.checked)
-    except Unsupported as e:
-        _inform(f"unsupported:{e}", f"the native scan path does not cover {e}")
-        cprog = None
-    if cprog is not None:
-        built = build(cprog)
-        if built is not None:
-            result = NativeProgram(cprog, *built)
-    try:
-        compiled._native = result
+        compiled._native = value
     except AttributeError:
         pass
-    return None if result is _FAILED else result
 
 
 class NativeProgram:

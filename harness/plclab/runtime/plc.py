@@ -95,7 +95,7 @@ class PLC:
                  native: Optional[bool] = None):
         self.compiled = compiled
         # the native scan path (plclab.runtime.native): None where it cannot run this program
-        self.native = _native.program_for(compiled) if _native.wanted(native) else None
+        self.native = _native.for_plc(compiled, native)
         self.checked: CheckedUnit = compiled.checked
         if self.checked.scope_count > 1:
             raise PlcLabError("these files hold the globals of several stands (GVL files): "
