@@ -972,6 +972,9 @@ class CGen:
             if not isinstance(t, T.ElementaryType):
                 raise Unsupported(f"{name} on {getattr(t, 'name', t)}")
         rc = _CTYPE[rb.name]
+        # each argument as its parameter's type, as the C call converts it (a double
+        # expression passed as a REAL is rounded to float first: Python's expr_as)
+        codes = [f"(({_CTYPE[t.name]})({code}))" for code, t in zip(codes, types)]
         if name.count("_TO_") == 1 and len(codes) == 1:
             if any(n not in T.ELEMENTARY for n in name.split("_TO_")):
                 raise Unsupported(f"standard function {name}")

@@ -105,10 +105,16 @@ def c_compiler() -> Optional[str]:
     return None
 
 
+PREFER_API = True
+"""Build a CPython extension (cffi's API mode) where Python's headers are. The program's C is
+the same either way; the semantics tests build plain libraries (ABI mode), a third of the
+build time for their hundreds of small programs."""
+
+
 def _key(cprog: CProgram, cc: str) -> tuple[str, bool, str, str]:
     """(module name, API mode?, Python include dir, file suffix) of a program's library."""
     include = sysconfig.get_paths().get("include") or ""
-    api = bool(include) and os.path.exists(os.path.join(include, "Python.h"))
+    api = PREFER_API and bool(include) and os.path.exists(os.path.join(include, "Python.h"))
     ext = (sysconfig.get_config_var("EXT_SUFFIX") or ".so") if api else ".so"
     key = hashlib.sha256("\0".join((cprog.source, cprog.cdef, cc, *CFLAGS, ext, include,
                                      f"api={api}")).encode()).hexdigest()[:32]
@@ -350,16 +356,21 @@ class NativeProgram:
         return [(1, run_all)]
 
     def mirror(self, layout: Layout, cdata: Any, pyobj: Any, keep: list) -> Any:
-        cls = self._class(layout, type(pyobj), pyobj)
+        """A mirror of the C struct `cdata`; its values copied from `pyobj` (None: a view of
+        what the C holds, e.g. the variable a VAR_IN_OUT points at)."""
+        cls = self._class(layout, type(pyobj) if pyobj is not None else T.StructValue, pyobj)
         proxy = cls.__new__(cls)
         _init_proxy(self, proxy, layout, cdata, pyobj, keep)
         return proxy
+
+    def view(self, layout: Layout, cdata: Any) -> Any:
+        return self.mirror(layout, cdata, None, [])
 
     def _class(self, layout: Layout, pytype: type, pyobj: Any) -> type:
         key = (layout.cname, pytype)
         cls = self._classes.get(key)
         if cls is None:
-            cls = _make_class(layout, pytype, pyobj)
+            cls = _make_class(self, layout, pytype, pyobj)
             self._classes[key] = cls
         return cls
 
@@ -461,8 +472,13 @@ def _assign(dst: Any, value: Any) -> None:
             setattr(dst, name, v)
 
 
-def _make_class(layout: Layout, pytype: type, pyobj: Any) -> type:
-    names = [f.name for f in layout.fields if f.kind != "ref" and hasattr(pyobj, f.name)]
+def _exposed(layout: Layout, pyobj: Any) -> list[str]:
+    """The variables a mirror shows: those its Python twin has (all, for a view)."""
+    return [f.name for f in layout.fields if pyobj is None or hasattr(pyobj, f.name)]
+
+
+def _make_class(np: "NativeProgram", layout: Layout, pytype: type, pyobj: Any) -> type:
+    names = _exposed(layout, pyobj)
     lines = []
     for f in layout.fields:
         if f.name not in names:
@@ -470,6 +486,8 @@ def _make_class(layout: Layout, pytype: type, pyobj: Any) -> type:
         if f.kind == "scalar":
             lines += [f"    @property\n    def {f.name}(self): return self._p.{f.cname}",
                       f"    @{f.name}.setter\n    def {f.name}(self, v): self._p.{f.cname} = v"]
+        elif f.kind == "ref":         # a VAR_IN_OUT: what the last call passed (None before)
+            lines += [f"    @property\n    def {f.name}(self): return _ref(self, {f.name!r})"]
         else:
             lines += [f"    @property\n    def {f.name}(self): return self._k['{f.name}']",
                       f"    @{f.name}.setter\n    def {f.name}(self, v): _assign(self._k['{f.name}'], v)"]
@@ -479,30 +497,65 @@ def _make_class(layout: Layout, pytype: type, pyobj: Any) -> type:
     src = f"class Mirror({base}):\n    __slots__ = {slots}\n" + "\n".join(lines) + "\n"
     if not is_struct:
         src += "    def __call__(self):\n        raise TypeError('a native block is called by the C code')\n"
-    ns: dict[str, Any] = {"StructMirror": StructMirror, "_assign": _assign}
+    ns: dict[str, Any] = {"StructMirror": StructMirror, "_assign": _assign, "_ref": _ref}
     exec(compile(src, f"<plc-native-{layout.cname}>", "exec"), ns)
     cls = ns["Mirror"]
     cls.__name__ = cls.__qualname__ = getattr(pytype, "__name__", layout.cname)
+    cls._np = np
+    cls._fields = {f.name: f for f in layout.fields}
     if not is_struct:
         # what the runtime reads of a program / block class: its variables and ST name
-        cls.__slots__ = getattr(pytype, "__slots__", tuple(names))
+        cls.__slots__ = getattr(pytype, "__slots__", tuple(n for n in names if n not in ("EN", "ENO")))
         cls._ST_NAME = getattr(pytype, "_ST_NAME", layout.st_name)
     return cls
 
 
+class ScalarRef:
+    """A scalar VAR_IN_OUT as the Python path shows it (compiler.Ref): get() / set()."""
+
+    __slots__ = ("_ptr",)
+
+    def __init__(self, ptr: Any):
+        self._ptr = ptr
+
+    def get(self) -> Any:
+        return self._ptr[0]
+
+    def set(self, value: Any) -> None:
+        self._ptr[0] = value
+
+
+def _ref(obj: Any, name: str) -> Any:
+    cls = type(obj)
+    f, np = cls._fields[name], cls._np
+    ptr = getattr(obj._p, f.cname)
+    if ptr == np.ffi.NULL:
+        return None
+    if isinstance(f.ty, T.ArrayType):
+        m = ArrayMirror()
+        m._a, m._n = np.ffi.cast(f"{f.sub}(*)[{f.ty.size}]", ptr)[0], f.ty.size   # an array, not a pointer
+        sub = np.cprog.layouts.get(f.sub)
+        m._items = None if sub is None else [np.view(sub, ptr[i]) for i in range(m._n)]
+        return m
+    if isinstance(f.ty, T.StructType):
+        return np.view(np.cprog.layouts[f.sub], ptr[0])
+    return ScalarRef(ptr)
+
+
 def _init_proxy(np: NativeProgram, proxy: Any, layout: Layout, cdata: Any, pyobj: Any, keep: list) -> None:
-    cls = type(proxy)
-    names = [f.name for f in layout.fields if f.kind != "ref" and hasattr(pyobj, f.name)]
+    """Point `proxy` at `cdata`; with a Python twin `pyobj`, copy its values into the C."""
+    names = _exposed(layout, pyobj)
     proxy._p = cdata
-    proxy._names = names
+    proxy._names = [f.name for f in layout.fields if f.name in names and f.kind != "ref"]
     kids: dict[str, Any] = {}
     proxy._k = kids
     for f in layout.fields:
-        if f.name not in names:
+        if f.name not in names or f.kind == "ref":
             continue
-        value = getattr(pyobj, f.name)
+        value = getattr(pyobj, f.name) if pyobj is not None else None
         if f.kind == "scalar":
-            setattr(cdata, f.cname, value)
+            if pyobj is not None:
+                setattr(cdata, f.cname, value)
         elif f.kind in ("struct", "fb"):
             kids[f.name] = np.mirror(np.cprog.layouts[f.sub], getattr(cdata, f.cname), value, keep)
         elif f.kind == "array":
@@ -511,12 +564,13 @@ def _init_proxy(np: NativeProgram, proxy: Any, layout: Layout, cdata: Any, pyobj
             m._a, m._n = arr, f.size
             if f.sub_kind == "scalar":
                 m._items = None
-                arr[0:f.size] = list(value)
+                if pyobj is not None:
+                    arr[0:f.size] = list(value)
             else:
                 sub = np.cprog.layouts[f.sub]
-                m._items = [np.mirror(sub, arr[i], value[i], keep) for i in range(f.size)]
+                m._items = [np.mirror(sub, arr[i], value[i] if value is not None else None, keep)
+                            for i in range(f.size)]
             kids[f.name] = m
-    del cls
 
 
 __all__ = ["ENV", "NativeProgram", "build", "cache_dir", "program_for", "python_only", "setting", "wanted"]
