@@ -304,30 +304,26 @@ class NativeProgram:
         return g
 
     def io(self, plc: Any, copy_in: Any, copy_out: Any) -> tuple[Any, Any]:
-        """The image <-> variable copies of PLC._compile_io, done in C inside `scan` (one C
-        call a scan): `_copy_in` gathers the raw input values into a buffer, the C converts
-        them before the programs run and converts the outputs after; `_copy_out` puts them
-        in the image. The Python copy through the mirrors (`copy_in`) stays for the outputs
-        read back after a client wrote them."""
+        """The image <-> variable copies of PLC._compile_io, converted in C: one call with the
+        raw input values, one that fills a buffer with the raw output values. At the same
+        stages of the scan as on the Python path, so what runs between them (the lab's
+        forces) sees the same. The Python copy through the mirrors (`copy_in`) stays for the
+        outputs read back after a client wrote them."""
         ffi, lib = self.ffi, self.lib
         ins, outs = self.cprog.io_bindings
         if [(b.area, b.index) for b in plc._inputs] != ins or [(b.area, b.index) for b in plc._outputs] != outs:
             raise RuntimeError("native I/O bindings are not the PLC's")   # pragma: no cover
-        st = plc._native_state
         obuf = ffi.new("uint64_t[]", max(1, len(outs)))
-        fresh = [False]           # obuf holds the outputs of the scan just run
-        raw_in: list[Any] = [()]  # the raw inputs gathered for the next scan
-        plc._native_io = (raw_in, obuf, fresh)
-        areas = plc.image.areas
-        ns: dict[str, Any] = {"st": st, "raw_in": raw_in, "obuf": obuf, "io_out": lib.io_out, "fresh": fresh,
-                              "unpack": ffi.unpack, "slow_in": copy_in}
+        ns: dict[str, Any] = {"st": plc._native_state, "obuf": obuf, "io_in": lib.io_in, "io_out": lib.io_out,
+                              "unpack": ffi.unpack, "slow_in": copy_in, "wrap": _wrap_raw}
         for area in {a for a, _i in ins + outs}:
-            ns[f"a_{area}"] = areas[area]       # the area lists are never replaced
+            ns[f"a_{area}"] = plc.image.areas[area]       # the area lists are never replaced
         gather = "".join(f"a_{a}[{i}], " for a, i in ins)
-        lines = ["def _copy_in(external):", f"    raw_in[0] = ({gather})",
-                 "    if external:", "        slow_in(external)"]
-        lines += ["def _copy_out(areas):", "    if fresh[0]:", "        fresh[0] = False",
-                  "    else:", "        io_out(st, obuf)"]
+        lines = ["def _copy_in(external):", "    try:", f"        io_in(st, {gather})",
+                 "    except (OverflowError, TypeError):      # a raw value past 64 bits: its low 64 bits",
+                 f"        io_in(st, *map(wrap, ({gather})))",
+                 "    if external:", "        slow_in(external)",
+                 "def _copy_out(areas):", "    io_out(st, obuf)"]
         if outs:
             lines.append(f"    v = unpack(obuf, {len(outs)})")
             for j, (a, i) in enumerate(outs):
@@ -336,22 +332,17 @@ class NativeProgram:
         return ns["_copy_in"], ns["_copy_out"]
 
     def schedule(self, plc: Any, sched: list) -> list:
-        """PLC._make_schedule's list as one entry: the C `scan` runs every instance whose
-        period divides the tick, between the input and output conversions."""
+        """PLC._make_schedule's list as one entry: one C call runs every instance whose
+        period divides the tick, in declaration order."""
         fn, sites = self.lib.scan, self.cprog.sites
         periods = self.ffi.new("int64_t[]", [p for p, _r in sched] or [1])
         st = plc._native_state
         clock = plc.scan_clock
 
         def run_all() -> None:
-            raw_in, obuf, fresh = plc._native_io
-            try:
-                rc = fn(st, obuf, clock.now, plc.watchdog_s, plc.ticks, periods, *raw_in[0])
-            except (OverflowError, TypeError):     # a raw value past 64 bits: its low 64 bits
-                rc = fn(st, obuf, clock.now, plc.watchdog_s, plc.ticks, periods, *map(_wrap_raw, raw_in[0]))
+            rc = fn(st, clock.now, plc.watchdog_s, plc.ticks, periods)
             if rc:
                 raise _fault(rc, st, sites, plc)
-            fresh[0] = True
         plc._native_periods = periods
         return [(1, run_all)]
 
