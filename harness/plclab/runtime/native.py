@@ -11,9 +11,10 @@ cover the program, the Python path runs (silently; one line on stderr when PLCLA
 asked for native).
 
 Turning it off: PLCLAB_NATIVE=0 in the environment, `PLC(..., native=False)`, or
-`python_only()` around the code that must see Python frames (the grader's line tracer). Built libraries are cached by the hash of their C
-in $XDG_CACHE_HOME/plclab/native (default ~/.cache/plclab/native); a build writes a temporary
-file and renames it, so concurrent processes never load a half-written library.
+`python_only()` around the code that must see Python frames (the grader's line tracer).
+Built libraries are cached by the hash of their C in $XDG_CACHE_HOME/plclab/native (default
+~/.cache/plclab/native); a build writes a temporary file and renames it, so concurrent
+processes never load a half-written library. User-facing: docs/runtime.md.
 """
 from __future__ import annotations
 
@@ -142,8 +143,11 @@ def build(cprog: CProgram, wait: bool = True, later: bool = True) -> Optional[tu
             if later:
                 _build_later(cprog, cc, api, include, modname, out_dir, lib_path)
             return None
+        if modname in _BROKEN:
+            return None
         with _BUILD_LOCK:
             if not lib_path.exists() and not _compile(cprog, cc, api, include, modname, out_dir, lib_path):
+                _BROKEN.add(modname)         # tried once in this process: the Python path from now on
                 return None
     try:
         loaded = _load(cprog, api, modname, lib_path)
@@ -168,6 +172,18 @@ _STATE_LOCK = threading.Lock()
 _BUILDING: set[str] = set()
 
 
+def _after_fork_in_child() -> None:
+    """A forked worker (grade-class) has no build thread of its parent: fresh locks, and the
+    builds the parent started are looked for on disk again."""
+    global _BUILD_LOCK, _STATE_LOCK
+    _BUILD_LOCK, _STATE_LOCK = threading.Lock(), threading.Lock()
+    _BUILDING.clear()
+
+
+if hasattr(os, "register_at_fork"):
+    os.register_at_fork(after_in_child=_after_fork_in_child)
+
+
 def _build_later(cprog: CProgram, cc: str, api: bool, include: str, modname: str, out_dir: Path,
                  lib_path: Path) -> None:
     with _STATE_LOCK:
@@ -183,6 +199,7 @@ def _build_later(cprog: CProgram, cc: str, api: bool, include: str, modname: str
 
 
 _LOADED: dict[str, tuple[Any, Any]] = {}
+_BROKEN: set[str] = set()
 
 
 def _compile(cprog: CProgram, cc: str, api: bool, include: str, modname: str, out_dir: Path,
