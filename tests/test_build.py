@@ -15,11 +15,12 @@ import pytest
 from lxml import etree
 
 from plclab import plcopen
+from plclab.frontend import plcxml
 from plclab.build import build_outputs, write_build, xml_project
 from plclab.errors import CompileError, PlcLabError
 from plclab.frontend import check_sources, load_files
 from plclab.plcopen import schema as schema_mod
-from plclab.plcopen.configuration import interval_literal
+from plclab.frontend.plcxml import interval_literal
 from plclab.plcopen.source import SourceText
 from plclab.stands import PLC_DIR, bundle, get_stand
 
@@ -29,7 +30,13 @@ CASES = Path(__file__).parent / "frontend" / "cases" / "valid"
 # valid ST that TC6 v2.01 has no element or attribute for: refused with one clear line
 NO_TC6_FORM = {"config_program_without_task.st": "RETAIN of program instance",
                "config_single_resource.st": "named RESOURCE",
-               "var_located_anonymous.st": "unnamed located variable"}
+               "var_located_anonymous.st": "unnamed located variable",
+               # forms OpenPLC Editor reads as another program (docs/ladder.md, the Editor's rules)
+               "pou_fb_instance_init.st": "variable t: TON instance with an initial value: OpenPLC Editor drops it",
+               "type_anonymous_enum_var.st": "variable state: an inline <enum> type",
+               "type_strings.st": "variable short: STRING[10]: OpenPLC Editor drops the length",
+               "type_struct_initial_values.st": "field dir: an inline <enum> type",
+               "type_subrange.st": "variable level: an inline <subrangeUnsigned> type"}
 
 
 @pytest.fixture(scope="module")
@@ -96,7 +103,7 @@ def test_tc6_model_check_refuses_unknown_and_missing_elements(built):
 def test_xml_reads_back_to_the_same_program(built, variant):
     st, xml = built[variant]
     original = load_files([st])
-    again = check_sources([(f"{xml.name} (as ST)", plcopen.st_from_xml(xml))])
+    again = check_sources([(f"{xml.name} (as ST)", plcxml.st_from_xml(xml))])
     assert plcopen.first_difference(original, again) is None
     # the same POU names and kinds, tasks and instances, said plainly
     assert [(p.kind, p.name) for p in again.unit.pous] == [(p.kind, p.name) for p in original.unit.pous]
@@ -180,7 +187,7 @@ TYPE
     T_Pct : INT (-10..110) := 50;
     T_Code : UINT (1..9);
     T_Speed : INT := 500;
-    T_Name : STRING[12] := 'mp9c';
+    T_Name : STRING := 'mp9c';        (* no length: OpenPLC Editor would drop it *)
     T_Grid : ARRAY[1..2, 0..3] OF INT := [1, 2, 6(0)];
     ST_Point : STRUCT
         X : REAL := 1.5;
@@ -211,11 +218,11 @@ VAR_TEMP
     Scratch : INT;
 END_VAR
 VAR
-    Delay : TON := (PT := T#2s);
+    Delay : TON;                      (* no initial value: OpenPLC Editor would drop it *)
     Where : ST_Point := (X := 2.0, Mode := FAULT);
 END_VAR
 Scratch := 1;
-Delay(IN := Set);
+Delay(IN := Set, PT := T#2s);
 Q := Delay.Q AND Scratch = 1;
 END_FUNCTION_BLOCK
 
@@ -284,7 +291,7 @@ def test_every_type_kind_and_value_maps_to_tc6():
     assert t["T_Code"].find("ppx:baseType/ppx:subrangeUnsigned/ppx:baseType/ppx:UINT", NS) is not None
     assert t["T_Speed"].find("ppx:baseType/ppx:INT", NS) is not None                     # alias
     assert t["T_Speed"].find("ppx:initialValue/ppx:simpleValue", NS).get("value") == "500"
-    assert t["T_Name"].find("ppx:baseType/ppx:string", NS).get("length") == "12"
+    assert t["T_Name"].find("ppx:baseType/ppx:string", NS) is not None
     grid = t["T_Grid"].find("ppx:baseType/ppx:array", NS)
     assert [(d.get("lower"), d.get("upper")) for d in grid.findall("ppx:dimension", NS)] == [("1", "2"), ("0", "3")]
     items = t["T_Grid"].findall("ppx:initialValue/ppx:arrayValue/ppx:value", NS)
@@ -301,8 +308,9 @@ def test_every_type_kind_and_value_maps_to_tc6():
     assert holder.find("ppx:tempVars/ppx:variable", NS).get("name") == "Scratch"
     delay = holder.find("ppx:localVars/ppx:variable[@name='Delay']", NS)
     assert delay.find("ppx:type/ppx:derived", NS).get("name") == "TON"
-    member = delay.find("ppx:initialValue/ppx:structValue/ppx:value", NS)
-    assert (member.get("member"), member.find("ppx:simpleValue", NS).get("value")) == ("PT", "T#2s")
+    where = holder.find("ppx:localVars/ppx:variable[@name='Where']", NS)
+    member = where.find("ppx:initialValue/ppx:structValue/ppx:value", NS)
+    assert (member.get("member"), member.find("ppx:simpleValue", NS).get("value")) == ("X", "2.0")
     main = pous["PRG_Main"].find("ppx:interface", NS)
     assert main.find("ppx:localVars/ppx:variable[@name='Out']", NS).get("address") == "%QW0"
     assert main.find("ppx:localVars/ppx:variable[@name='Stamp']/ppx:type/ppx:TOD", NS) is not None
@@ -376,8 +384,8 @@ def test_xml_that_is_not_valid_tc6_is_refused_with_the_first_schema_error(tmp_pa
 
 
 def test_xml_that_reads_back_differently_is_refused(tmp_path, monkeypatch):
-    real = plcopen.st_from_tree
-    monkeypatch.setattr(plcopen, "st_from_tree", lambda tree: real(tree).replace("T#10ms", "T#20ms"))
+    real = plcxml.st_from_tree
+    monkeypatch.setattr(plcxml, "st_from_tree", lambda tree: real(tree).replace("T#10ms", "T#20ms"))
     with pytest.raises(PlcLabError) as e:
         write_build("mp9c", "task1", str(tmp_path / "t.st"), str(tmp_path / "t.xml"))
     msg = str(e.value)
@@ -441,7 +449,7 @@ IF t1.Q THEN lamp := NOT lamp; END_IF;
 def test_st_from_xml_reads_a_file_written_by_the_editor(tmp_path):
     path = tmp_path / "plc.xml"
     path.write_bytes(BEREMIZ_STYLE)
-    text = plcopen.st_from_xml(path)
+    text = plcxml.st_from_xml(path)
     unit = check_sources([("plc.xml (as ST)", text)])
     assert [p.name for p in unit.unit.pous] == ["blink"]
     assert unit.config.resources[0].tasks[0].interval_ns == 20_000_000
@@ -459,11 +467,11 @@ def test_st_from_xml_refuses_what_is_not_a_tc6_project(tmp_path):
     bad = tmp_path / "bad.xml"
     bad.write_text("<project><unclosed></project>", encoding="utf-8")
     with pytest.raises(PlcLabError, match="not well-formed XML"):
-        plcopen.st_from_xml(bad)
+        plcxml.st_from_xml(bad)
     other = tmp_path / "other.xml"
     other.write_text("<html/>", encoding="utf-8")
     with pytest.raises(PlcLabError, match="not a PLCopen TC6"):
-        plcopen.st_from_xml(other)
+        plcxml.st_from_xml(other)
 
 
 def test_build_without_xml_is_only_the_bundle():

@@ -5,6 +5,7 @@ from __future__ import annotations
 import pytest
 
 from plclab import plcopen
+from plclab.frontend import plcxml
 from plclab.build import write_build
 from plclab.frontend import check_sources, load_files
 from plclab.plcopen import schema
@@ -20,5 +21,5 @@ def test_every_program_builds_to_a_loadable_bundle_and_a_valid_xml(stand, varian
     assert bundle.config is not None and bundle.config.name == "Config0"
     assert [r.name for r in bundle.config.resources] == ["Res0"]
     schema.validate_bindings(xml.read_bytes(), xml.name)
-    again = check_sources([("plc.xml (as ST)", plcopen.st_from_xml(xml))])
+    again = check_sources([("plc.xml (as ST)", plcxml.st_from_xml(xml))])
     assert plcopen.first_difference(bundle, again) is None

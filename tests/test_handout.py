@@ -59,8 +59,9 @@ def test_handout_is_the_checked_starting_program_map_and_sheet(stand, tmp_path, 
     editor = out / f"{stand}-openplc"
     assert sorted(p.name for p in editor.iterdir()) == ["beremiz.xml", "plc.xml"]
     from plclab import plcopen
+    from plclab.frontend import plcxml
     from plclab.frontend import load_files
-    tree = plcopen.parse_xml((editor / "plc.xml").read_bytes(), "plc.xml")
+    tree = plcxml.parse_xml((editor / "plc.xml").read_bytes(), "plc.xml")
     plcopen.validate(tree, "plc.xml")
     assert plcopen.first_difference(check_sources([(str(out / FILES[stand]), st)]),
                                     load_files([editor / "plc.xml"])) is None

@@ -14,9 +14,11 @@ import pytest
 
 from plclab.hmi import ThermoHmi, run_hmi
 from plclab.modbus.maps import TwidoMap
-from plclab.modbus.profiles import THERMO
+from plclab.stands import twido_profile
 from plclab.modbus.server import ModbusTcpServer
 from plclab.runtime.image import ProcessImage
+
+THERMO = twido_profile("thermo")
 
 PLCLAB = [sys.executable, "-m", "plclab.cli"]
 MANUAL, AUTO1 = 0, 1

@@ -5,8 +5,8 @@ so a failed build never leaves a half-written or unchecked program behind:
 1. the variant's ST sources check (diagnostics name the files as they are on disk);
 2. the bundle text, exactly what goes into the .st file, checks too;
 3. the XML project (if asked for) validates against the TC6 schema when the schema is on this
-   machine (see plclab.plcopen.schema), and reads back, through ST and the front end, to the
-   same program as the bundle.
+   machine (see plclab.plcopen.schema), and reads back, as OpenPLC Editor reads it (frontend.plcxml),
+   through ST and the front end, to the same program as the bundle.
 """
 from __future__ import annotations
 
@@ -17,7 +17,7 @@ from typing import Callable, Optional
 from plclab import plcopen
 from plclab.errors import PlcLabError
 from plclab.fileio import check_output, write_bytes
-from plclab.frontend import check_sources
+from plclab.frontend import check_sources, plcxml
 from plclab.frontend.checked import CheckedUnit
 from plclab.stands import bundle, get_stand, sources
 
@@ -35,24 +35,31 @@ class BuildOutput:
 
 def build_outputs(stand: str, variant: str, xml: bool = True, xml_name: Optional[str] = None,
                   part: Optional[str] = None, method: str = "evalfn",
-                  tools: Optional[dict[int, float]] = None) -> BuildOutput:
+                  tools: Optional[dict[int, float]] = None, fine_cycle: Optional[int] = None,
+                  drive: Optional[str] = None) -> BuildOutput:
     """Make and check the bundle (and the XML project) of `variant` of `stand`. The cnc
-    stand's bundle is made for OpenPLC (plclab.cnc.openplc: its fine cycle, and with `part`
-    a G-code part program in its frame table, run with `method`, tool table `tools`)."""
+    stand's bundle is made for OpenPLC (plclab.cnc.openplc: its fine cycle, `fine_cycle` ms
+    or the OpenPLC default of 5, and with `part` a G-code part program in its frame table,
+    run with `method`, tool table `tools`; `drive` "pulse": the pulse-count drive)."""
     s = get_stand(stand)
     s.variant(variant)                       # an unknown variant is one clear error
     if part is not None and stand != "cnc":
         raise PlcLabError(f"build: --part is for the cnc stand (a G-code part program), not {stand}")
+    if drive is not None and stand != "cnc":
+        raise PlcLabError(f"build: --drive is for the cnc stand (GVL_CNC.PulseDrive), not {stand}")
+    if fine_cycle is not None and stand != "cnc":
+        raise PlcLabError(f"build: --fine-cycle is for the cnc stand (PRG_CncStand's fine cycle), not {stand}")
     name = f"{stand}_{variant}"
     check_sources(sources(s, variant))
     text = bundle(s, variant)
     if stand == "cnc":
-        from plclab.cnc.gcode import parse_file
-        from plclab.cnc.openplc import STEP_MM, openplc_bundle
+        from plclab.nc.gcode import parse_file
+        from plclab.cnc.openplc import OPENPLC_FINE_MS, STEP_MM, openplc_bundle
 
         program = parse_file(part, tools, STEP_MM) if part is not None else None
         notes = tuple(program.notes) if program is not None else ()
-        text = openplc_bundle(text, program.frames if program is not None else None, method, part=part or "")
+        text = openplc_bundle(text, program.frames if program is not None else None, method, part=part or "",
+                              fine_ms=OPENPLC_FINE_MS if fine_cycle is None else fine_cycle, drive=drive or "step")
     else:
         notes = ()
     checked = check_sources([(f"{name}.st", text)])
@@ -71,7 +78,11 @@ def xml_project(text: str, name: str, where: str,
     tree = plcopen.project_tree(checked, text, name)
     data = plcopen.to_bytes(tree)
     schema = plcopen.validate(tree, where)
-    st_again = plcopen.st_from_tree(plcopen.parse_xml(data, where))
+    try:
+        st_again = plcxml.st_from_tree(plcxml.parse_xml(data, where))   # as OpenPLC Editor reads it
+    except PlcLabError as e:
+        raise PlcLabError(f"{where}: OpenPLC Editor would not make the same program of this PLCopen XML: "
+                          f"{str(e).splitlines()[0]}") from None
     try:
         again = check_sources([(f"{where} (as ST)", st_again)])
     except PlcLabError as e:
@@ -85,12 +96,13 @@ def xml_project(text: str, name: str, where: str,
 def write_build(stand: str, variant: str, st_path: str | None, xml_path: str | None,
                 part: Optional[str] = None, method: str = "evalfn",
                 tools: Optional[dict[int, float]] = None,
-                report: Callable[[str], None] = lambda line: None) -> list[Path]:
+                report: Callable[[str], None] = lambda line: None, fine_cycle: Optional[int] = None,
+                drive: Optional[str] = None) -> list[Path]:
     """Write `<stand>_<variant>.st` (or `st_path`) and, if `xml_path` is given, the PLCopen XML
     project; returns the paths written. Raises PlcLabError / CompileError, writing nothing.
     `report` gets the part program's notes and warnings (cnc --part)."""
     out = build_outputs(stand, variant, xml=xml_path is not None, xml_name=xml_path, part=part, method=method,
-                        tools=tools)
+                        tools=tools, fine_cycle=fine_cycle, drive=drive)
     for line in out.notes:
         report(line)
     targets = [(Path(st_path) if st_path else Path.cwd() / f"{out.name}.st", out.st_text.encode("utf-8"))]

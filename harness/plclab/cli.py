@@ -84,13 +84,14 @@ def _tool(text: str) -> tuple[int, float]:
 
 
 def _cmd_cnc(args: argparse.Namespace) -> int:
-    from plclab.cnc.gcode import GcodeError
+    from plclab.nc.gcode import GcodeError
     from plclab.cnc.run import run_cnc
 
     try:
         result = run_cnc(args.part, method=args.method, step_mm=args.step, feed=args.feed, csv=args.csv,
                          vcd=args.vcd, plot=args.plot, svg=args.svg, diagonal=args.diagonal,
-                         tools=dict(args.tool or []), drive=args.drive, program=args.program)
+                         tools=dict(args.tool or []), drive=args.drive, program=args.program,
+                         fine_cycle=args.fine_cycle)
     except GcodeError as e:              # already `file:line:col: error: ...`; nothing has run
         print(e, file=sys.stderr)
         return 1
@@ -164,7 +165,7 @@ def _cmd_serve(args: argparse.Namespace) -> int:
             plant = None
     profile = None
     if stand_cfg.profile == "twido":
-        from plclab.modbus.profiles import twido_profile
+        from plclab.stands import twido_profile
         profile = twido_profile(args.stand)
     console = None if args.console == "none" else _host_port(args.console, "--console")
     opts = ServeOptions(srcs, stand_cfg, modbus, plant, stand_cfg.profile, profile, console)
@@ -198,15 +199,24 @@ def _cmd_hmi(args: argparse.Namespace) -> int:
                    commands=None if args.once else sys.stdin)
 
 
+def _plant_params(command: str, stand: str, fine_cycle: Optional[int] = None) -> dict:
+    """The parameters a plant run for OpenPLC starts with (PSM script, `plant --psm`): the cnc
+    stand's in step with `plclab build cnc`'s fine cycle (`--fine-cycle`, default the build's),
+    the others' none."""
+    if stand != "cnc":
+        if fine_cycle is not None:
+            raise PlcLabError(f"{command}: --fine-cycle is for the cnc stand, not {stand}")
+        return {}
+    from plclab.cnc.openplc import plant_params
+    return plant_params() if fine_cycle is None else plant_params(fine_cycle)
+
+
 def _cmd_plant(args: argparse.Namespace) -> int:
     from plclab.modbus.psm import run_plant
 
     psm = _host_port(args.psm, "--psm")
     console = None if args.console == "none" else _host_port(args.console, "--console")
-    params = {}
-    if args.stand == "cnc":                  # as the PSM script: in step with `plclab build cnc`
-        from plclab.cnc.openplc import plant_params
-        params = plant_params()
+    params = _plant_params("plant", args.stand, args.fine_cycle)
     return run_plant(args.stand, psm, console, traceback=bool(os.environ.get("PLCLAB_DEBUG")),
                      out=lambda line: print(line, flush=True), params=params)
 
@@ -214,7 +224,8 @@ def _cmd_plant(args: argparse.Namespace) -> int:
 def _cmd_psm_script(args: argparse.Namespace) -> int:
     from plclab.modbus.psm import psm_script
 
-    sys.stdout.write(psm_script(args.stand, console=_host_port(args.console, "--console")))
+    sys.stdout.write(psm_script(args.stand, console=_host_port(args.console, "--console"),
+                                plant=_plant_params("psm-script", args.stand, args.fine_cycle)))
     return 0
 
 
@@ -224,7 +235,7 @@ def _cmd_console(args: argparse.Namespace) -> int:
     where = _host_port(args.where, "the console face") if args.where else ("127.0.0.1", CONSOLE_PORT)
     tape = None
     if args.part:
-        from plclab.cnc.gcode import GcodeError
+        from plclab.nc.gcode import GcodeError
         from plclab.cnc.openplc import part_tape
 
         if args.stand != "cnc":
@@ -237,7 +248,10 @@ def _cmd_console(args: argparse.Namespace) -> int:
         for note in notes:
             print(note, file=sys.stderr)
         tape = (method, frames)
-    for line in run_console(args.stand, where, sets=args.set or (), presses=args.press or (), tape=tape):
+    if args.wait is not None and not 0 <= args.wait <= 600:
+        raise PlcLabError(f"console: --wait {args.wait:g}: 0..600 seconds")
+    for line in run_console(args.stand, where, sets=args.set or (), presses=args.press or (), tape=tape,
+                            tape_wait=10.0 if args.wait is None else args.wait):
         print(line)
     return 0
 
@@ -257,11 +271,12 @@ def _cmd_build(args: argparse.Namespace) -> int:
         from plclab.stands import get_stand
         print(get_stand(args.stand).outline(args.variant), end="")
         return 0
-    from plclab.cnc.gcode import GcodeError
+    from plclab.nc.gcode import GcodeError
 
     try:
         paths = write_build(args.stand, args.variant, args.output, args.xml, part=args.part, method=args.method,
-                            tools=dict(args.tool or []), report=lambda line: print(line, file=sys.stderr))
+                            tools=dict(args.tool or []), report=lambda line: print(line, file=sys.stderr),
+                            fine_cycle=args.fine_cycle, drive=args.drive)
     except GcodeError as e:              # already `file:line:col: error: ...`; nothing written
         print(e, file=sys.stderr)
         return 1
@@ -368,7 +383,7 @@ def _cmd_run(args: argparse.Namespace) -> int:
     with memory_limited(None if not args.program else -1):   # your program is bounded like a student's
         r = run_scenario(args.stand, args.variant, args.scenario, args.csv, args.vcd, args.plot,
                          program=args.program, inputs=args.inputs, against=args.against,
-                         reference=args.reference)
+                         reference=args.reference, fine_cycle=args.fine_cycle)
     print("\n".join(r.timeline))
     if r.absent_note:
         print(r.absent_note)
@@ -388,6 +403,10 @@ def _cmd_run(args: argparse.Namespace) -> int:
         return 0
     print(f"scenario {args.scenario or 'demo'} passed ({r.session.now:.1f} s of plant time)")
     return 0
+
+
+def _fine_cycle_option(c: argparse.ArgumentParser, text: str) -> None:
+    c.add_argument("--fine-cycle", type=int, metavar="MS", help=text)
 
 
 def build_parser() -> argparse.ArgumentParser:
@@ -439,6 +458,9 @@ def build_parser() -> argparse.ArgumentParser:
     c.add_argument("--method", choices=("evalfn", "dda", "integration"), default="evalfn",
                    help="cnc --part: the interpolator (default evalfn)")
     c.add_argument("--tool", type=_tool, action="append", metavar="DN=R", help="cnc --part: the tool-radius table")
+    _fine_cycle_option(c, "cnc: PRG_CncStand's fine cycle, in its task and FINE_MS (default 5, what OpenPLC holds)")
+    c.add_argument("--drive", choices=("step", "pulse"),
+                   help="cnc: step/direction bits (default) or pulse counts (GVL_CNC.PulseDrive: higher feeds)")
     c.set_defaults(func=_cmd_build)
 
     c = sub.add_parser("handout", help="the student's starting program, I/O map and task sheet (no solution)")
@@ -460,6 +482,7 @@ def build_parser() -> argparse.ArgumentParser:
     c.add_argument("--against", metavar="TASK", help="with --inputs: play it on the task's model answer too and "
                    "show the first difference (a checkout, or --reference)")
     c.add_argument("--reference", nargs="+", metavar="FILE.st", help="with --against: the course's own model answer")
+    _fine_cycle_option(c, "cnc: run PRG_CncStand at this fine cycle (default 1; 5 is the OpenPLC build's)")
     c.set_defaults(func=_cmd_run)
 
     c = sub.add_parser("grade", help="grade a program on a lab task: one row per requirement")
@@ -520,7 +543,7 @@ def build_parser() -> argparse.ArgumentParser:
     c.add_argument("stand", choices=stands + ("cnc",))
     c.add_argument("--program", nargs="+", metavar="FILE.st", help="run these ST files instead of the variant")
     c.add_argument("--variant", choices=("baseline", "task1", "task2", "task3", "full"),
-                   help="default: the most complete program there is")
+                   help="default: the starting program a student gets (the robots: Appendix 1, as the real stand has it loaded)")
     c.add_argument("--port", type=_port, default=8080, metavar="P", help="web page port (default 8080; 0: any free)")
     c.add_argument("--bind", default="127.0.0.1", metavar="ADDR", help="address to listen on (default 127.0.0.1)")
     c.add_argument("--speed", type=float, default=1.0, metavar="X", help="x0.1 .. x50 (x1: real time)")
@@ -544,12 +567,14 @@ def build_parser() -> argparse.ArgumentParser:
     c.add_argument("--psm", nargs="?", const="127.0.0.1:2605", default="127.0.0.1:2605", metavar="HOST:PORT")
     c.add_argument("--console", default="127.0.0.1:2606", metavar="HOST:PORT",
                    help="the console face (default 127.0.0.1:2606; none = no console face)")
+    _fine_cycle_option(c, "cnc: the program's fine cycle, for the pulse generator (default 5, as plclab build)")
     c.set_defaults(func=_cmd_plant)
 
     c = sub.add_parser("psm-script", help="print an OpenPLC PSM script (core/psm/main.py) running the plant")
     c.add_argument("stand", choices=every_stand)
     c.add_argument("--console", default="127.0.0.1:2606", metavar="HOST:PORT",
                    help="where the script serves the console face (default 127.0.0.1:2606)")
+    _fine_cycle_option(c, "cnc: the program's fine cycle, for the pulse generator (default 5, as plclab build)")
     c.set_defaults(func=_cmd_psm_script)
 
     c = sub.add_parser("console", help="operate a stand's console face (switches, SB1) and show it")
@@ -562,6 +587,8 @@ def build_parser() -> argparse.ArgumentParser:
     c.add_argument("--method", choices=("evalfn", "dda", "integration"), default="evalfn",
                    help="cnc --part: the interpolator (default evalfn)")
     c.add_argument("--tool", type=_tool, action="append", metavar="DN=R", help="cnc --part: the tool-radius table")
+    c.add_argument("--wait", type=float, metavar="SECONDS",
+                   help="cnc --part: how long to wait for the PLC to store every frame (default 10)")
     c.set_defaults(func=_cmd_console)
 
     c = sub.add_parser("cnc", help="run a G-code part program on the CNC stand; contour error per frame")
@@ -576,6 +603,7 @@ def build_parser() -> argparse.ArgumentParser:
                    help="the tool-radius table: D number = radius in mm (repeatable), e.g. --tool D1=2.5")
     c.add_argument("--program", nargs="+", metavar="FILE.st",
                    help="your ST: FB_CncEvalLinear.st (Task 4) in place of the stub, or a complete program")
+    _fine_cycle_option(c, "PRG_CncStand's fine cycle (default 1; 5 is what plclab build cnc gives OpenPLC)")
     for opt in ("csv", "vcd", "plot", "svg"):
         c.add_argument(f"--{opt}", metavar="F")
     c.set_defaults(func=_cmd_cnc)

@@ -5,7 +5,7 @@ channel to the stand (one run by `plclab serve thermo`, or a real Twido), a scan
 the holding registers from start address 0, and points at offset = register - start address.
 Task 1 shows the heat-sink temperature (%MW3); Task 2 shows and sets the heater power (%MW2,
 0..2000). It is only a Modbus client (pymodbus), so it works against anything that honours
-the register contract (plclab.modbus.profiles.THERMO). A refused write shows the exception
+the register contract (plclab.stands.twido_profile("thermo")). A refused write shows the exception
 the stand answered with and the rule of the contract that explains it.
 
 Output is one line per change of the registers, so it reads the same in a terminal, a log
@@ -21,7 +21,8 @@ from dataclasses import dataclass
 from typing import Callable, Optional, TextIO
 
 from plclab.errors import PlcLabError
-from plclab.modbus.profiles import THERMO, THERMO_RULES, Access, Register, TwidoProfile
+from plclab.modbus.profiles import THERMO_RULES, Access, Register, TwidoProfile
+from plclab.stands import twido_profile
 
 MODE_NAMES = {0: "manual", 1: "auto-1", 2: "auto-2"}
 MODE_WORDS = {"manual": 0, "auto1": 1, "auto-1": 1, "automatic-1": 1, "auto2": 2, "auto-2": 2,
@@ -111,9 +112,9 @@ class Point:
 class ThermoHmi:
     """The HMI's logic, apart from the terminal: scan, show, and write with explanations."""
 
-    def __init__(self, channel: ModbusChannel, profile: TwidoProfile = THERMO, start: int = 0):
+    def __init__(self, channel: ModbusChannel, profile: Optional[TwidoProfile] = None, start: int = 0):
         self.channel = channel
-        self.profile = profile
+        self.profile = profile = profile or twido_profile("thermo")
         self.start = start
         self.length = max(r.address for r in profile.registers) + 1 - start
         self.points = {r.name: Point(r, r.address - start) for r in profile.registers}

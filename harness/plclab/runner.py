@@ -41,15 +41,20 @@ def run_scenario(stand: str, variant: Optional[str] = None, scenario: Optional[s
                  csv: Optional[str] = None, vcd: Optional[str] = None, plot: Optional[str] = None,
                  out_dir: str = "out", retain_dir: Optional[Path] = None,
                  program: Optional[Sequence[str]] = None, inputs: Optional[str] = None,
-                 against: Optional[str] = None, reference: Optional[Sequence[str]] = None) -> RunResult:
+                 against: Optional[str] = None, reference: Optional[Sequence[str]] = None,
+                 fine_cycle: Optional[int] = None) -> RunResult:
     """Run scenario `scenario` (default: the demo) of `stand` on `variant` or on the ST files
     `program` (one compilation unit, a complete program with its CONFIGURATION). A program
     that does not compile raises CompileError (its `file:line:col: error:` lines).
 
     `inputs`: an operator script (time_s,name,value; what a grade's exploration writes) is
     played instead of a scenario; with `against` (a task) it is played on that task's model
-    answer too, and `failure` is the first difference, as the grade's row states it."""
+    answer too, and `failure` is the first difference, as the grade's row states it.
+
+    `fine_cycle` ms (the cnc stand): PRG_CncStand runs at that fine cycle (plclab.stands.cnc)."""
     spec = stand_spec(stand)
+    if fine_cycle is not None and stand != "cnc":
+        raise PlcLabError(f"run: --fine-cycle is for the cnc stand (PRG_CncStand's fine cycle), not {stand}")
     if (against or reference) and not inputs:
         raise PlcLabError("run: --against and --reference compare an operator script's play: give --inputs too")
     if inputs and scenario:
@@ -75,7 +80,11 @@ def run_scenario(stand: str, variant: Optional[str] = None, scenario: Optional[s
     retain_path = (retain_dir or Path(out_dir) / "retain") / f"{stand}-{variant}-{name}.json"
     if retain_path.exists():
         retain_path.unlink()               # a scenario starts from a fresh controller
-    if srcs is None:
+    if fine_cycle is not None:
+        from plclab.stands import cnc
+        s = cnc.session(variant if srcs is None else spec.stand.richest_variant, program=srcs,
+                        retain_path=retain_path, fine_ms=fine_cycle)
+    elif srcs is None:
         s = spec.session(variant, retain_path=retain_path)
     else:
         s = spec.session(program=srcs, checked=checked, retain_path=retain_path)

@@ -262,7 +262,8 @@ class Session:
 
     def inject(self, fault: str, **params: Any) -> None:
         self.plant.inject(fault, **params)
-        self.log(f"fault injected: {fault} {params if params else ''}".rstrip())
+        from plclab.plants.base import fault_words
+        self.log(f"fault injected: {fault_words(fault, params)}")
 
     def clear_faults(self) -> None:
         self.plant.clear()

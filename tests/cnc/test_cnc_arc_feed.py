@@ -8,7 +8,7 @@ import math
 
 import pytest
 
-from plclab.cnc.gcode import parse
+from plclab.nc.gcode import parse
 from plclab.stands import cnc
 
 PART = "G21 G90 G17 F300\nG01 X10\nG03 X10 Y0 I-10 J0\n"       # a full circle R 10 at 5 mm/s

@@ -13,11 +13,16 @@ def test_cnc_runs_a_part_and_writes_the_tool_path(tmp_path, capsys):
     out = capsys.readouterr().out
     assert rc == 0, out
     assert "M words ignored" in out
-    rows = [line for line in out.splitlines() if line.strip().endswith(" ok")]
+    rows = [line for line in out.splitlines() if line.strip()[:1].isdigit()]
     assert len(rows) == 2 and " G01 " in rows[0] and " G02 " in rows[1]
-    assert "ok: every frame within its bound" in out
+    assert rows[0].endswith(" 600.0     593.6  ok")                # the start's fine cycle: within 2 %
+    # the arc runs by digital integration: its ramps (V / A = 50 ms) on 1.4 mm are said
+    assert rows[1].endswith("  in bound, BELOW THE FEED")
+    assert "frame 2 reached 462 of F600 mm/min (77%): DDA runs an arc by digital integration" in out
+    assert "ok: every frame within its bound; 1 of 2 frames below their programmed feed" in out
     lines = csv.read_text(encoding="utf-8").splitlines()
-    assert lines[0] == "time_s,X,Y,Z" and lines[-1].split(",")[1:3] == ["2.0000", "0.0000"]
+    assert lines[0] == "time_s,X,Y,Z,frame,feed_mm_min,reached_mm_min"
+    assert lines[-1].split(",")[1:] == ["2.0000", "0.0000", "0.0000", "2", "600.0", "462.0"]
     assert svg.read_text(encoding="utf-8").startswith("<svg") and plot.read_bytes()[:4] == b"\x89PNG"
 
 

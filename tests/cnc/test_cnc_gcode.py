@@ -6,7 +6,7 @@ import math
 
 import pytest
 
-from plclab.cnc.gcode import GcodeError, parse
+from plclab.nc.gcode import GcodeError, parse
 
 
 def test_lines_arcs_modes_and_units():

@@ -8,9 +8,9 @@ import pytest
 
 from plclab.build import build_outputs
 from plclab.cli import main
-from plclab.cnc.gcode import parse
+from plclab.nc.gcode import parse
 from plclab.cnc.openplc import OPENPLC_FINE_MS, part_tape, plant_params
-from plclab.cnc.toolpath import check_blocks
+from plclab.nc.toolpath import check_blocks
 from plclab.modbus.psm import psm_script
 from plclab.stands import cnc
 
@@ -31,14 +31,15 @@ def built(tmp_path_factory):
     return part, build_outputs("cnc", "full", xml=False, part=str(part)).st_text
 
 
-def test_the_openplc_bundle_runs_the_fine_cycle_openplc_can_hold():
+def test_the_openplc_bundle_runs_the_fine_cycle_openplc_can_hold(capsys):
     text = build_outputs("cnc", "full", xml=False).st_text
     assert f"TASK FineTask (INTERVAL := T#{OPENPLC_FINE_MS}ms, PRIORITY := 0);" in text
     assert f"FINE_MS : LREAL := {OPENPLC_FINE_MS}.0;" in text and "T#1ms" not in text
     assert "    FrameCount : INT;" in text                    # no part given: the table starts empty
     # the PSM script's pulse generator spreads a cycle's counts over the bundle's T = 4 fine cycles
     assert plant_params() == {"pulse_cycle": 4 * OPENPLC_FINE_MS / 1000}
-    assert f"PLANT = {plant_params()!r}" in psm_script("cnc")
+    assert main(["psm-script", "cnc"]) == 0                    # what `plclab psm-script cnc` writes
+    assert f"PLANT = {plant_params()!r}" in capsys.readouterr().out
     assert "PLANT = {}" in psm_script("mp9c")
 
 

@@ -12,8 +12,8 @@ from functools import lru_cache
 from hypothesis import given, settings, strategies as st
 
 from cnc_st import Runner, pou
-from plclab.cnc.gcode import parse
-from plclab.cnc.toolpath import check_blocks
+from plclab.nc.gcode import parse
+from plclab.nc.toolpath import check_blocks
 from plclab.plants.base import signed16
 from plclab.stands import cnc
 

@@ -10,8 +10,8 @@ import random
 import pytest
 from hypothesis import given, settings, strategies as st
 
-from plclab.cnc.gcode import parse
-from plclab.cnc.toolpath import check_blocks
+from plclab.nc.gcode import parse
+from plclab.nc.toolpath import check_blocks
 from plclab.plants.base import unsigned16
 from plclab.plants.cnc import AXES, ENABLE, PULSE_CYCLE, PULSES, CncTable
 from plclab.stands import cnc

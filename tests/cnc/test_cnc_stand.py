@@ -8,8 +8,8 @@ import math
 
 import pytest
 
-from plclab.cnc.gcode import parse
-from plclab.cnc.toolpath import check_blocks
+from plclab.nc.gcode import parse
+from plclab.nc.toolpath import check_blocks
 from plclab.scenario import ScenarioFailure
 from plclab.stands import cnc
 
@@ -93,7 +93,7 @@ G40 G01 X-1 Y-1
 
 @pytest.mark.parametrize("method, side", [("evalfn", "G41"), ("dda", "G42")])
 def test_tool_radius_correction_runs_on_the_equidistant(method, side):
-    from plclab.cnc.toolpath import check_offsets
+    from plclab.nc.toolpath import check_offsets
 
     text = POCKET.replace("G41", side)
     frames = parse(text, "pocket.nc", {1: 0.3}).frames

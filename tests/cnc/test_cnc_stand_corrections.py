@@ -8,8 +8,8 @@ import math
 
 import pytest
 
-from plclab.cnc.gcode import parse
-from plclab.cnc.toolpath import check_blocks
+from plclab.nc.gcode import parse
+from plclab.nc.toolpath import check_blocks
 from plclab.plants.cnc import CncTable
 from plclab.plants.base import PlantError
 from plclab.scenario import ScenarioFailure

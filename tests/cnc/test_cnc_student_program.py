@@ -4,6 +4,8 @@ stub (or run a complete program as it is); the installed package, which has no m
 answer, says so and points at --program."""
 from __future__ import annotations
 
+import re
+
 from pathlib import Path
 
 import pytest
@@ -33,7 +35,7 @@ def installed(monkeypatch):
 
 
 def _rows(out: str) -> list[str]:
-    return [line for line in out.splitlines() if line.strip().endswith((" ok", "OUT OF BOUND"))]
+    return [line for line in out.splitlines() if re.match(r"\s*\d+\s+\d+\s+G\d\d ", line)]
 
 
 def test_installed_package_points_evalfn_at_program(part, installed, capsys):
@@ -49,18 +51,19 @@ def test_the_students_block_replaces_the_stub(part, installed, capsys):
     assert main(["cnc", str(part), "--method", "evalfn", "--program", str(MODEL_ANSWER)]) == 0
     out = capsys.readouterr().out
     rows = _rows(out)
-    assert len(rows) == 3 and all(r.endswith(" ok") for r in rows), out
+    # within every bound; the evaluation function's one step per 1 ms caps F600 off the axes (said)
+    assert len(rows) == 3 and all(r.endswith((" ok", "  in bound, BELOW THE FEED")) for r in rows), out
     # the stub itself handed in: the table does not move, every frame misses its end point
     assert main(["cnc", str(part), "--program", str(STUB)]) == 1
     rows = _rows(capsys.readouterr().out)
-    assert [r.endswith("OUT OF BOUND") for r in rows] == [True, True, False]   # frame 3 ends at the start
+    assert ["OUT OF BOUND" in r for r in rows] == [True, True, False]   # frame 3 ends at the start
 
 
 def test_a_wrong_block_fails_its_contour_rows(part, capsys):
     assert main(["cnc", str(part), "--program", WRONG_QUADRANT]) == 1
     out = capsys.readouterr().out
     rows = _rows(out)
-    assert len(rows) == 3 and all(r.endswith("OUT OF BOUND") for r in rows), out
+    assert len(rows) == 3 and all("OUT OF BOUND" in r for r in rows), out
     error_mm, bound_mm = (float(v) for v in rows[0].split()[5:7])
     assert error_mm > 0.5 and bound_mm == 0.01
     assert "FAILED: see the rows above" in out

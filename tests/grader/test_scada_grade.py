@@ -479,7 +479,8 @@ def test_cli_serves_records_and_grades(tmp_path):
 def test_a_failing_traffic_observer_costs_the_client_nothing():
     """The recording hook runs in the server's thread: its failure must not cost the answer."""
     from plclab.modbus.maps import TwidoMap
-    from plclab.modbus.profiles import THERMO
+    from plclab.stands import twido_profile
+    THERMO = twido_profile("thermo")
     from plclab.modbus.server import ModbusTcpServer
     from plclab.stands.thermo import session
 

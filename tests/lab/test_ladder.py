@@ -57,6 +57,27 @@ def test_a_plc_xml_uploaded_with_st_files_runs_and_its_errors_name_the_drawing(r
     assert bad["ok"] is False and len(bad["errors"]) == 1 and bad["errors"][0]["text"].startswith("plc.xml: ")
 
 
+def test_editor_projects_with_located_io_beside_a_timer_or_counter_open_in_the_lab(running, tmp_path):  # noqa: F811
+    """The Editor's commonest shapes (located I/O in one table with a TON, a CTU, FB instances)
+    load in the lab, and an LD POU among them is drawn as its rungs."""
+    from drawing import project
+    from test_grading import handout_with_located_io
+    from test_editor_variables import counter_ctu, latch_ton
+
+    server, url = running("mp9c")
+    lab = server.lab
+    for program, data in (("LatchTon", project([latch_ton()], program="LatchTon")),
+                          ("Counter", project([counter_ctu()], program="Counter")),
+                          ("PRG_Mp9cBaseline", handout_with_located_io())):
+        loaded = asyncio.run(_post(url + "api/program", _files(("plc.xml", data))))
+        assert loaded["ok"] is True, (program, loaded)
+        assert lab.program_name.endswith("plc.xml")
+        listing = {p["name"]: p for p in lab.call(lab.listing).result(10)}
+        assert program in listing, sorted(listing)
+    drawn = listing["FB_Mp9cManual"]["ladder"]
+    assert any(e["kind"] == "coil" for e in drawn["elements"])
+
+
 def _element(page, label: str):
     return page.get_by_label("ladder diagram").locator(f'g[aria-label="{label}"]').first
 

@@ -102,7 +102,7 @@ def test_a_cross_site_upload_or_grade_changes_nothing(lab):
     assert answers[2][1].startswith("refused: a request from another site's page")
     assert answers[3][1].startswith("refused: the lab's session token is missing or stale")
     assert answers[6][1] == 'grade: send {"task": "task1"} as application/json'
-    assert server.lab.program_name == "full (shipped)"          # nothing was loaded
+    assert server.lab.program_name == "baseline (shipped)"          # nothing was loaded
     assert server._grade_runs == 0                              # nothing was graded
 
 

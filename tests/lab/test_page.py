@@ -111,7 +111,7 @@ def test_tur10_power_up_state(lab_page, shots):
 def test_thermo_power_up_state(lab_page, shots):
     page = lab_page("thermo").page
     expect(switch(page, "DISTURBANCE")).to_have_attribute("aria-checked", "false")
-    expect(page.get_by_label("value of %MW0", exact=True)).to_have_text("0", timeout=WAIT)       # manual mode
+    expect(page.get_by_label("value of %MW0", exact=True)).to_have_text("0 (manual)", timeout=WAIT)   # manual mode
     expect(page.get_by_label("value of %MW3", exact=True)).to_have_text("22", timeout=WAIT)      # ambient
     expect(page.get_by_label("value of %MW6", exact=True)).to_have_text("40", timeout=WAIT)      # setpoint
     expect(page.locator("#mimic")).to_contain_text("22.0 \u00b0C")
@@ -275,9 +275,9 @@ def test_thermo_registers_refuse_like_the_twido_face_which_stays_up(lab_page, sh
     lp = lab_page("thermo", speed=10)
     page = lp.page
     page.get_by_role("combobox", name="speed").select_option("10")
-    page.get_by_label("new value of %MW0").fill("1")                      # automatic-1
+    page.get_by_label("new value of %MW0").select_option("1")             # automatic-1, chosen by name
     page.get_by_role("button", name="write %MW0").click()
-    expect(page.get_by_label("value of %MW0", exact=True)).to_have_text("1", timeout=WAIT)
+    expect(page.get_by_label("value of %MW0", exact=True)).to_have_text("1 (automatic-1)", timeout=WAIT)
     page.get_by_label("new value of %MW2").fill("1500")                   # heater: manual mode only
     page.get_by_role("button", name="write %MW2").click()
     expect(page.locator("#register-message")).to_contain_text(

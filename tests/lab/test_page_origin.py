@@ -47,7 +47,7 @@ def test_another_site_s_page_cannot_drive_the_lab_and_its_own_page_can(rebinding
             f"refused: this lab answers to localhost or an IP address on port {port}, not to the host "
             f"'attacker.example:{port}'")
         # nothing above changed the lab: no program, no grade, no console change
-        assert lab.program_name == "full (shipped)"
+        assert lab.program_name == "baseline (shipped)"
         assert thread.server._grade_runs == 0
         assert not [a for a in lab.call(lambda: list(lab.session.actions)).result(10) if "SA1" in a.text]
         # the lab's own page works: it flips a switch, and by the name localhost too

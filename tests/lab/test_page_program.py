@@ -59,13 +59,13 @@ def test_watch_and_force_from_the_program_tree(lab_page, shots):
     expect(count).to_have_text("0", timeout=WAIT)
     expect(table.get_by_label("value of SA5", exact=True)).to_have_text("FALSE")
     # force an input: the program sees it (manual mode: the arm goes down), the console switch
-    # stays where it is, and SA5 is marked forced on the console and in the table
+    # shows the forced value the PLC reads, and SA5 is marked forced on the console and in the table
     page.get_by_label("force value of SA5").fill("TRUE")
     page.get_by_role("button", name="force SA5", exact=True).click()
     expect(table.get_by_label("value of SA5", exact=True)).to_have_text("TRUE (forced)", timeout=WAIT)
     on(lamp(page, "L3"))
     on(lamp(page, "SQ2"))
-    expect(switch_(page, "SA5")).to_have_attribute("aria-checked", "false")
+    expect(switch_(page, "SA5")).to_have_attribute("aria-checked", "true")
     expect(switch_(page, "SA5")).to_have_attribute("data-forced", "true")
     expect(page.get_by_label("forces")).to_have_text("1 forced")
     expect(page.locator("#actions")).to_contain_text("FORCE SA5 := TRUE")
@@ -92,6 +92,7 @@ def test_watch_and_force_from_the_program_tree(lab_page, shots):
     expect(table.get_by_label("value of SA5", exact=True)).to_have_text("FALSE", timeout=WAIT)
     on(lamp(page, "SQ1"))
     expect(switch_(page, "SA5")).not_to_have_attribute("data-forced", "true")
+    expect(switch_(page, "SA5")).to_have_attribute("aria-checked", "false")       # where the switch is
     page.get_by_role("button", name="Release all forces").click()
     on(lamp(page, "L7"))
     expect(page.get_by_label("forces")).to_have_text("")
@@ -135,7 +136,7 @@ def test_online_monitoring_shows_values_beside_their_use_and_a_fault_opens_its_s
     # a grade row naming the statement opens it too
     source.locator("#src-3").click()
     page.get_by_role("button", name="Grade task1").click()
-    opener = page.get_by_role("button", name="open faulty.st:4")
+    opener = page.get_by_role("button", name="open faulty.st:4", exact=True)
     expect(opener).to_be_visible(timeout=120_000)
     page.get_by_label("POU", exact=True).select_option("Faulty")
     opener.click()

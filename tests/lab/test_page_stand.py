@@ -28,7 +28,7 @@ def test_tur10_jog_buttons_move_a_link_only_while_held(lab_page):
     fwd.hover()
     page.mouse.down()
     expect(fwd).to_have_attribute("aria-pressed", "true")
-    expect(page.locator("#speed-shown")).to_have_text("x1 while SA1_FWD held (then x5)", timeout=WAIT)
+    expect(page.locator("#speed-shown")).to_have_text("x1 while SA1 forward held (then x5)", timeout=WAIT)
     expect(page.locator("#dac-1")).not_to_have_text("DAC 0", timeout=WAIT)
     page.mouse.move(5, 5)                                   # off the button: let go
     expect(fwd).to_have_attribute("aria-pressed", "false")
@@ -144,10 +144,18 @@ PHONE = """() => {
     const r = c.getBoundingClientRect();
     return {left: r.left, right: r.right, width: r.width, pixels: c.width};
   });
-  const m = document.querySelector('#mimic').getBoundingClientRect();
+  const svg = document.querySelector('#mimic');
+  const m = svg.getBoundingClientRect();
+  const scale = m.width / svg.viewBox.baseVal.width;        // CSS px per drawing unit
+  const texts = [...svg.querySelectorAll('text')].filter((t) => t.textContent.trim())
+    .map((t) => ({text: t.textContent.slice(0, 30), px: parseFloat(getComputedStyle(t).fontSize) * scale}));
+  const rows = (label) => { const b = document.querySelector(`[aria-label="${label}"]`); return b ? b.getBoundingClientRect().top : null; };
+  const writes = [...document.querySelectorAll('#register-table button, #register-table input')]
+    .filter((e) => e.getClientRects().length).map((e) => e.getBoundingClientRect().right);
   return {scroll: document.documentElement.scrollWidth, inner: window.innerWidth, dpr: window.devicePixelRatio,
           columns: getComputedStyle(document.querySelector('main')).gridTemplateColumns.split(' ').length,
-          mimic: [m.width, m.height], canvases};
+          mimic: [m.width, m.height], canvases, texts, writes,
+          pairs: [1, 2, 3, 4, 5].map((k) => [rows(`SA${k} forward`), rows(`SA${k} backward`)])};
 }"""
 
 
@@ -157,9 +165,18 @@ def test_a_390x844_phone_gets_one_column_without_sideways_scroll(lab_page, shots
         try:
             page = lp.page
             page.wait_for_function("document.querySelectorAll('canvas[data-trend]').length > 0")
+            page.get_by_role("button", name="Show the program").click()       # its POU selector too
+            expect(page.get_by_label("POU", exact=True)).to_be_enabled(timeout=WAIT)
             let_time_pass(page, 0.2)
             got = page.evaluate(PHONE)
             assert got["inner"] == 390 and got["scroll"] <= 390, (stand, got)
+            small = [t for t in got["texts"] if t["px"] < 9]
+            assert not small, (stand, "drawing text under 9 CSS px", small)
+            assert all(right <= 390 for right in got["writes"]), (stand, got["writes"])   # thermo: write on-screen
+            if stand == "thermo":
+                assert len(got["writes"]) >= 4, got["writes"]
+            if stand == "tur10":
+                assert all(fwd == bwd for fwd, bwd in got["pairs"]), got["pairs"]      # a link's pair on one row
             assert got["columns"] == 1, (stand, got)
             assert got["mimic"][0] >= 340 and got["mimic"][1] >= 170, (stand, got)   # was 160x81
             for c in got["canvases"]:

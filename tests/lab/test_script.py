@@ -26,6 +26,11 @@ async def _post_script(url: str, name: str, data: bytes) -> dict:
             return await r.json()
 
 
+def replay(page, name: str, text: str) -> None:
+    """Replay input script `text` from the page's picker, as file `name`."""
+    page.locator("#script-file").set_input_files(files=[{"name": name, "mimeType": "text/csv", "buffer": text.encode()}])
+
+
 def test_a_bad_script_row_is_one_line_and_nothing_is_reset(running):  # noqa: F811
     server, url = running("mp9c")
     lab = server.lab
@@ -44,8 +49,7 @@ def test_replayed_script_drives_the_stand_at_its_plant_times(lab_page):
     lp = lab_page("mp9c", speed=5)
     page = lp.page
     expect(page.locator("#clock")).not_to_have_text("t = 0.00 s", timeout=WAIT)
-    page.locator("#script-file").set_input_files(files=[{"name": "ops.csv", "mimeType": "text/csv",
-                                                          "buffer": SCRIPT.encode()}])
+    replay(page, "ops.csv", SCRIPT)
     status = page.get_by_role("status", name="input script")
     expect(status).to_contain_text("replaying ops.csv", timeout=WAIT)
     expect(switch(page, "SA5")).to_have_attribute("aria-checked", "true", timeout=WAIT)   # the console follows

@@ -121,7 +121,7 @@ def test_uploads_too_large_or_not_st_are_refused_and_a_good_one_loads(running, t
     no_config = asyncio.run(_post(url + "api/program", _files(
         ("p.st", b"PROGRAM Blinker VAR x : BOOL; END_VAR x := NOT x; END_PROGRAM\n"))))
     assert no_config["errors"][0]["text"].startswith("p.st:1:1: error: no CONFIGURATION")
-    assert server.lab.program_name == "full (shipped)"                    # the PLC kept its program
+    assert server.lab.program_name == "baseline (shipped)"                    # the PLC kept its program
     # the baseline bundle, as `plclab build` writes it, loads
     assert main(["build", "mp9c", "baseline", "-o", str(tmp_path / "mp9c.st")]) == 0
     loaded = asyncio.run(_post(url + "api/program", _files(("mp9c.st", (tmp_path / "mp9c.st").read_bytes()))))
@@ -166,7 +166,7 @@ def test_cli_serves_the_page_until_stopped(tmp_path):
     try:
         first = proc.stdout.readline()
         second = proc.stdout.readline()
-        assert first.startswith("virtual lab: TUR-10 positional robot, program full (shipped), x2"), first
+        assert first.startswith("virtual lab: TUR-10 positional robot, program baseline (shipped), x2"), first
         url = re.search(r"open (http://127\.0\.0\.1:\d+/) in a browser", second).group(1)
         page = urllib.request.urlopen(url, timeout=10).read().decode()
         assert '<script src="/static/lab.js">' in page
@@ -269,7 +269,7 @@ def test_a_garbage_multipart_body_gets_one_line_and_no_traceback(running):
         assert status == 400 and answer["ok"] is False
         assert answer["message"].startswith("upload: the request could not be read as multipart/form-data (")
         assert "\n" not in answer["message"] and "Traceback" not in answer["message"]
-    assert server.lab.program_name == "full (shipped)"
+    assert server.lab.program_name == "baseline (shipped)"
 
 
 def test_the_trace_is_a_ring_of_the_last_minutes_and_the_download_says_which(monkeypatch):
@@ -336,7 +336,7 @@ def test_an_upload_that_cannot_be_loaded_leaves_the_previous_program_running(run
     assert deep["ok"] is False
     assert deep["errors"][0]["text"].startswith("deep.st:"), deep      # one located line (check or load)
     assert "Traceback" not in str(deep)
-    assert lab.program_name == "full (shipped)"
+    assert lab.program_name == "baseline (shipped)"
     lab.call(lambda: lab.advance(0.1)).result(10)
     assert lab.session.plc.state == "RUN" and lab.session.plc.fault is None
     # Restart, Reload and a new upload all still work
@@ -367,7 +367,7 @@ def test_a_load_that_fails_after_the_check_goes_back_to_the_previous_program(run
     assert answer["ok"] is False
     assert answer["message"] == ("the program could not be loaded (it needs more memory than the lab has: "
                                  "MemoryError); the PLC runs the previous program again (restarted)")
-    assert lab.program_name == "full (shipped)"
+    assert lab.program_name == "baseline (shipped)"
     lab.call(lambda: lab.advance(0.1)).result(10)
     assert lab.session.plc.state == "RUN"
     assert "mp9c.st" not in [n for n, _ in lab.session.sources]

@@ -234,17 +234,63 @@ class Pou:
 
 
 def _type(parent, type_name: str, tag: str = "type") -> None:
+    """A type as the Editor's variable table writes it: elementary, STRING (with a length only
+    if asked: `STRING[10]`), `ARRAY [1..3] OF INT`, or a derived (user type, block) name."""
     t = sub(parent, tag)
-    if type_name.upper() in ("BOOL", "INT", "DINT", "UINT", "REAL", "TIME", "WORD", "BYTE", "SINT", "LREAL", "DWORD"):
-        sub(t, type_name.upper())
+    word = type_name.upper()
+    if word in ("BOOL", "INT", "DINT", "UINT", "REAL", "TIME", "WORD", "BYTE", "SINT", "LREAL", "DWORD"):
+        sub(t, word)
+    elif word.startswith("STRING"):
+        sub(t, "string", length=word[7:-1] if "[" in word else None)
+    elif word.startswith("ARRAY"):
+        dims, base = type_name.split("[", 1)[1].split("] OF ")
+        arr = sub(t, "array")
+        for dim in dims.split(","):
+            lower, upper = dim.strip().split("..")
+            sub(arr, "dimension", lower=lower, upper=upper)
+        _type(arr, base.strip(), "baseType")
     else:
         sub(t, "derived", name=type_name)
 
 
+def _value(parent, value, tag: str = "initialValue") -> None:
+    """A value as the Editor writes it: text as `simpleValue`; a list of (repetition, text) as
+    `arrayValue` (repetition None: one value)."""
+    el = sub(parent, tag)
+    if isinstance(value, list):
+        arr = sub(el, "arrayValue")
+        for rep, item in value:
+            sub(sub(arr, "value", repetitionValue=rep), "simpleValue", value=item)
+    else:
+        sub(el, "simpleValue", value=value)
+
+
+def _documentation(parent, text: str) -> None:
+    etree.SubElement(sub(parent, "documentation"), f"{{{XHTML}}}p").text = etree.CDATA(text)
+
+
+def var_list(parent, tag: str, variables: list) -> etree._Element:
+    """One variable list: `tag` is its name and qualifiers ("localVars retain"); each variable
+    (name, type, initial value[, address[, documentation]]) as the Editor's table saves it."""
+    name, *words = tag.split()
+    vl = sub(parent, name, **{w: "true" for w in words})
+    for name, type_name, init, *rest in variables:
+        address = rest[0] if rest else None
+        v = sub(vl, "variable", name=name, address=address)
+        _type(v, type_name)
+        if init is not None:
+            _value(v, init)
+        if len(rest) > 1 and rest[1]:
+            _documentation(v, rest[1])
+    return vl
+
+
 def project(pous: list[Pou], globals_: list[tuple[str, str, Optional[str]]] = (),
-            program: Optional[str] = None, interval: str = "T#10ms") -> bytes:
+            program: Optional[str] = None, interval: str = "T#10ms",
+            global_lists: tuple = (), resource_lists: tuple = ()) -> bytes:
     """The whole plc.xml: POUs, and a configuration running `program` (globals located with
-    AT addresses: (name, type, address))."""
+    AT addresses: (name, type, address); `global_lists` / `resource_lists`: more lists of the
+    configuration / resource, (tag, variables) as `var_list` takes them)."""
     root = etree.Element(q("project"), nsmap={None: PPX, "xhtml": XHTML,
                                               "xsd": "http://www.w3.org/2001/XMLSchema"})
     sub(root, "fileHeader", companyName="Unknown", productName="Unnamed", productVersion="1",
@@ -262,15 +308,7 @@ def project(pous: list[Pou], globals_: list[tuple[str, str, Optional[str]]] = ()
         if p.return_type:
             _type(interface, p.return_type, "returnType")
         for tag, variables in p.vars.items():
-            attrs = {}
-            if tag.endswith(" constant"):
-                tag, attrs = tag.split()[0], {"constant": "true"}
-            vl = sub(interface, tag, **attrs)
-            for name, type_name, init in variables:
-                v = sub(vl, "variable", name=name)
-                _type(v, type_name)
-                if init is not None:
-                    sub(sub(v, "initialValue"), "simpleValue", value=init)
+            var_list(interface, tag.split("#")[0], variables)     # "localVars#2": a second list of that kind
         body = sub(el, "body")
         if isinstance(p.body, Diagram):
             body.append(p.body.finish())
@@ -287,6 +325,10 @@ def project(pous: list[Pou], globals_: list[tuple[str, str, Optional[str]]] = ()
             for name, type_name, address in globals_:
                 v = sub(gv, "variable", name=name, address=address)
                 _type(v, type_name)
+        for tag, variables in resource_lists:
+            var_list(res, tag, variables)
         task = sub(res, "task", name="task0", priority=0, interval=interval)
         sub(task, "pouInstance", name="instance0", typeName=program)
+        for tag, variables in global_lists:       # TC6: a configuration's lists after its resources
+            var_list(conf, tag, variables)
     return etree.tostring(root, xml_declaration=True, encoding="utf-8", pretty_print=True)

@@ -17,7 +17,7 @@ import matplotlib.pyplot as plt  # noqa: E402
 from matplotlib.patches import FancyBboxPatch, Rectangle  # noqa: E402
 from lxml import etree  # noqa: E402
 
-from plclab.plcopen.graphical import read_elements  # noqa: E402
+from plclab.frontend.graphical import read_elements  # noqa: E402
 
 NS = {"ppx": "http://www.plcopen.org/xml/tc6_0201"}
 

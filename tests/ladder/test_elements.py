@@ -312,7 +312,7 @@ def test_xml_with_st_files_in_one_unit(tmp_path):
 
 def test_generated_lines_map_back_to_the_drawing(tmp_path):
     """What the grader uses to name a statement of a ladder POU: (file, line) -> rung, element."""
-    from plclab.plcopen.graphical import drawing_location
+    from plclab.frontend.graphical import drawing_location
 
     d = Diagram()
     a = d.contact("A", 0, 0)

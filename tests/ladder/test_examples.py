@@ -14,7 +14,7 @@ import pytest
 
 from examples import EXAMPLES, EXAMPLES_DIR
 from plclab.frontend import check_sources
-from plclab.plcopen.project import source_from_xml
+from plclab.frontend.plcxml import source_from_xml
 from plclab.runtime.compiler import compile_unit
 from plclab.runtime.plc import PLC
 from plclab.runtime.sim import Simulation
@@ -23,11 +23,12 @@ from plclab.stands import get_stand, sources
 
 def test_stored_examples_are_what_examples_py_draws_and_valid_tc6():
     from plclab import plcopen
+    from plclab.frontend import plcxml
 
     for name, make in EXAMPLES.items():
         data = (EXAMPLES_DIR / name).read_bytes()
         assert data == make(), f"{name}: run examples.py to redraw it"
-        plcopen.validate(plcopen.parse_xml(data, name), name)       # the TC6 model: raises on a bad file
+        plcopen.validate(plcxml.parse_xml(data, name), name)       # the TC6 model: raises on a bad file
 
 
 def stand_sources(stand: str) -> list[tuple[str, str]]:

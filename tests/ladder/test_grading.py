@@ -65,3 +65,32 @@ def test_exploration_names_the_rung_and_element_that_last_wrote_the_output(tmp_p
     assert "last written in plc.xml: FB_Mp9cManual (LD), rung " in e1.observed, e1.observed
     assert ", coil L" in e1.observed and "localId" in e1.observed
     assert "plc.xml:" not in e1.observed.replace("plc.xml: FB_", "")    # no generated line number
+
+
+def handout_with_located_io() -> bytes:
+    """The ladder Task 1 project, with the I/O the program uses declared as a student often does
+    in OpenPLC Editor: SB1 and HL1 at their addresses in the program's own table, among its
+    function block instances (the Editor writes that table as two VAR blocks), not as globals."""
+    root = etree.fromstring(handout_with_ladder_manual(every_mechanism=True))
+    program = root.find("ppx:types/ppx:pous/ppx:pou[@name='PRG_Mp9cBaseline']", PPX)
+    externals = program.find("ppx:interface/ppx:externalVars", PPX)
+    table = program.findall("ppx:interface/ppx:localVars", PPX)[-1]
+    assert table.find("ppx:variable[@name='Button']", PPX) is not None       # the instances' table
+    for name, address, position in (("SB1", "%IX1.6", 1), ("HL1", "%QX1.0", 3)):
+        variable = externals.find(f"ppx:variable[@name='{name}']", PPX)
+        externals.remove(variable)
+        variable.set("address", address)
+        table.insert(position, variable)
+    for globals_ in root.iterfind(".//ppx:globalVars", PPX):
+        for variable in list(globals_):
+            if variable.get("name") in ("SB1", "HL1"):
+                globals_.remove(variable)
+    return etree.tostring(root, xml_declaration=True, encoding="utf-8")
+
+
+def test_located_io_in_the_program_table_checks_and_passes_task1(tmp_path, capsys):
+    path = tmp_path / "plc.xml"
+    path.write_bytes(handout_with_located_io())
+    assert main(["check", str(path)]) == 0, capsys.readouterr()
+    report = grade("mp9c", "task1", [str(path)])
+    assert report.exit_code == 0, report.text()

@@ -5,9 +5,11 @@ import pytest
 
 from modbus_support import CLIENTS, FakeScan, exception_code
 from plclab.modbus.maps import TwidoMap
-from plclab.modbus.profiles import THERMO
+from plclab.stands import twido_profile
 from plclab.modbus.server import ModbusTcpServer
 from plclab.runtime.image import ProcessImage
+
+THERMO = twido_profile("thermo")
 
 MANUAL, AUTO1, AUTO2 = 0, 1, 2
 

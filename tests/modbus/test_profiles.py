@@ -8,8 +8,8 @@ import pytest
 
 from plclab.frontend.parser import parse_source
 from plclab.modbus.profiles import (THERMO_MODES, THERMO_RULES, Access, GvlRegister, RegisterRule,
-                                    ValueRange, ValueSet, profile_from_gvl, twido_profile, valid_range)
-from plclab.stands import PLC_DIR, get_stand, gvl_variables
+                                    ValueRange, ValueSet, profile_from_gvl, valid_range)
+from plclab.stands import PLC_DIR, twido_profile, get_stand, gvl_variables
 
 
 def _program_constants(pou: str) -> dict[str, int]:

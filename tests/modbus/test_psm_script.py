@@ -200,8 +200,8 @@ def test_cnc_part_program_through_the_console_face_reaches_the_plc_frame_by_fram
     where = ("127.0.0.1", console_port)
     try:
         openplc = OpenPlcPsm(psm_port)
-        lines = run_console("cnc", where, tape=(1, frames), tape_wait=0.0)
-        assert lines[0].startswith("tape: the PLC has stored 0 of 4 frames so far")
+        with pytest.raises(PlcLabError, match=r"^tape: the PLC stored 0 of 4 frames in 0 s: it acknowledged none"):
+            run_console("cnc", where, tape=(1, frames), tape_wait=0.0)      # no scan yet: not loaded
         shown = []
         for _scan in range(8):                                # the PLC: store what is shown, acknowledge it
             openplc.read_dig_inp()
@@ -220,6 +220,83 @@ def test_cnc_part_program_through_the_console_face_reaches_the_plc_frame_by_fram
                 assert e.value.code == 3
             assert console.read_holding_registers(0, 2) == [4, 1]       # the last good tape's count, method
         stop_script(proc, openplc)
+    finally:
+        if proc.poll() is None:
+            proc.kill()
+            proc.wait(TIMEOUT)
+
+
+PART = "G21 G90 G17\nG01 X2 Y0 F300\nY1\nX0 Y0\n"        # three frames
+
+
+class PlcSide:
+    """OpenPLC's PSM exchange in a thread of its own, every 5 ms, until stopped: `ack` (True:
+    store and acknowledge the frame the tape reader shows, as PRG_CncStand does while idle;
+    False: never acknowledge) and `hl1` (the program running lamp, %QX0.7)."""
+
+    def __init__(self, port: int, ack: bool, hl1: bool = False):
+        import threading
+
+        self.openplc = OpenPlcPsm(port)
+        self.ack, self.hl1 = ack, hl1
+        self.stored: list[int] = []
+        self.stop = threading.Event()
+        self.thread = threading.Thread(target=self.run, daemon=True)
+        self.thread.start()
+
+    def run(self) -> None:
+        ack = 0
+        while not self.stop.wait(0.005):
+            self.openplc.read_dig_inp()
+            words = self.openplc.read_ana_inp()
+            if self.ack:
+                if words[4] != ack and words[4] and words[4] not in self.stored:
+                    self.stored.append(words[4])
+                ack = words[4]
+            bits = [0] * 400
+            bits[7] = int(self.hl1)
+            self.openplc.write_dig_out(bits)
+            self.openplc.write_ana_out([0] * 4 + [ack] + [0] * 45)
+
+    def close(self) -> OpenPlcPsm:
+        self.stop.set()
+        self.thread.join(TIMEOUT)
+        return self.openplc
+
+
+def test_console_part_exits_non_zero_unless_every_frame_is_stored_and_acknowledged(tmp_path):
+    """`plclab console cnc --part`: against a PLC side that does not acknowledge, exit 1 with
+    one line naming how many frames were stored and why; a running part (HL1 lit) is refused
+    by name, nothing sent; a PLC that stores every frame: exit 0."""
+    part = tmp_path / "part.nc"
+    part.write_text(PART, encoding="utf-8")
+    proc, psm_port, console_port = start_script(tmp_path, "cnc")
+    where = f"127.0.0.1:{console_port}"
+
+    def console(*extra):
+        return subprocess.run([sys.executable, "-m", "plclab.cli", "console", "cnc", where, "--part", str(part),
+                               *extra], capture_output=True, text=True, timeout=TIMEOUT)
+    try:
+        plc = PlcSide(psm_port, ack=True, hl1=True)             # a part runs: HL1 lit
+        time.sleep(0.1)
+        r = console("--wait", "2")
+        assert r.returncode == 1 and r.stderr.count("\n") == 1
+        assert r.stderr.startswith("plclab: error: tape: not loaded: a part program is running or held (HL1 lit)")
+        plc.close().close()
+        assert not plc.stored                                   # nothing was put on the reader
+        plc = PlcSide(psm_port, ack=False)
+        r = console("--wait", "0.5")
+        assert r.returncode == 1 and r.stdout == ""
+        assert r.stderr == ("plclab: error: tape: the PLC stored 0 of 3 frames in 0.5 s: it acknowledged none "
+                            "(TAPE_ACK, %QW4; the cnc program must run in OpenPLC, idle, with this PSM script); "
+                            "SB1 runs nothing until every frame is stored (the tape stays on the reader)\n")
+        plc.close().close()
+        plc = PlcSide(psm_port, ack=True)
+        r = console("--wait", "5")
+        assert r.returncode == 0, r.stderr
+        assert r.stdout.splitlines()[0] == "tape: 3 frames stored and acknowledged by the PLC; SB1 runs them"
+        assert plc.stored == [1, 2, 3]
+        stop_script(proc, plc.close())
     finally:
         if proc.poll() is None:
             proc.kill()

@@ -1,2 +1,3 @@
-"""CNC part programs (docs/cnc.md): the G-code front end that turns a part program into the
-frame table of the CNC stand, and the tool-path checks against the interpolators' bounds."""
+"""The CNC stand's part programs run (docs/cnc.md): `plclab cnc` (run.py), the bundle for a real
+OpenPLC (openplc.py) and the bench. The G-code front end and the tool-path checks they use sit
+a layer below the stands, in plclab.nc."""

@@ -27,7 +27,7 @@ def bench_cnc(radius_mm: float = 3.0, feed_mm_min: float = 600.0, method: str = 
     """Run a line to (R, 0) and a full circle of `radius_mm` at `feed_mm_min` (0.01 mm steps)
     `runs` times on a fresh stand each; the best run's figures (the least disturbed by other
     load on the machine)."""
-    from plclab.cnc.gcode import parse
+    from plclab.nc.gcode import parse
     from plclab.stands import cnc
 
     r = float(radius_mm)

@@ -19,7 +19,7 @@ from __future__ import annotations
 import re
 from typing import Optional
 
-from plclab.cnc.gcode import Frame
+from plclab.nc.gcode import Frame
 from plclab.errors import PlcLabError
 
 OPENPLC_FINE_MS = 5            # ms: the fine cycle in OpenPLC (over 5 times the PSM exchange)
@@ -28,32 +28,41 @@ STEP_MM = 0.01                 # the drives' step: GVL_CNC.StepMm's initial valu
 PER_LINE = 12                  # initial values per line of the bundle
 
 
-def plant_params() -> dict[str, float]:
-    """The PSM script's plant for this bundle: its pulse generator spreads a cycle's counts
-    over the program's interpolation cycle T."""
-    return {"pulse_cycle": NFINE * OPENPLC_FINE_MS / 1000.0}
+def plant_params(fine_ms: int = OPENPLC_FINE_MS) -> dict[str, float]:
+    """The PSM script's plant for the bundle of fine cycle `fine_ms`: its pulse generator
+    spreads a cycle's counts over the program's interpolation cycle T."""
+    from plclab.stands.cnc import fine_cycle_params
+    return {"pulse_cycle": fine_cycle_params(fine_ms)["pulse_cycle"]}
 
 
 def openplc_bundle(text: str, frames: Optional[list[Frame]] = None, method: str = "evalfn",
-                   diagonal: bool = False, part: str = "") -> str:
+                   diagonal: bool = False, part: str = "", fine_ms: int = OPENPLC_FINE_MS,
+                   drive: str = "step") -> str:
     """The bundle `text` (plclab.stands.bundle of the cnc stand) made for OpenPLC: the fine
-    cycle OPENPLC_FINE_MS, and with `frames` the part program `part` as the frame table's
-    initial values. Raises PlcLabError if the program is not the shape this relies on."""
-    from plclab.stands.cnc import FRAME_ARRAYS, MAX_FRAMES, frame_table
+    cycle `fine_ms` in the task and FINE_MS (plclab.stands.cnc.with_fine_cycle, the edit
+    `plclab cnc --fine-cycle` runs), and with `frames` the part program `part` as the frame
+    table's initial values; `drive` "pulse": GVL_CNC.PulseDrive starts TRUE (the pulse-count
+    drive, DDA and digital integration up to PULSE_FEED_MAX). Raises PlcLabError if the
+    program is not the shape this relies on."""
+    from plclab.stands.cnc import FRAME_ARRAYS, MAX_FRAMES, frame_table, with_fine_cycle
 
     _expect(text, r"NFINE : INT := (\d+);", str(NFINE), "NFINE")
     _expect(text, r"StepMm : LREAL := ([\d.]+);", str(STEP_MM), "StepMm")
-    text = _replace(text, r"(TASK FineTask \(INTERVAL := )T#1ms(, )", rf"\g<1>T#{OPENPLC_FINE_MS}ms\g<2>",
-                    "the FineTask of T#1ms")
-    text = _replace(text, r"(FINE_MS : LREAL := )1\.0;", rf"\g<1>{OPENPLC_FINE_MS:.1f};", "FINE_MS := 1.0")
-    note = [f"(* For OpenPLC: PRG_CncStand every {OPENPLC_FINE_MS} ms (FINE_MS = {OPENPLC_FINE_MS}.0), "
-            f"the PSM exchange needs about 1 ms a scan."]
+    text = with_fine_cycle([("bundle", text)], fine_ms)[0][1]
+    note = [f"(* For OpenPLC: PRG_CncStand every {fine_ms} ms (FINE_MS = {fine_ms}.0), the PSM exchange "
+            f"needs about 1 ms a scan;", f"   plclab cnc --fine-cycle {fine_ms} runs the twin at this cycle."]
+    if drive not in ("step", "pulse"):
+        raise PlcLabError(f"build: unknown drive {drive!r} (step or pulse)")
+    if frames is None and drive == "pulse":
+        at = text.find("\nCONFIGURATION ")
+        text = text[:at] + _replace(text[at:], r"^(\s*PulseDrive : BOOL);", r"\g<1> := TRUE;", "PulseDrive", re.M)
+        note.append("   The pulse-count drive (PulseDrive := TRUE): counts on %QW, spread by the PSM script.")
     if frames is not None:
         if not frames:
             raise PlcLabError(f"{part}: no motion in the part program")
         if len(frames) > MAX_FRAMES:
             raise PlcLabError(f"{part}: {len(frames)} frames: the frame table holds {MAX_FRAMES}")
-        table = frame_table(frames, STEP_MM, method, diagonal)
+        table = frame_table(frames, STEP_MM, method, diagonal, drive)
         at = text.find("\nCONFIGURATION ")
         if at < 0:
             raise PlcLabError("build: the cnc program has no CONFIGURATION for the frame table")
@@ -67,8 +76,8 @@ def openplc_bundle(text: str, frames: Optional[list[Frame]] = None, method: str 
                 else rf"^(\s*{name} : \w+);"
             text = _replace(text, pattern, lambda m, init=init: f"{m.group(1)} := {init};", name, re.M)
         text = head + text
-        note.append(f"   Part program {part}: {len(frames)} frames in the frame table (GVL_CNC), method {method}; "
-                    f"SB1 on the console face runs it.")
+        note.append(f"   Part program {part}: {len(frames)} frames in the frame table (GVL_CNC), method {method}"
+                    + (", the pulse-count drive" if drive == "pulse" else "") + "; SB1 on the console face runs it.")
     first_end = text.index("*)") + 2                   # after the bundle's own first comment
     return text[:first_end] + "\n" + "\n".join(note) + " *)" + text[first_end:]
 
@@ -99,7 +108,7 @@ def part_tape(part: str, method: str = "evalfn", tools: Optional[dict[int, float
     """A part program for the stand's tape reader (`plclab console cnc --part`): the method's
     number, per frame the frame table's nine values in steps (plclab.plants.cnc: TAPE_WORDS
     order), and the part's notes. The same table `plclab cnc` and the bundle's --part load."""
-    from plclab.cnc.gcode import parse_file
+    from plclab.nc.gcode import parse_file
     from plclab.stands.cnc import FRAME_ARRAYS, MAX_FRAMES, frame_table
 
     program = parse_file(part, tools, STEP_MM)

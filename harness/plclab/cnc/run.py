@@ -4,12 +4,13 @@ virtual time; per frame the contour error against its bound; the tool path as CS
 from __future__ import annotations
 
 import math
-from dataclasses import dataclass, replace
+from dataclasses import dataclass, field, replace
 from pathlib import Path
 from typing import Optional, Sequence
 
-from plclab.cnc.gcode import Frame, Program, parse_file
-from plclab.cnc.toolpath import HEADER, BlockResult, OffsetResult, check_blocks, check_offsets, path_mm
+from plclab.cnc.feeds import REACHED_TOLERANCE, reached_feed, slow_reason
+from plclab.nc.gcode import Frame, Program, parse_file
+from plclab.nc.toolpath import HEADER, BlockResult, OffsetResult, check_blocks, check_offsets, path_mm
 from plclab.errors import PlcLabError
 from plclab.fileio import check_output, open_atomic, write_text
 
@@ -23,6 +24,12 @@ class CncResult:
     finished: bool
     lines: list[str]
     files: list[Path]
+    feeds: list["FrameFeed"] = field(default_factory=list)     # per frame: programmed and reached
+
+    @property
+    def slow(self) -> list["FrameFeed"]:
+        """The frames whose reached feed is below the programmed one (by REACHED_TOLERANCE)."""
+        return [f for f in self.feeds if f.slow]
 
     @property
     def ok(self) -> bool:
@@ -34,10 +41,11 @@ def run_cnc(part: str, method: str = "evalfn", step_mm: float = 0.01, feed: Opti
             csv: Optional[str] = None, vcd: Optional[str] = None, plot: Optional[str] = None,
             svg: Optional[str] = None, diagonal: bool = False,
             tools: Optional[dict[int, float]] = None, drive: str = "step",
-            program: Optional[Sequence[str]] = None) -> CncResult:
+            program: Optional[Sequence[str]] = None, fine_cycle: Optional[int] = None) -> CncResult:
     """Run part program `part` on the CNC stand: the shipped program (a checkout's model
     answer of FB_CncEvalLinear), or with `program` the student's files (their
-    FB_CncEvalLinear in place of the stub, or a complete program: cnc.program_sources)."""
+    FB_CncEvalLinear in place of the stub, or a complete program: cnc.program_sources);
+    `fine_cycle` ms: the program's fine cycle (default 1 ms; 5 is the OpenPLC build's)."""
     from plclab.stands import cnc
     from plclab.trace import write_vcd
 
@@ -49,6 +57,8 @@ def run_cnc(part: str, method: str = "evalfn", step_mm: float = 0.01, feed: Opti
         raise PlcLabError(f"--step {step_mm}: the drives' step must be 0.001..1 mm")
     if feed is not None and feed <= 0:
         raise PlcLabError(f"--feed {feed}: the feed must be > 0 mm/min")
+    if fine_cycle is not None:
+        cnc.check_fine_ms(fine_cycle)    # else the program's own cycle (the shipped one's: 1 ms)
     for target in (csv, vcd, plot, svg):
         if target:
             check_output(target)         # a bad output is refused before the run
@@ -64,17 +74,24 @@ def run_cnc(part: str, method: str = "evalfn", step_mm: float = 0.01, feed: Opti
         frames = [f if f.kind == 0 else replace(f, feed=feed) for f in frames]
     if not frames:
         raise PlcLabError(f"{part}: no motion in the part program")
-    s = cnc.session(variant, program=srcs, step_mm=step_mm)
+    s = cnc.session(variant, program=srcs, step_mm=step_mm, fine_ms=fine_cycle)
     _check_travel(frames, s.plant)
     length = sum(math.dist(f.start, f.end) if not f.is_arc else 2 * math.pi * math.hypot(f.i, f.j)
                  for f in frames)
-    slowest = min(min(f.feed, 60_000 * step_mm) for f in frames) / 60.0
+    fine_s = cnc.fine_cycle_s(s)
+    slowest = min(min(f.feed, 60.0 * step_mm / fine_s / math.sqrt(2)) for f in frames) / 60.0
     run = cnc.run_part(s, frames, method, diagonal, timeout=10.0 + 3.0 * length / slowest, drive=drive)
-    blocks = check_blocks(run.executed, run.points, step_mm, method, start_time=run.start, drive=drive)
+    blocks = check_blocks(run.executed, run.points, step_mm, method, start_time=run.start, drive=drive,
+                          fine_s=fine_s)
     offsets = check_offsets(frames, run.executed, step_mm)
+    feeds = [frame_feed(f, b, method, drive, diagonal, fine_s, step_mm) for f, b in zip(run.executed, blocks)]
     lines = list(gcode.notes) + [f"{part}: {len(frames)} frames, method {method}, step {step_mm:g} mm, "
-                                   f"drive {drive}", HEADER]
-    lines += [b.row() for b in blocks]
+                                   f"drive {drive}, fine cycle {fine_s * 1000:g} ms", FRAME_HEADER]
+    for b, fd in zip(blocks, feeds):
+        lines.append(frame_row(b, fd))
+        if fd.slow:
+            lines.append(f"      frame {b.index} reached {fd.reached:.0f} of F{fd.programmed:g} mm/min "
+                         f"({fd.reached / fd.programmed:.0%}): {fd.why}")
     if offsets:
         lines.append("tool-radius correction (frames on the equidistant):")
         lines += [o.row() for o in offsets]
@@ -90,7 +107,7 @@ def run_cnc(part: str, method: str = "evalfn", step_mm: float = 0.01, feed: Opti
     files = []
     points = path_mm(run.points, step_mm)
     if csv:
-        files.append(_write_csv(csv, points))
+        files.append(_write_csv(csv, run.points, step_mm, feeds))
     if vcd:
         write_vcd(s.trace, vcd)
         files.append(Path(vcd))
@@ -98,9 +115,53 @@ def run_cnc(part: str, method: str = "evalfn", step_mm: float = 0.01, feed: Opti
         files.append(_plot(plot, frames, run.executed, points, blocks, step_mm, part, method))
     if svg:
         files.append(_svg(svg, frames, points))
-    result = CncResult(gcode, blocks, offsets, run.missed, run.finished, lines, files)
-    lines.append("ok: every frame within its bound" if result.ok else "FAILED: see the rows above")
+    result = CncResult(gcode, blocks, offsets, run.missed, run.finished, lines, files, feeds)
+    slow = f"; {len(result.slow)} of {len(blocks)} frames below their programmed feed (said above)" \
+        if result.slow else ""
+    lines.append(f"ok: every frame within its bound{slow}" if result.ok else f"FAILED: see the rows above{slow}")
     return result
+
+
+@dataclass(frozen=True)
+class FrameFeed:
+    """A frame's feed: the programmed one (None for a rapid, which runs at the stand's top
+    rate) and the one reached, path length over the frame's time, mm/min; `why` it is lower."""
+
+    programmed: Optional[float]
+    reached: Optional[float]
+    why: str = ""
+
+    @property
+    def slow(self) -> bool:
+        return bool(self.why)
+
+
+def frame_feed(f: Frame, b: BlockResult, method: str, drive: str, diagonal: bool, fine_s: float,
+               h: float) -> FrameFeed:
+    """Frame `f`'s programmed and reached feed (its result `b`), and why it ran slower."""
+    reached = reached_feed(b.length_mm, b.time_s)
+    if f.kind == 0:
+        return FrameFeed(None, reached)
+    if reached is not None and reached < f.feed * (1 - REACHED_TOLERANCE):
+        return FrameFeed(f.feed, reached, slow_reason(f, b.length_mm, f.feed, reached, method, drive, diagonal,
+                                                      fine_s, h))
+    return FrameFeed(f.feed, reached)
+
+
+FRAME_HEADER = HEADER + f" {'F mm/min':>9} {'reached':>9}"
+
+
+def frame_row(b: BlockResult, fd: FrameFeed) -> str:
+    """A frame's row of the table: contour figures, the programmed and the reached feed, the
+    verdict ("ok" only when within the bound and at the programmed feed)."""
+    row = b.row()
+    verdict = "ok" if b.ok else "OUT OF BOUND"
+    figures = row[:row.rindex(verdict)].rstrip()
+    programmed = "rapid" if fd.programmed is None else f"{fd.programmed:.1f}"
+    reached = "-" if fd.reached is None else f"{fd.reached:.1f}"
+    if fd.slow:
+        verdict = "in bound, BELOW THE FEED" if b.ok else verdict + ", BELOW THE FEED"
+    return f"{figures} {programmed:>9} {reached:>9}  {verdict}"
 
 
 PLOTTED_SCENARIOS = ("square", "circle", "star", "pocket", "backlash", "blank")
@@ -118,7 +179,7 @@ def plot_scenario(name: str, path: str) -> Path:
     cnc.SCENARIOS[name](s)
     run = s.cnc_run                       # type: ignore[attr-defined]
     blocks = check_blocks(run.executed, run.points, run.step_mm, run.method, run.frames_start, run.origin,
-                          drive=run.drive)
+                          drive=run.drive, fine_s=run.fine_s)
     return _plot(path, run.frames, run.executed, path_mm(run.points, run.step_mm), blocks, run.step_mm,
                  f"scenario {name}", run.method)
 
@@ -136,11 +197,20 @@ def _check_travel(frames: list[Frame], plant) -> None:
                 raise PlcLabError(f"line {f.line}: the block leaves the table's travel ({lo:g}..{hi:g} mm)")
 
 
-def _write_csv(path: str, points) -> Path:
+CSV_HEADER = "time_s,X,Y,Z,frame,feed_mm_min,reached_mm_min"
+
+
+def _write_csv(path: str, points, h: float, feeds: list[FrameFeed]) -> Path:
+    """The tool path, a row per move: time, position (mm), the frame it belongs to and that
+    frame's programmed feed (empty for a rapid) and reached feed, the table's figures."""
+    def cell(v: Optional[float]) -> str:
+        return "" if v is None else f"{v:.1f}"
+
     with open_atomic(path) as fh:
-        fh.write("time_s,X,Y,Z\n")
-        for t, x, y, z in points:
-            fh.write(f"{t:.6f},{x:.4f},{y:.4f},{z:.4f}\n")
+        fh.write(CSV_HEADER + "\n")
+        for t, k, x, y, z in points:
+            fd = feeds[k - 1] if 1 <= k <= len(feeds) else FrameFeed(None, None)
+            fh.write(f"{t:.6f},{x * h:.4f},{y * h:.4f},{z * h:.4f},{k},{cell(fd.programmed)},{cell(fd.reached)}\n")
     return Path(path)
 
 

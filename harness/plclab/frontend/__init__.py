@@ -1,6 +1,8 @@
 """ST front end: parse and check one compilation unit made of one or more files.
 
 `load_files` / `check_sources` are what the CLI, the build, the runtime and the tests call.
+`read_sources` is the one entry for program files: an OpenPLC Editor project (plc.xml) is read
+as the Editor's generator writes its ST (plcxml; its LD / FBD bodies through graphical/).
 """
 from __future__ import annotations
 
@@ -118,7 +120,7 @@ def read_sources(paths: Iterable[str | Path]) -> list[tuple[str, str]]:
 
 def _read_project(path: str | Path, st_texts: list[tuple[str, str]]) -> tuple[str, list[Diagnostic]]:
     from plclab.errors import PlcLabError
-    from plclab.plcopen.project import source_from_xml
+    from plclab.frontend.plcxml import source_from_xml
 
     name = str(path)
     data, errs = _read_bytes(path)

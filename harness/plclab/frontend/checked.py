@@ -50,6 +50,6 @@ class CheckedUnit:
     config: Optional[A.Configuration]
     diagnostics: list[Diagnostic] = field(default_factory=list)
     scope_count: int = 1     # global scopes (several GVL files of different stands, no CONFIGURATION)
-    # sources made from a plc.xml (file name -> plcopen GeneratedSource): a fault in their
+    # sources made from a plc.xml (file name -> frontend.graphical GeneratedSource): a fault in their
     # code names the POU, rung and element drawn, not a line of generated text
     drawings: dict[str, Any] = field(default_factory=dict)

@@ -19,8 +19,8 @@ import math
 from pathlib import Path
 from typing import Any, Optional
 
-from plclab.cnc.gcode import Frame
-from plclab.cnc.toolpath import segment_distance
+from plclab.nc.gcode import Frame
+from plclab.nc.toolpath import segment_distance
 from plclab.scenario import Session
 from plclab.stands import cnc
 

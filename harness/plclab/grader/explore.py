@@ -792,7 +792,7 @@ def exploration_rows(req: Any, sources: Sequence[tuple[str, str]], checked: Any,
     (the shrunk script and the student's traces under it, in `out_dir`). A difference that
     plainly breaks one of the task's requirements comes with that requirement's row too, after
     E1's (the engine puts it in place of the scenarios' row if they passed it)."""
-    from plclab.plcopen.graphical import drawing_location
+    from plclab.frontend.graphical import drawing_location
     from plclab.stands.base import stand_spec
     from plclab.trace import write_csv, write_vcd
 

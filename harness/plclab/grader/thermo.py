@@ -31,11 +31,12 @@ from typing import Callable, Optional
 from plclab import fileio
 from plclab.errors import PlcLabError
 from plclab.modbus.maps import TwidoMap
-from plclab.modbus.profiles import MANUAL, THERMO, THERMO_MODES, THERMO_RULES, valid_range
+from plclab.modbus.profiles import MANUAL, THERMO_MODES, THERMO_RULES, valid_range
 from plclab.modbus.protocol import ModbusException, Request, Table
 from plclab.modbus.server import answer_pdu
 from plclab.modbus.traffic import Exchange, Traffic, TrafficRecorder, describe, exception_name, parse_traffic
 from plclab.scenario import Session
+from plclab.stands import twido_profile
 
 from .engine import grade, grade_sources
 from .registry import Checks, Failure, Requirement, RequirementSet, Scenario, Submission, register
@@ -116,7 +117,7 @@ def replay(traffic: Traffic) -> Replay:
     from plclab.stands.thermo import session
 
     s = session()
-    rmap = TwidoMap(s.plc.image, THERMO)
+    rmap = TwidoMap(s.plc.image, twido_profile(STAND))
     tick_ns = s.plc.tick_ns
     out = []
     for e in traffic.exchanges:
@@ -403,7 +404,7 @@ def record_session(host: str = "127.0.0.1", port: int = 5020, duration_s: Option
     with tempfile.TemporaryDirectory(prefix="plclab-scada-") as tmp:
         stand_cfg = dataclasses.replace(conf.stand(STAND), retain_file=Path(tmp) / "thermo.retain")
         modbus = dataclasses.replace(conf.modbus, bind=host, port=port)
-        opts = ServeOptions(sources(get_stand(STAND), "full"), stand_cfg, modbus, make_plant(STAND), "twido", THERMO)
+        opts = ServeOptions(sources(get_stand(STAND), "full"), stand_cfg, modbus, make_plant(STAND), "twido", twido_profile(STAND))
         service = Service(opts, report=lambda line: None)
         recorder = TrafficRecorder(lambda: service.plc.now_ns / 1e9)
         service.server.on_request = recorder

@@ -19,12 +19,12 @@ def open_lab(stand: str, program: Optional[Sequence[str]] = None, variant: Optio
              port: int = 8080, speed: float = 1.0, modbus_port: Optional[int] = 5020) -> LabServer:
     """A lab server for `stand` running the ST files `program` (else the shipped `variant`),
     not yet listening. A program that fails the check is refused here, with its diagnostics.
-    Without a variant: the most complete program there is (`full` in a checkout)."""
+    Without a variant: the student's starting program (the real stand has Appendix 1 loaded)."""
     from plclab.frontend import read_sources
     from plclab.lab.engine import check_program
     from plclab.stands import get_stand
 
-    variant = variant or get_stand(stand).richest_variant
+    variant = variant or get_stand(stand).starting_variant
     get_stand(stand).variant(variant)
     sources = None
     if program:

@@ -67,7 +67,9 @@ def bench_lab(stand: str = "mp9c", speeds: tuple[float, ...] = (1, 10), seconds:
     the server's CPU (share of one core) with no page, with one and with `pages` pages."""
     results = []
     for speed in speeds:
+        from plclab.stands import get_stand
         proc = subprocess.Popen([sys.executable, "-m", "plclab.cli", "lab", stand, "--port", "0",
+                                 "--variant", get_stand(stand).richest_variant,      # the most complete program
                                  "--speed", str(speed), "--modbus-port", "0"],
                                 stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True)
         try:
@@ -130,8 +132,9 @@ def trace_kept(stand: str, hours: float = 2.0) -> dict:
     """Run the lab's engine for `hours` of plant time, a console change every 5 s: how much
     trace it keeps (the ring bounds it whatever the run's length)."""
     from plclab.lab.engine import TRACE_KEEP_S, Lab
+    from plclab.stands import get_stand
 
-    lab = Lab(stand)
+    lab = Lab(stand, variant=get_stand(stand).richest_variant)   # the most complete program
     try:
         lab.session.run(lab.session.tick)
         control = next(c for c in lab.panel.controls if c.kind == "switch")

@@ -56,7 +56,7 @@ class Lab:
         self.stand = stand
         self.module = stand_module(stand)
         self.panel: Panel = PANELS[stand]
-        variant = variant or self.module.STAND.richest_variant
+        variant = variant or self.module.STAND.starting_variant    # as the real stand: Appendix 1 loaded
         self.variant = variant
         self.program_files = list(program_files)      # where --program came from (reload re-reads them)
         self.uploaded: Optional[list[tuple[str, str]]] = None   # the last program a page loaded
@@ -135,6 +135,7 @@ class Lab:
         self._extra_unknown.clear()
         self._trend_sent, self._events_sent, self._actions_sent = {}, 0, 0
         self._trimmed_at = 0.0
+        self.start_refused, self._start_watch = None, None
         self.epoch += 1
         self.script = (name, list(steps), 0)
         s.log(f"input script {name}: {len(steps)} step(s), the stand reset")
@@ -284,7 +285,7 @@ class Lab:
 
     def load_part(self, text: str, name: str, method: str) -> str:
         """A CNC part program into the PLC's frame table (plclab.lab.cncview)."""
-        from plclab.cnc.gcode import GcodeError
+        from plclab.nc.gcode import GcodeError
         try:
             return self.panel.part.load(self.session, text, name, method)
         except (GcodeError, ValueError) as e:
@@ -309,12 +310,94 @@ class Lab:
             raise LabError(f"{label} is a switch: it is set on or off, not pressed")
         if down:
             self.session.console.hold(control.input)
-            self.held.add(control.input)
+            if not control.latching:          # a latched button is no hold of the student's time
+                self.held.add(control.input)
         else:
             self.session.console.release(control.input)
             self.held.discard(control.input)
+        self._watch_start(control.input, down)
         self.console_levels[label] = int(down)
         self._rebase = True            # the pace changes while a button is held (see `pace`)
+
+    # ------------------------------------------------------------------ a start press refused
+    start_refused: Optional[str] = None    # why the last start press started nothing (the page shows it)
+    _start_watch: Any = None               # (output change counts at the press, deadline or None)
+
+    def _watch_start(self, name: str, down: bool) -> None:
+        """A press of the stand's start button in automatic mode is watched: when none of the
+        outputs a start changes has changed `within` s of its release, the lab says so and
+        what the program reads of the console then (the StandSpec's StartPress: I/O only)."""
+        from plclab.stands.base import stand_spec
+        start = stand_spec(self.stand).start
+        if start is None or name != start.button:
+            return
+        s = self.session
+        if down:
+            self.start_refused = None
+            switch, level = start.mode
+            if int(bool(s.value(switch))) != level or self._playing(start):
+                self._start_watch = None           # manual mode (a press records a frame), or a stop press
+                return
+            self._start_watch = ({o: s.trace.change_count(o) for o in start.outputs if o in s.trace}, None)
+        elif self._start_watch is not None:
+            self._start_watch = (self._start_watch[0], s.now + start.within)
+
+    def _playing(self, start: Any) -> bool:
+        """Whether playback is under way (a press then stops it): the program says so where
+        the stand's observables name it (Running, InFrame); a program without them, when one
+        of the outputs a start moves changed in the last seconds (a frame, or its pause)."""
+        s = self.session
+        told = []
+        for name in ("Running", "InFrame"):
+            if name in s.observables:
+                try:
+                    told.append(bool(s.value(name)))
+                except Exception:     # noqa: BLE001 - a student's program need not have it
+                    pass
+        if told:
+            return any(told)
+        recent = round((s.now - start.within - 1.0) * 1e9)
+        for o in start.outputs:
+            if o in s.trace:
+                changes = s.trace.changes(o)
+                if len(changes) > 1 and changes[-1][0] >= recent:
+                    return True
+        return False
+
+    def _check_start(self) -> None:
+        counts, deadline = self._start_watch
+        s = self.session
+        if any(s.trace.change_count(o) != n for o, n in counts.items()):
+            self._start_watch = None               # an output changed: playback started (or stopped)
+            return
+        if deadline is None or s.now < deadline:
+            return
+        self._start_watch = None
+        from plclab.stands.base import stand_spec
+        start = stand_spec(self.stand).start
+        assert start is not None
+        label = {c.input: c.label for c in self.panel.controls}
+        read = []
+        for name, off, on in start.reads:
+            try:
+                level = int(bool(s.value(name)))
+            except PlcLabError:
+                continue
+            read.append(f"{label.get(name, name)} {'on' if level else 'off'}"
+                        + (f" ({on if level else off})" if (off, on) != ("off", "on") else ""))
+        frames, ask = "", " Is one of them off that the program needs on?"
+        try:
+            count = int(s.value("FrameCount"))
+            frames = f"; {count} frame(s) recorded" if count else "; no frame recorded"
+            ask = ask if count else " Record frames first (manual mode)."
+        except Exception:        # noqa: BLE001 - a program without the shipped frame memory
+            pass
+        first, last = start.outputs[0], start.outputs[-1]
+        text = (f"{label.get(start.button, start.button)} pressed in automatic mode: the program started "
+                f"nothing ({first}..{last} unchanged {start.within:g} s after the release). "
+                f"It reads {', '.join(read)}{frames}.{ask}")
+        self.start_refused = text
+        s.log(text)
 
     def pace(self) -> float:
         """The speed the plant runs at now: x1 while a push button is held, whatever the
@@ -569,6 +652,10 @@ class Lab:
         rate_wall, rate_virt = time.monotonic(), s.now
         while not self._stop.is_set():
             self._drain()
+            if self.session is not s:      # an input script's reset swapped the session: pace the new one
+                s = self.session
+                rate_wall, rate_virt = time.monotonic(), s.now
+                self._rebase = True
             if self._rebase:
                 self._rebase = False
                 base_wall, base_virt = time.monotonic(), s.now - s.tick
@@ -637,6 +724,8 @@ class Lab:
                 s.run(s.tick)
                 self._sample_extras(extras)
         self.scans_run += n
+        if self._start_watch is not None:
+            self._check_start()
         if s.now - self._trimmed_at >= TRIM_EVERY_S:
             self._trim()
 
@@ -703,10 +792,12 @@ class Lab:
         fault = plc.fault
         if fault is not None:            # on the header's clock (the PLC's restarts at every load)
             fault = dataclasses.replace(fault, time_ns=fault.time_ns + round(s.now * 1e9) - plc.now_ns)
+        forced_labels = self._forced_labels()
         snap: dict[str, Any] = {
             "type": "state", "seq": self.seq, "t": round(s.now - s.tick, 6), "tick": s.tick,
             "speed": self.speed, "paused": self.paused, "actual_speed": round(self.actual_speed, 2),
-            "held": sorted(self.held), "pace": self.pace(),
+            "held": sorted(self.held), "pace": self.pace(), "start_refused": self.start_refused,
+            "held_labels": [c.label for c in self.panel.controls if c.input in self.held],   # as the console prints them
             "program": self.program_name, "loads": self.loads, "epoch": self.epoch,
             "script": self._script_state(),
             "trace_from": round(s.trace.start_ns / 1e9, 3), "trace_keep": TRACE_KEEP_S,
@@ -715,7 +806,7 @@ class Lab:
             "plc": {"state": plc.state, "fault": str(fault) if fault else None,
                     "pou": fault.pou if fault else None, "file": fault.file if fault else None,
                     "line": fault.line if fault else None},
-            "io": self._io(),
+            "io": self._io(forced_labels),
             "mimic": self.panel.mimic(s),
         }
         # what is new since the last snapshot; a full one (a page connecting) has it all, and
@@ -733,7 +824,7 @@ class Lab:
             snap["registers"] = self.registers()
         snap["watch"] = self._watch_values()
         snap["forced"] = {p: _force_text(v) for p, v in self.forces.values.items()}
-        snap["forced_labels"] = self._forced_labels()
+        snap["forced_labels"] = forced_labels
         values = self._monitor_values(full)
         if values is not _SAME and values is not None:
             snap["monitor"] = {"pou": self.monitor.pou, "instance": self.monitor.instance, "values": values}
@@ -777,11 +868,19 @@ class Lab:
         wall, speed, virt = self._pace
         return virt + (time.monotonic() - wall) * speed
 
-    def _io(self) -> dict[str, int]:
+    def _io(self, forced: Sequence[str] = ()) -> dict[str, int]:
         s = self.session
         io = {}
         for c in self.panel.controls:        # the console as the operator set it (seen while paused too)
+            if c.kind == "button":           # a button's level: pressed (1) or not, whatever its contact
+                io[c.label] = self.console_levels.setdefault(c.label, 0)
+                continue
             io[c.label] = self.console_levels.setdefault(c.label, int(bool(s.value(c.signal))))
+            if c.label in forced:            # forced: what the PLC reads, not where the switch is
+                try:
+                    io[c.label] = int(bool(s.plc.read(c.signal)))
+                except PlcLabError:
+                    pass
         for k in self.panel.knobs:
             io[k.label] = self.console_levels.setdefault(k.label, k.initial)
         for lamp in self.panel.lamps:
@@ -811,10 +910,13 @@ class Lab:
 
     # ------------------------------------------------------------------ thermo registers
     def registers(self) -> list[dict[str, Any]]:
-        from plclab.modbus.profiles import THERMO
+        from plclab.stands import twido_profile
+        THERMO = twido_profile("thermo")
         image = self.session.plc.image
         raw = image.snapshot("MW", 0, max(r.address for r in THERMO.registers) + 1)
+        from plclab.modbus.profiles import THERMO_MODES
         return [{"address": r.address, "name": r.name, "access": r.access.value,
+                 "choices": [[k, v] for k, v in sorted(THERMO_MODES.items())] if r.name == "mode" else None,
                  "valid": str(r.valid) if r.valid is not None else "",
                  "rule": f"writable only when {r.writable_when}" if r.writable_when else "",
                  "description": r.description, "value": r.as_value(raw[r.address])} for r in THERMO.registers]
@@ -824,8 +926,9 @@ class Lab:
         load makes a new process image; the map follows it). `external`: the map an
         external SCADA client writes through, each write (done or refused) in the lab's log."""
         from plclab.modbus.maps import TwidoMap
-        from plclab.modbus.profiles import THERMO
         from plclab.modbus.protocol import ModbusException
+        from plclab.stands import twido_profile
+        THERMO = twido_profile("thermo")
 
         lab = self
 
@@ -936,7 +1039,7 @@ def read_upload(files: Sequence[tuple[str, Any]]) -> tuple[list[tuple[str, str]]
     element of a drawing. Held to the memory limit of a program run (plclab.limits)."""
     from plclab.frontend import is_project_file
     from plclab.limits import memory_limited
-    from plclab.plcopen.project import source_from_xml       # imported before the limit (lxml maps a lot)
+    from plclab.frontend.plcxml import source_from_xml       # imported before the limit (lxml maps a lot)
     st_texts = [(n, t) for n, t in files if not is_project_file(n)]
     out: list[tuple[str, str]] = []
     errors: list[str] = []

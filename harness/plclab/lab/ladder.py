@@ -9,10 +9,10 @@ every element's output: the left rail is powered; a contact conducts when power 
 and its variable is TRUE (FALSE for a negated one); wires into one point are OR'ed; a coil
 is energised when power reaches it (its variable is shown beside it); a box's outputs are
 the values its call left (`DebounceTimer.Q`, `_TMP_ADD5_OUT`: the names the translation
-gives them, plcopen.graphical.generator). An edge contact (|P|, |N|) conducts for the one
+gives them, frontend.graphical.generator). An edge contact (|P|, |N|) conducts for the one
 scan of its trigger; the page, ten snapshots a second, shows the variable's level on it.
 
-The semantics are the translation's (plclab.plcopen.graphical.read_elements), not a second
+The semantics are the translation's (plclab.frontend.graphical.read_elements), not a second
 reading of the XML: only the geometry (sizes, pin and wire points) is read here.
 """
 from __future__ import annotations
@@ -23,14 +23,14 @@ from lxml import etree
 
 from plclab.errors import PlcLabError
 from plclab.iec import types as T
-from plclab.plcopen.datatypes import NS, local
+from plclab.frontend.tc6 import NS, local
 
 MAX_ELEMENTS = 2000          # elements drawn per POU (a bigger drawing: shown as its ST)
 
 
 def drawings(sources: list[tuple[str, str]]) -> dict[str, dict]:
     """POU name (upper case) -> its LD layout, for every LD POU of the plc.xml sources (a
-    source read from a plc.xml carries its bytes as `xml`, plcopen.project.source_from_xml)."""
+    source read from a plc.xml carries its bytes as `xml`, frontend.plcxml.source_from_xml)."""
     out: dict[str, dict] = {}
     for _name, text in sources:
         data = getattr(text, "xml", None)
@@ -74,7 +74,7 @@ def _pin_at(var: etree._Element, block: dict) -> Optional[list[float]]:
 def layout(body: etree._Element) -> Optional[dict]:
     """The drawing of one LD body as the page draws it: elements (id, kind, box, name,
     modifier, pins) and wires (points, the source element and pin whose power they carry)."""
-    from plclab.plcopen.graphical import read_elements
+    from plclab.frontend.graphical import read_elements
     elements = read_elements(body)
     if len(elements) > MAX_ELEMENTS:
         return None
@@ -219,7 +219,7 @@ def _plain(v: Any) -> Any:
 
 def pou_elements(sources: list[tuple[str, str]], pou: str) -> Optional[list]:
     """The translation's elements of LD POU `pou` (what PowerFlow evaluates)."""
-    from plclab.plcopen.graphical import read_elements
+    from plclab.frontend.graphical import read_elements
     for _name, text in sources:
         data = getattr(text, "xml", None)
         if not data:

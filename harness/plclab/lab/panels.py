@@ -16,6 +16,7 @@ from dataclasses import dataclass, field
 from typing import Any, Callable, Mapping
 
 from plclab.errors import PlcLabError
+from plclab.lab.cncview import CncPart, cnc_mimic, set_backlash, set_fine_cycle, set_override
 from plclab.scenario import ScenarioFailure, Session
 from plclab.stands.base import StandSpec, stand_spec
 
@@ -28,6 +29,7 @@ class Control:
     input: str            # the plant's console name: 'SA5', 'SA1_FWD', 'I07'
     kind: str             # 'switch' | 'button'
     hint: str = ""        # what the contact does, shown beside it
+    latching: bool = False   # a button that stays pressed until pressed again (an emergency stop)
 
     @property
     def signal(self) -> str:
@@ -84,6 +86,8 @@ class Panel:
     faults: tuple[Fault, ...]
     trends: tuple[str, ...]                          # signals trended when the page opens
     trend_window: float = 60.0                       # plant seconds a trend shows
+    trend_units: Mapping[str, tuple[float, str]] = field(default_factory=dict)   # signal -> (factor, unit)
+    trend_overlays: Mapping[str, str] = field(default_factory=dict)  # trend -> signal drawn over it
     mimic: Callable[[Session], dict[str, Any]] = field(repr=False, default=lambda s: {})
     frames: Callable[[Session], Any] = field(repr=False, default=_no_frames)   # the recorded program
     knobs: tuple[Knob, ...] = ()
@@ -99,7 +103,7 @@ class Panel:
         """The static part of the page, sent once when a page connects."""
         return {
             "stand": self.stand,
-            "controls": [{"label": c.label, "kind": c.kind, "hint": c.hint, "signal": c.signal}
+            "controls": [{"label": c.label, "kind": c.kind, "hint": c.hint, "signal": c.signal, "latching": c.latching}
                          for c in self.controls],
             "lamps": [{"label": lamp.label, "hint": lamp.hint, "group": lamp.group} for lamp in self.lamps],
             "faults": [{"name": f.name, "text": f.text,
@@ -108,6 +112,8 @@ class Panel:
             "knobs": [{"label": k.label, "lo": k.lo, "hi": k.hi, "unit": k.unit, "initial": k.initial, "hint": k.hint}
                       for k in self.knobs],
             "part": self.part.describe() if self.part is not None else None,
+            "trend_units": {k: list(v) for k, v in self.trend_units.items()},
+            "trend_overlays": dict(self.trend_overlays),
         }
 
     def knob(self, label: str) -> Knob:
@@ -129,12 +135,15 @@ class Look:
     labels: Mapping[str, str] = field(default_factory=dict)     # console input -> printed label
     hints: Mapping[str, str] = field(default_factory=dict)      # GVL label -> what it does
     buttons: frozenset[str] = frozenset()                       # push buttons; other inputs are switches
+    latching: frozenset[str] = frozenset()                      # push buttons that latch (mushroom buttons)
     lamp_groups: tuple[str, ...] = ("lamps",)                   # spec groups drawn as lamps, in order
     fault_texts: Mapping[str, str] = field(default_factory=dict)   # short text (default: the spec's)
     # (fault, parameter) -> (choices, default); a parameter not here is a number field
     fault_params: Mapping[tuple[str, str], tuple[tuple[str, ...], str]] = field(default_factory=dict)
     trends: tuple[str, ...] = ()
     trend_window: float = 60.0      # plant seconds a trend shows (thermo: its 300-s step response)
+    trend_units: Mapping[str, tuple[float, str]] = field(default_factory=dict)   # signal -> (factor, unit) shown
+    trend_overlays: Mapping[str, str] = field(default_factory=dict)  # trend -> a signal drawn over it (same unit)
     mimic: Callable[[Session], dict[str, Any]] = field(repr=False, default=lambda s: {})
     frames: Callable[[Session], Any] = field(repr=False, default=_no_frames)
     knobs: tuple[Knob, ...] = ()    # settings that are not contacts (their labels leave the console)
@@ -148,6 +157,7 @@ def derive_panel(spec: StandSpec, look: Look) -> Panel:
     params = {(f.name, p.name) for f in spec.faults for p in f.params}
     knobs = {k.label for k in look.knobs}
     stale = [*(k for k in look.labels if k not in spec.console), *(b for b in look.buttons if b not in spec.console),
+             *(b for b in look.latching if b not in look.buttons),
              *(k for k in look.hints if k not in set(spec.console) | shown),
              *(k for k in look.fault_texts if k not in {f.name for f in spec.faults}),
              *(f"{f}.{p}" for f, p in look.fault_params if (f, p) not in params),
@@ -155,13 +165,13 @@ def derive_panel(spec: StandSpec, look: Look) -> Panel:
     if stale:
         raise PlcLabError(f"lab panel of {spec.name}: {', '.join(stale)} not in the stand's StandSpec")
     controls = tuple(Control(look.labels.get(i, i), i, "button" if i in look.buttons else "switch",
-                             look.hints.get(i, "")) for i in spec.console if i not in knobs)
+                             look.hints.get(i, ""), i in look.latching) for i in spec.console if i not in knobs)
     lamps = tuple(Lamp(name, look.hints.get(name, ""), LAMP_GROUPS[group])
                   for group in look.lamp_groups for name in getattr(spec, group))
     faults = tuple(Fault(f.name, look.fault_texts.get(f.name, f.doc),
                          tuple(_fault_param(look, f.name, p) for p in f.params)) for f in spec.faults)
-    return Panel(spec.name, controls, lamps, faults, look.trends, look.trend_window, look.mimic, look.frames,
-                 look.knobs, look.part)
+    return Panel(spec.name, controls, lamps, faults, look.trends, look.trend_window, look.trend_units,
+                 look.trend_overlays, look.mimic, look.frames, look.knobs, look.part)
 
 
 def _fault_param(look: Look, fault: str, param: Any) -> FaultParam:
@@ -175,8 +185,11 @@ def _fault_param(look: Look, fault: str, param: Any) -> FaultParam:
 
 def recorded_program(s: Session) -> Any:
     """The control program in the PLC's frame memory, raw: (frames [(data words, pause ns or
-    None)], the frame pointer, whether playback runs), or None when the program has no frame
-    memory where the stand's observables say (FrameCount: `Main.Cp.Count`)."""
+    None)], the frame pointer, the playback phase), or None when the program has no frame
+    memory where the stand's observables say (FrameCount: `Main.Cp.Count`). The phase is
+    'frame' (frame Ptr being executed), 'pause' (the pause after frame Ptr), 'wait' (step
+    mode: frame Ptr waits for the next press), 'between' (running, neither known) or
+    'stopped' (read from the playback record's InFrame, State and Running, where it has them)."""
     count_path = s.observables.get("FrameCount")
     ptr_path = s.observables.get("FramePtr")
     if not count_path:
@@ -190,14 +203,20 @@ def recorded_program(s: Session) -> Any:
     for frame in frames[:max(0, min(count, len(frames)))]:
         pause = getattr(frame, "PAUSE", None)
         rows.append(([int(v) for v in frame.DATA], int(pause) if isinstance(pause, int) else None))
-    ptr = running = None
+    ptr = None
+    phase = "stopped"
     if ptr_path:
         try:
             seq = s.plc.read(ptr_path.rsplit(".", 1)[0])
-            ptr, running = int(seq.PTR), bool(getattr(seq, "RUNNING", False) or getattr(seq, "INFRAME", False))
+            ptr = int(seq.PTR)
+            state = getattr(seq, "STATE", None)
+            if bool(getattr(seq, "INFRAME", False)):
+                phase = "frame"
+            elif bool(getattr(seq, "RUNNING", False)):
+                phase = {2: "pause", 3: "wait"}.get(state, "between") if isinstance(state, int) else "between"
         except Exception:    # noqa: BLE001
             pass
-    return rows, ptr, running
+    return rows, ptr, phase
 
 
 def _pause_text(pause: Any) -> str:
@@ -205,12 +224,25 @@ def _pause_text(pause: Any) -> str:
 
 
 def _frame_table(s: Session, columns: list[str], decode: Callable[[list[int]], list[str]]) -> Any:
+    """The table the page shows: the frames decoded, the one being executed (`current`), the
+    one last done while the robot pauses or waits for a step press (`done`), the next one."""
     raw = recorded_program(s)
     if raw is None:
         return None
-    rows, ptr, running = raw
-    return {"columns": ["frame", *columns, "pause"], "current": ptr if running else None, "next": ptr,
-            "rows": [[str(i), *decode(data), _pause_text(pause)] for i, (data, pause) in enumerate(rows, 1)]}
+    rows, ptr, phase = raw
+    count = len(rows)
+    current = done = None
+    nxt = ptr
+    if phase == "frame":
+        current = ptr
+    elif phase == "pause" and ptr is not None:          # the pause after frame Ptr: Ptr is done
+        done = ptr
+        nxt = 1 if ptr >= count else ptr + 1
+    elif phase == "wait" and ptr is not None:           # Ptr already moved on to the next frame
+        done = count if ptr <= 1 else ptr - 1
+    return {"columns": ["frame", *columns, "pause"], "current": current, "done": done, "next": nxt,
+            "phase": phase, "rows": [[str(i), *decode(data), _pause_text(pause)]
+                                     for i, (data, pause) in enumerate(rows, 1)]}
 
 
 # --------------------------------------------------------------------------- MP-9C
@@ -316,8 +348,15 @@ TUR10 = derive_panel(stand_spec("tur10"), Look(
 # --------------------------------------------------------------------------- thermo
 
 def _thermo_mimic(s: Session) -> dict[str, Any]:
+    from plclab.modbus.profiles import THERMO_MODES
     snap = s.plant.snapshot()
-    return {"temperature": snap["temperature_c"], "heater_w": snap["heater_w"], "fan_rpm": snap["fan_rpm"],
+    try:                             # the SCADA registers the program works with (%MW0, %MW6)
+        mode, setpoint = int(s.value("MODE")), int(s.value("SETPOINT"))
+    except (ScenarioFailure, PlcLabError, TypeError, ValueError):
+        mode = setpoint = None
+    return {"mode": mode, "mode_name": THERMO_MODES.get(mode, f"unknown ({mode})") if mode is not None else None,
+            "setpoint": setpoint,
+            "temperature": snap["temperature_c"], "heater_w": snap["heater_w"], "fan_rpm": snap["fan_rpm"],
             "heater_command": snap["heater_command"], "fan_command": snap["fan_command"],
             "heater_max_w": s.plant.params.heater_max_w, "fan_max_rpm": s.plant.params.fan_max_rpm,
             "faults": snap["faults"]}
@@ -329,11 +368,27 @@ THERMO = derive_panel(stand_spec("thermo"), Look(
                  "heater_dead": "heater burnt out"},
     trends=("TEMP_ADC", "SETPOINT", "HEATER", "FAN", "DISTURBANCE"),
     trend_window=600.0,
+    # the raw ADC shown in degC (10 counts per degC) on one scale with the setpoint, drawn over it
+    trend_units={"TEMP_ADC": (0.1, "\u00b0C"), "SETPOINT": (1.0, "\u00b0C"), "TEMPERATURE": (1.0, "\u00b0C")},
+    trend_overlays={"TEMP_ADC": "SETPOINT"},
     mimic=_thermo_mimic,
 ))
 
-from plclab.lab.cncview import CNC_LOOK  # noqa: E402 - the CNC's look builds on the classes above
-
-CNC = derive_panel(stand_spec("cnc"), CNC_LOOK)
+CNC = derive_panel(stand_spec("cnc"), Look(
+    hints={"SB1": "start the part program", "SB2": "stop / feed hold", "SA1": "single block",
+           "SB3": "emergency stop: latches when pressed, press again to release", "HL1": "program running",
+           "HL2": "fault / emergency stop"},
+    buttons=frozenset({"SB1", "SB2", "SB3"}),
+    latching=frozenset({"SB3"}),          # a mushroom button: stays pressed until released
+    lamp_groups=("lamps",),
+    fault_texts={"slow_drive": "a drive misses steps above a rate"},
+    fault_params={("slow_drive", "axis"): (("X", "Y", "Z"), "X"), ("slow_drive", "rate"): ((), "1000")},
+    trends=("SB1", "HL1", "CNT_X", "CNT_Y"),
+    knobs=(Knob("RP1", 0, 150, "%", 100, "feed override", set_override),
+           Knob("backlash", 0, 50, "steps", 0, "play of every axis's transmission", set_backlash),
+           Knob("FINE_MS", 1, 20, "ms", 1, "fine cycle (5: as OpenPLC runs it)", set_fine_cycle)),
+    part=CncPart(),
+    mimic=cnc_mimic,
+))
 
 PANELS = {p.stand: p for p in (MP9C, TUR10, THERMO, CNC)}

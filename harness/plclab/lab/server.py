@@ -105,6 +105,7 @@ class LabServer:
         self._grade_lock: Optional[asyncio.Lock] = None
         self._grade_runs = 0
         self.grade_files: dict[str, Path] = {}
+        self.last_grade: Optional[dict] = None       # the last grade's table (a reloaded page shows it)
         self.token = secrets.token_urlsafe(24)       # what a state-changing request must carry
         self.session_id = secrets.token_hex(6)       # a page that sees it change knows the lab restarted
 
@@ -281,7 +282,8 @@ class LabServer:
             twido = f"{self.bind}:{self.modbus.port}"
         return {"type": "hello", "stand": lab.stand, "title": lab.module.STAND.title, "panel": lab.panel.describe(),
                 "speeds": list(SPEEDS), "tasks": grade_tasks, "checks": checks, "twido": twido, "pages": len(self.clients) + 1,
-                "trend_names": lab.trend_names, "trend_window": lab.panel.trend_window, "can_reload": True, "session": self.session_id}
+                "trend_names": lab.trend_names, "trend_window": lab.panel.trend_window, "can_reload": True, "session": self.session_id,
+                "grade": self.last_grade}
 
     async def websocket(self, request: web.Request) -> web.StreamResponse:
         ws = web.WebSocketResponse(heartbeat=20.0, max_msg_size=MAX_MESSAGE)
@@ -345,7 +347,8 @@ class LabServer:
             elif op in ("press", "release"):
                 label = str(msg["label"])
                 await asyncio.wrap_future(lab.call(lambda: lab.press(label, op == "press"), console=True))
-                (client.held.add if op == "press" else client.held.discard)(label)
+                if not lab.panel.control(label).latching:     # a latched button stays when the page goes
+                    (client.held.add if op == "press" else client.held.discard)(label)
             elif op == "speed":
                 await asyncio.wrap_future(lab.call(lambda: lab.set_speed(msg["value"])))
             elif op == "unscript":
@@ -540,7 +543,8 @@ class LabServer:
         if self._grade_lock.locked():
             return _refuse("grade: a grade is already running; wait for its table")
         async with self._grade_lock:
-            sources = await asyncio.wrap_future(self.lab.call(lambda: list(self.lab.session.sources)))
+            sources, program = await asyncio.wrap_future(self.lab.call(
+                lambda: (list(self.lab.session.sources), self.lab.program_name)))
             self._grade_runs += 1
             run = f"{self._grade_runs}-{task}"
             out_dir = self.lab.work_dir / "grade" / run
@@ -555,13 +559,49 @@ class LabServer:
             for p in paths:
                 self.grade_files[f"{run}/{p.name}"] = p
                 links[scenario].append({"name": p.name, "url": f"/grade/{run}/{p.name}"})
+        graded = await loop.run_in_executor(None, self._graded_values, report)
         rows = [{"id": r.id, "text": r.text, "result": r.result, "expected": r.expected, "observed": r.observed,
-                 "time": r.time, "scenario": r.scenario, "traces": links.get(r.scenario, [])} for r in report.rows]
+                 "time": r.time, "scenario": r.scenario, "traces": links.get(r.scenario, []),
+                 "graded": graded.get(r.id)} for r in report.rows]
         n_pass = sum(r.passed for r in report.rows)
         summary = (f"{n_pass} of {len(report.rows)} requirements passed: {'PASS' if report.passed else 'FAIL'}"
                    if not report.errors else "the program does not compile: FAIL")
-        return web.json_response({"ok": True, "title": report.title, "task": task, "passed": report.passed,
-                                  "errors": report.errors, "rows": rows, "summary": summary})
+        result = {"ok": True, "title": report.title, "task": task, "passed": report.passed,
+                  "errors": report.errors, "rows": rows, "summary": summary, "program": program}
+        self.last_grade = result                 # a reloaded page shows it again
+        return web.json_response(result)
+
+    def _graded_values(self, report: Any) -> dict[str, str]:
+        """For each row that did not pass at a known time: the console and the outputs as the
+        graded run had them then (read from its trace), in console labels; what a student
+        compares with the lab's live values when the row opens the program."""
+        from plclab.trace import read_csv
+        lab = self.lab
+        names = [c.label for c in lab.panel.controls] + [lamp.label for lamp in lab.panel.lamps]
+        labels = lab.session.labels
+        traces: dict[str, Any] = {}
+        out: dict[str, str] = {}
+        for r in report.rows:
+            if r.passed or r.time is None:
+                continue
+            csv = next((p for p in report.traces.get(r.scenario, []) if p.suffix == ".csv"), None)
+            if csv is None:
+                continue
+            try:
+                if csv not in traces:
+                    traces[csv] = read_csv(csv)
+                trace = traces[csv]
+                shown = []
+                for label in names:
+                    signal = next((c.signal for c in lab.panel.controls if c.label == label), label)
+                    address = labels.get(signal, signal)
+                    if address in trace:
+                        shown.append(f"{label}={_plain_value(trace.value_at(address, r.time))}")
+            except (PlcLabError, OSError, ValueError, LookupError):
+                continue
+            if shown:
+                out[r.id] = f"the graded run ({r.scenario}) at t = {r.time:.2f} s: " + " ".join(shown)
+        return out
 
     async def grade_file(self, request: web.Request) -> web.StreamResponse:
         key = f"{request.match_info['run']}/{request.match_info['file']}"
@@ -594,6 +634,12 @@ class LabServer:
 
 ALL_OPS = ("set", "press", "release", "speed", "pause", "run", "scan", "restart", "inject", "clear", "trends",
            "tree", "watch", "force", "unforce", "source", "monitor", "unscript", "register", "knob", "part", "contour")
+
+
+def _plain_value(value: Any) -> str:
+    if isinstance(value, bool):
+        return str(int(value))
+    return str(value)
 
 
 def _bit(value: Any) -> int:

@@ -1,7 +1,7 @@
 """Modbus TCP faces of the soft PLC and OpenPLC's PSM I/O protocol.
 
 protocol  MBAP framing and PDU codec (exception codes 01/02/03 exactly)
-profiles  Twido register tables as data (THERMO)
+profiles  Twido register tables as data (the rules; plclab.stands.twido_profile builds a stand's table)
 maps      register maps over the process image: OpenPlcMap, TwidoMap
 server    ModbusTcpServer: asyncio in its own thread, never blocking the scan
 psm       PSM plant-side server (lockstep), PLC-side client, PlantService, psm_script()

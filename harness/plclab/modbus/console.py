@@ -247,20 +247,39 @@ def run_console(stand: str, where: tuple[str, int], sets: Iterable[str] = (),
 
 
 def _send_tape(client: ConsoleClient, face: Any, method: int, frames: list[tuple[int, ...]], wait: float) -> str:
-    """Load the tape and wait for the PLC to store it all (the `tape` readout); one line."""
+    """Load the tape and wait up to `wait` s for the PLC to store and acknowledge every frame
+    (the `tape` readout); the line to print, or ConsoleError (one line: how many frames were
+    stored and why not the rest). Refused, nothing sent, while a part program runs or is held
+    (HL1 lit): the PLC stores a tape only while no program runs."""
+    lamps = [label for label, _loc in face.lamps]
+    running = "HL1" in lamps and (lambda: client.client.read_discrete_inputs(lamps.index("HL1"), 1)[0] == 1)
+    if running and running():
+        raise ConsoleError("tape: not loaded: a part program is running or held (HL1 lit), and the PLC stores "
+                           "a tape only while no program runs; load it when the part has ended (or after SB3)")
     try:
         client.load_tape(method, frames)
     except RawModbusError as exc:
         raise ConsoleError(f"the stand refused the part program: {exc}") from None
     where = [name for name, _unit in face.readouts].index("tape")
+    n = len(frames)
     deadline = time.monotonic() + wait
-    stored = 0
+    taken = False                # the readout went back from the last tape's count: the plant has this tape
     while True:
         stored = client.client.read_input_registers(where, 1)[0]
-        if stored == len(frames) or time.monotonic() >= deadline:
+        taken = taken or stored < n
+        if (taken and stored == n) or time.monotonic() >= deadline:
             break
         client.sleep(0.05)
-    if stored == len(frames):
-        return f"tape: {len(frames)} frames stored by the PLC; SB1 runs them"
-    return (f"tape: the PLC has stored {stored} of {len(frames)} frames so far (it stores them while no "
-            f"program runs; the tape readout shows the progress)")
+    if taken and stored == n:
+        return f"tape: {n} frames stored and acknowledged by the PLC; SB1 runs them"
+    if not taken:
+        why = (f"the plant has not taken the tape in {wait:g} s (no PSM exchange: OpenPLC must run the "
+               f"program with this PSM script)")
+    elif running and running():
+        why = f"the PLC stored {stored} of {n} frames: a part program started before it had stored them all (HL1 lit)"
+    elif stored == 0:
+        why = (f"the PLC stored 0 of {n} frames in {wait:g} s: it acknowledged none (TAPE_ACK, %QW4; the cnc "
+               f"program must run in OpenPLC, idle, with this PSM script)")
+    else:
+        why = f"the PLC stored {stored} of {n} frames in {wait:g} s: it stopped acknowledging (TAPE_ACK, %QW4)"
+    raise ConsoleError(f"tape: {why}; SB1 runs nothing until every frame is stored (the tape stays on the reader)")

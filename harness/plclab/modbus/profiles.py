@@ -2,19 +2,20 @@
 
 A SCADA exercise relies on a register contract (which %MW exist, which are read-only, which
 values are accepted and when); keeping that contract in a table rather than in code lets the
-server, the thermo stand, the HMI and the docs share one source. THERMO is `docs/thermo.md`'s table.
+server, the thermo stand, the HMI and the docs share one source. The thermo stand's table
+(`docs/thermo.md`) is `plclab.stands.twido_profile("thermo")`.
 
 Each fact has one home. The stand's GVL (plc/GVL/GVL_THERMO.st) says which %MW exist, their
 names, types, initial values and meanings; what ST cannot say -- the Twido's refusal rules
 (read only, valid values, writable only in manual mode) and the HMI's point names -- is
 declared here once, per GVL label (THERMO_RULES), and tests/modbus/test_profiles.py holds the
-ranges to PRG_Thermo's constants. THERMO is built from both on first use, not at import: the
-PSM script embeds this module (for TwidoMap's types) without the ST sources.
+ranges to PRG_Thermo's constants. The stands build a profile from both
+(plclab.stands.twido_profile): the ST sources are theirs, and the PSM script embeds this module
+(for TwidoMap's types) without them.
 """
 from __future__ import annotations
 
 import enum
-import functools
 from dataclasses import dataclass
 from typing import Mapping, Sequence
 
@@ -121,7 +122,7 @@ class RegisterRule:
 
 @dataclass(frozen=True)
 class GvlRegister:
-    """What a profile takes of one %MW global of the GVL (plclab.stands.gvl_variables)."""
+    """What a profile takes of one %MW global of the GVL (plclab.stands.gvl_variables reads them)."""
 
     address: int
     type: str
@@ -177,20 +178,3 @@ def valid_range(rules: Sequence[RegisterRule], label: str) -> ValueRange:
 
 # Stand name (and openplc.conf `profile = twido`) -> the rules of its Twido map.
 TWIDO_RULES: dict[str, tuple[RegisterRule, ...]] = {"thermo": THERMO_RULES}
-
-
-@functools.lru_cache(maxsize=None)
-def twido_profile(stand: str) -> TwidoProfile:
-    """The Twido map of `stand`: its GVL's %MW globals under its rules."""
-    from plclab.stands import get_stand, gvl_variables     # the ST sources: not in the PSM script
-
-    gvl = {v.name: GvlRegister(int(v.address[3:]), v.type, v.comment)
-           for v in gvl_variables(get_stand(stand)) if v.address.startswith("%MW")}
-    return profile_from_gvl(stand, gvl, TWIDO_RULES[stand])
-
-
-def __getattr__(name: str) -> TwidoProfile:
-    """`THERMO`, built on first use (see the module docstring)."""
-    if name == "THERMO":
-        return twido_profile("thermo")
-    raise AttributeError(f"module {__name__!r} has no attribute {name!r}")

@@ -34,7 +34,7 @@ import socket
 import struct
 import textwrap
 import zlib
-from typing import Any, Callable, Protocol
+from typing import Any, Callable, Optional, Protocol
 
 from plclab.errors import PlcLabError
 from plclab.iec.address import AddressError
@@ -504,10 +504,13 @@ def _module_source(name: str) -> str:
 
 
 def psm_script(stand: str, *, psm: tuple[str, int] = (DEFAULT_HOST, PSM_PORT),
-               console: tuple[str, int] = (DEFAULT_HOST, CONSOLE_PORT)) -> str:
+               console: tuple[str, int] = (DEFAULT_HOST, CONSOLE_PORT),
+               plant: Optional[dict[str, Any]] = None) -> str:
     """The text of an OpenPLC PSM script (core/psm/main.py) that runs `stand`'s plant with
     run_plant(): the PLC Lab modules it needs are embedded, so it depends on no path of this
-    installation and needs nothing but a Python 3 (OpenPLC's own)."""
+    installation and needs nothing but a Python 3 (OpenPLC's own). `plant`: the parameters
+    the plant starts with (the cnc stand's come from the bundle it runs with, plclab.cnc.openplc,
+    which the command line passes: the Modbus layer knows no stand's program)."""
     if stand not in STANDS:
         raise PlcLabError(f"psm-script: unknown stand {stand!r} (one of {', '.join(STANDS)})")
     modules = _EMBEDDED + (f"plclab.plants.{stand}",) + _EMPTY_PACKAGES
@@ -524,11 +527,7 @@ def psm_script(stand: str, *, psm: tuple[str, int] = (DEFAULT_HOST, PSM_PORT),
                                 subsequent_indent="#       ") for table, names in tables]
     if face.tape:
         face_lines.append(f"#   holding registers 0..{face.tape - 1}: the tape reader (plclab console {stand} --part)")
-    plant: dict[str, Any] = {}
-    if stand == "cnc":                       # in step with `plclab build cnc`'s fine cycle
-        from plclab.cnc.openplc import plant_params
-        plant = plant_params()
     return _SCRIPT.format(
-        plant=plant, stand=stand, psm_host=psm[0], psm_port=psm[1], console_host=console[0], console_port=console[1],
+        plant=dict(plant or {}), stand=stand, psm_host=psm[0], psm_port=psm[1], console_host=console[0], console_port=console[1],
         face="\n".join(face_lines), packages=packages, embedded="\n".join(lines),
         modules=textwrap.fill(", ".join(sorted(modules)), 92, initial_indent="#   ", subsequent_indent="#   "))

@@ -97,7 +97,7 @@ class PlantModel:
         if fault not in self.FAULTS:
             raise PlantError(f"unknown fault {fault!r}; this plant has: {', '.join(sorted(self.FAULTS))}")
         self.faults[fault] = dict(params)
-        self.event("fault_injected", f"{fault} {params}" if params else fault)
+        self.event("fault_injected", fault_words(fault, params))
 
     def clear(self, fault: str | None = None) -> None:
         """Remove one injected fault, or all of them."""
@@ -116,3 +116,8 @@ def signed16(raw: int) -> int:
 def unsigned16(value: int) -> int:
     """A signed value as the raw register content."""
     return int(value) & 0xFFFF
+
+
+def fault_words(fault: str, params: dict[str, Any]) -> str:
+    """An injected fault as a student reads it: 'jammed (mechanism lift)', not a Python dict."""
+    return f"{fault} ({', '.join(f'{k} {v}' for k, v in params.items())})" if params else fault

@@ -1,4 +1,5 @@
-"""TC6 data types, values and variable declarations, both ways (AST -> XML, XML -> ST text).
+"""TC6 data types, values and variable declarations, AST -> XML (the front end reads them back:
+frontend.tc6, frontend.plcxml).
 
 TC6 spells a type as one child element: an elementary type (`<INT/>`, `<TOD/>`,
 `<string length="20"/>`), `<derived name="..."/>` for user types and FB instances,
@@ -15,27 +16,15 @@ from lxml import etree
 
 from plclab.errors import PlcLabError
 from plclab.frontend import ast as A
-from plclab.plcopen import sttext
+from plclab.frontend import sttext
+from plclab.frontend.tc6 import ELEMENTARY_TAGS, XHTML, q
 from plclab.plcopen.source import SourceText
 
-PPX = "http://www.plcopen.org/xml/tc6_0201"
-XHTML = "http://www.w3.org/1999/xhtml"
-NS = {"ppx": PPX, "xhtml": XHTML}
 
 # ST type name -> TC6 element (TIME_OF_DAY and DATE_AND_TIME have only their short names there)
-ELEMENTARY = {n: n for n in ("BOOL", "BYTE", "WORD", "DWORD", "LWORD", "SINT", "INT", "DINT", "LINT", "USINT",
-                             "UINT", "UDINT", "ULINT", "REAL", "LREAL", "TIME", "DATE", "DT", "TOD")}
+ELEMENTARY = {n: n for n in ELEMENTARY_TAGS}
 ELEMENTARY.update({"TIME_OF_DAY": "TOD", "DATE_AND_TIME": "DT"})
 _UNSIGNED = {"USINT", "UINT", "UDINT", "ULINT", "BYTE", "WORD", "DWORD", "LWORD"}
-
-
-def q(tag: str) -> str:
-    """A TC6 element name with its namespace."""
-    return f"{{{PPX}}}{tag}"
-
-
-def local(el: etree._Element) -> str:
-    return etree.QName(el).localname
 
 
 def sub(parent: etree._Element, tag: str, **attrs: str) -> etree._Element:
@@ -48,14 +37,6 @@ def formatted_text(parent: etree._Element, tag: str, text: str) -> etree._Elemen
     p = etree.SubElement(el, f"{{{XHTML}}}p")
     p.text = etree.CDATA(text) if "]]>" not in text else text
     return el
-
-
-def read_formatted_text(el: Optional[etree._Element]) -> Optional[str]:
-    """The text of `<tag><xhtml:p>text</xhtml:p></tag>` (the layout around <xhtml:p> is not part of it)."""
-    if el is None:
-        return None
-    inner = [c for c in el if isinstance(c.tag, str)]
-    return "".join(inner[0].itertext()) if inner else (el.text or "").strip()
 
 
 # --------------------------------------------------------------------------- AST -> XML
@@ -155,91 +136,3 @@ def data_type_element(parent: etree._Element, t: A.TypeDecl, src: SourceText) ->
 
 
 # --------------------------------------------------------------------------- XML -> ST text
-
-def type_text(el: etree._Element, where: str) -> str:
-    """The ST spelling of a dataType-typed element (type, baseType, returnType)."""
-    content = [c for c in el if isinstance(c.tag, str)]
-    if len(content) != 1:
-        raise PlcLabError(f"{where}: a type element needs exactly one child")
-    c = content[0]
-    name = local(c)
-    if name in ("string", "wstring"):
-        word = name.upper()
-        return f"{word}[{c.get('length')}]" if c.get("length") else word
-    if name == "derived":
-        return c.get("name")
-    if name == "array":
-        dims = ", ".join(f"{d.get('lower')}..{d.get('upper')}" for d in c.findall("ppx:dimension", NS))
-        return f"ARRAY[{dims}] OF {type_text(c.find('ppx:baseType', NS), where)}"
-    if name == "enum":
-        return "(" + ", ".join(v.get("name") for v in c.findall("ppx:values/ppx:value", NS)) + ")"
-    if name in ("subrangeSigned", "subrangeUnsigned"):
-        rng = c.find("ppx:range", NS)
-        return f"{type_text(c.find('ppx:baseType', NS), where)} ({rng.get('lower')}..{rng.get('upper')})"
-    if name in ELEMENTARY.values():
-        return name
-    raise PlcLabError(f"{where}: type <{name}> has no ST form here")
-
-
-def value_text(el: etree._Element) -> str:
-    """The ST initializer of a value-typed element (initialValue, value)."""
-    content = [c for c in el if isinstance(c.tag, str)]
-    if not content:
-        return ""
-    c = content[0]
-    name = local(c)
-    if name == "simpleValue":
-        return c.get("value", "")
-    if name == "arrayValue":
-        items = []
-        for v in c.findall("ppx:value", NS):
-            rep = v.get("repetitionValue")
-            items.append(f"{rep}({value_text(v)})" if rep is not None else value_text(v))
-        return f"[{', '.join(items)}]"
-    if name == "structValue":
-        return "(" + ", ".join(f"{v.get('member')} := {value_text(v)}" for v in c.findall("ppx:value", NS)) + ")"
-    return ""
-
-
-def variable_text(var: etree._Element, where: str, indent: str) -> str:
-    """`<indent>Name [AT %IX0.0] : TYPE [:= value];  (* doc *)` and a line break."""
-    name = var.get("name")
-    at = f" AT {var.get('address')}" if var.get("address") else ""
-    text = f"{name}{at} : {type_text(var.find('ppx:type', NS), f'{where}, variable {name}')}"
-    init = var.find("ppx:initialValue", NS)
-    if init is not None:
-        text += f" := {value_text(init)}"
-    return documented(text + ";", read_formatted_text(var.find("ppx:documentation", NS)), indent)
-
-
-def data_type_text(dt: etree._Element) -> str:
-    """One declaration of a TYPE block (without the TYPE / END_TYPE around it)."""
-    name = dt.get("name")
-    base = dt.find("ppx:baseType", NS)
-    doc = read_formatted_text(dt.find("ppx:documentation", NS))
-    struct = base.find("ppx:struct", NS) if base is not None else None
-    if struct is not None:
-        fields = "".join(variable_text(v, f"type {name}", " " * 8) for v in struct.findall("ppx:variable", NS))
-        return documented(f"{name} : STRUCT", doc, " " * 4) + fields + "    END_STRUCT;\n"
-    text = f"{name} : {type_text(base, f'type {name}')}"
-    init = dt.find("ppx:initialValue", NS)
-    if init is not None:
-        text += f" := {value_text(init)}"
-    return documented(text + ";", doc, " " * 4)
-
-
-def documented(line: str, doc: Optional[str], indent: str) -> str:
-    """A declaration line with its documentation: a one-line comment after it, a longer one
-    on the lines before it."""
-    if not doc:
-        return f"{indent}{line}\n"
-    if "\n" in doc:
-        return f"{indent}{comment(doc, '')}\n{indent}{line}\n"
-    return f"{indent}{line}{comment(doc, '    ')}\n"
-
-
-def comment(doc: Optional[str], sep: str) -> str:
-    """A documentation text as an ST comment after `sep` ('' when there is none)."""
-    if not doc:
-        return ""
-    return f"{sep}(* {doc.replace('*)', '* )')} *)"

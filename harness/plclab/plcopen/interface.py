@@ -1,7 +1,8 @@
-"""VAR blocks <-> TC6 variable lists (`inputVars`, `localVars constant="true"`, ...).
+"""VAR blocks -> TC6 variable lists (`inputVars`, `localVars constant="true"`, ...).
 
-Each ST block becomes one list, in the order written, so that the XML reads back to the same
-blocks with the same qualifiers; the comment before a block documents the list.
+Each ST block becomes one list, in the order written, so that the XML reads back (as OpenPLC
+Editor reads it: frontend.plcxml) to the same blocks with the same qualifiers; the comment
+before a block documents the list.
 """
 from __future__ import annotations
 
@@ -9,15 +10,12 @@ from typing import Optional
 
 from lxml import etree
 
-from plclab.errors import PlcLabError
 from plclab.frontend import ast as A
-from plclab.plcopen.datatypes import (NS, comment, formatted_text, local, read_formatted_text, sub,
-                                      variable_element, variable_text)
+from plclab.plcopen.datatypes import formatted_text, sub, variable_element
 from plclab.plcopen.source import SourceText
 
 LIST_TAGS = {"VAR": "localVars", "VAR_TEMP": "tempVars", "VAR_INPUT": "inputVars", "VAR_OUTPUT": "outputVars",
              "VAR_IN_OUT": "inOutVars", "VAR_EXTERNAL": "externalVars", "VAR_GLOBAL": "globalVars"}
-SECTIONS = {tag: section for section, tag in LIST_TAGS.items()}
 _QUALIFIERS = (("constant", "CONSTANT"), ("retain", "RETAIN"), ("nonretain", "NON_RETAIN"))
 
 
@@ -37,17 +35,3 @@ def var_list_element(parent: etree._Element, block: A.VarBlock, src: SourceText,
     if doc:
         formatted_text(el, "documentation", doc)
     return el
-
-
-def var_list_text(el: etree._Element, where: str, indent: str = "") -> str:
-    """The ST block of a TC6 variable list, `VAR_INPUT CONSTANT ... END_VAR` style."""
-    name = local(el)
-    section = SECTIONS.get(name)
-    if section is None:
-        raise PlcLabError(f"{where}: <{name}> variables have no ST form here")
-    words = [section] + [word for attr, word in _QUALIFIERS if el.get(attr) in ("true", "1")]
-    doc = comment(read_formatted_text(el.find("ppx:documentation", NS)), "")
-    lines = [indent + doc] if doc else []
-    lines.append(indent + " ".join(words))
-    body = "".join(variable_text(v, where, indent + "    ") for v in el.findall("ppx:variable", NS))
-    return "\n".join(lines) + "\n" + body + indent + "END_VAR\n"

@@ -13,6 +13,7 @@ by `plclab.stands.references`); the CNC stand's is a whole block (`solutions/POU
 """
 from __future__ import annotations
 
+import functools
 import importlib
 import re
 from dataclasses import dataclass, field
@@ -257,3 +258,14 @@ def _read(path: Path) -> str:
 
 def _indent(text: str, n: int) -> str:
     return "\n".join((" " * n + line) if line.strip() else line for line in text.strip().splitlines())
+
+
+@functools.lru_cache(maxsize=None)
+def twido_profile(name: str):
+    """The Twido register table of stand `name` (the thermo stand's is docs/thermo.md's): its
+    GVL's %MW globals under the stand's rules of plclab.modbus.profiles (TWIDO_RULES)."""
+    from plclab.modbus.profiles import TWIDO_RULES, GvlRegister, profile_from_gvl
+
+    gvl = {v.name: GvlRegister(int(v.address[3:]), v.type, v.comment)
+           for v in gvl_variables(get_stand(name)) if v.address.startswith("%MW")}
+    return profile_from_gvl(name, gvl, TWIDO_RULES[name])

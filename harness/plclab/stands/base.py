@@ -60,6 +60,21 @@ class Fault:
 
 
 @dataclass(frozen=True)
+class StartPress:
+    """How the operator starts automatic playback, in console terms only, so a view can say
+    why a start press did nothing (the lab): what the press is, which outputs a start
+    changes, and the console inputs a program may require (mode switches, spare inputs),
+    each with the words the console prints for its two positions. Nothing of a program's
+    inside: any program of the stand is judged by its I/O."""
+
+    button: str                                  # the push button that starts playback ('SB1')
+    mode: tuple[str, int]                        # the switch and its level in automatic mode ('SA1', 1)
+    reads: tuple[tuple[str, str, str], ...]      # (console input, word when off, word when on)
+    outputs: tuple[str, ...]                     # outputs a start changes (valve coils, drive outputs)
+    within: float = 1.0                          # plant seconds after the release a start shows in
+
+
+@dataclass(frozen=True)
 class StandSpec:
     """Everything a runner, a grader or a view needs of one stand (see the module docstring)."""
 
@@ -82,6 +97,8 @@ class StandSpec:
     # the grader's exploration: operator-script generators, what is compared, tolerances and
     # freedoms (plclab.stands.operators.Exploration); None: the stand is graded by scenarios alone
     explore: Any = None
+    # how automatic playback is started (a view says why a press did nothing); None: no playback
+    start: Optional[StartPress] = None
 
     @property
     def name(self) -> str:
@@ -136,4 +153,4 @@ def stand_spec(name: str) -> StandSpec:
     return spec
 
 
-__all__ = ["Fault", "FaultParam", "PlotEntry", "REQUIRED", "ScenarioFn", "StandSpec", "stand_spec"]
+__all__ = ["Fault", "FaultParam", "PlotEntry", "REQUIRED", "ScenarioFn", "StandSpec", "StartPress", "stand_spec"]

@@ -1,6 +1,7 @@
 """The CNC stand (docs/cnc.md): an X-Y-Z table with step/direction drives run by
-PRG_CncStand in a 1 ms fine-cycle task, executing a part program's frames with the
-evaluation-function, DDA or digital-integration interpolators of textbook chapter 4.
+PRG_CncStand in a 1 ms fine-cycle task (or another: with_fine_cycle, `--fine-cycle MS`),
+executing a part program's frames with the evaluation-function, DDA or digital-integration
+interpolators of textbook chapter 4.
 
 `run_part` loads a part program's frames into the PLC's frame table (GVL_CNC), presses
 SB1 and records the table's path, frame by frame; `plclab cnc` and the scenarios use it.
@@ -12,7 +13,7 @@ from dataclasses import dataclass, field, replace
 from pathlib import Path
 from typing import Callable, Optional, Sequence
 
-from plclab.cnc.gcode import Frame, parse
+from plclab.nc.gcode import Frame, parse
 from plclab.scenario import ScenarioFailure, Session
 from plclab.stands import Stand, Task, Variant
 from plclab.stands.base import Fault, FaultParam, StandSpec
@@ -21,7 +22,9 @@ from plclab.trace import Trace
 POUS = ("FC_CncArcQuadrant", "FC_CncAngle", "FB_CncEvalLinear", "FB_CncEvalCircular", "FB_CncDdaPulses",
         "FB_CncDdaLinear", "FB_CncIntegLinear", "FB_CncIntegCircular", "FB_CncToolCorner", "FB_CncToolRadius",
         "FB_CncProbeHole", "FB_CncBlankSetup", "FB_CncBlankTransform", "FB_CncBacklash", "PRG_CncStand")
-FINE_CYCLE_S = 0.001
+FINE_CYCLE_S = 0.001          # the shipped program's fine cycle (its FineTask, FINE_MS)
+FINE_MS_RANGE = (1, 20)        # --fine-cycle MS: whole milliseconds (5: the OpenPLC build's)
+NFINE = 4                      # PRG_CncStand: fine cycles per interpolation cycle T
 MAX_FRAMES = 200
 METHODS = {"evalfn": 0, "dda": 1, "integration": 2}
 
@@ -41,9 +44,67 @@ STAND = Stand(
 
 
 def session(variant: str = "full", program: Optional[list[tuple[str, str]]] = None,
-            retain_path=None, step_mm: float = 0.01, **plant_params) -> Session:
-    """A fresh stand (SPEC.session): the table at the machine zero, drives of `step_mm`."""
-    return SPEC.session(variant, program, retain_path, step_mm=step_mm, **plant_params)
+            retain_path=None, step_mm: float = 0.01, fine_ms: Optional[int] = None, checked=None,
+            **plant_params) -> Session:
+    """A fresh stand (SPEC.session): the table at the machine zero, drives of `step_mm`;
+    with `fine_ms` the program (the variant's, or `program`) runs that fine cycle
+    (with_fine_cycle) and the plant knows it (fine_cycle_params)."""
+    if fine_ms is not None:
+        from plclab.stands import sources
+        program = with_fine_cycle(list(program) if program is not None else sources(STAND, variant), fine_ms)
+        checked = None
+        plant_params = {**fine_cycle_params(fine_ms), **plant_params}
+    return SPEC.session(variant, program, retain_path, step_mm=step_mm, checked=checked, **plant_params)
+
+
+def check_fine_ms(fine_ms: float) -> int:
+    """`--fine-cycle MS`: whole milliseconds in FINE_MS_RANGE, or one clear error."""
+    lo, hi = FINE_MS_RANGE
+    if fine_ms != int(fine_ms) or not lo <= fine_ms <= hi:
+        from plclab.errors import PlcLabError
+        raise PlcLabError(f"--fine-cycle {fine_ms:g}: the fine cycle is {lo}..{hi} whole ms "
+                          f"(1 the stand's default, 5 the OpenPLC build's)")
+    return int(fine_ms)
+
+
+def fine_cycle_params(fine_ms: int) -> dict[str, float]:
+    """The plant for a program of fine cycle `fine_ms`: its period (what the harness reads
+    back as the fine cycle, fine_cycle_s) and the pulse generator spreading a cycle's counts
+    over the program's interpolation cycle T = NFINE fine cycles."""
+    return {"period": fine_ms / 1000.0, "pulse_cycle": NFINE * fine_ms / 1000.0}
+
+
+def fine_cycle_s(s: Session) -> float:
+    """The fine cycle the stand runs (s): the plant's period, set with the program's."""
+    return float(getattr(s.plant, "period", FINE_CYCLE_S))
+
+
+_FINE_TASK = r"(TASK FineTask \(INTERVAL := )T#\d+ms(, )"
+_FINE_MS = r"(FINE_MS : LREAL := )\d+(?:\.\d*)?;"
+
+
+def with_fine_cycle(srcs: Sequence[tuple[str, str]], fine_ms: int) -> list[tuple[str, str]]:
+    """The program `srcs` (file name, text) running PRG_CncStand every `fine_ms` ms: its
+    FineTask's interval and PRG_CncStand's FINE_MS constant (feeds, the interpolation cycle
+    T and the rapids' rate follow it), the same edit `plclab build cnc --fine-cycle` makes.
+    A program without exactly one of each is refused by name."""
+    import re
+
+    from plclab.errors import PlcLabError
+
+    fine_ms = check_fine_ms(fine_ms)
+    out, found = [], {"the FineTask's INTERVAL": 0, "PRG_CncStand's FINE_MS constant": 0}
+    for name, text in srcs:
+        text, n_task = re.subn(_FINE_TASK, rf"\g<1>T#{fine_ms}ms\g<2>", text)
+        text, n_ms = re.subn(_FINE_MS, rf"\g<1>{fine_ms}.0;", text)
+        found["the FineTask's INTERVAL"] += n_task
+        found["PRG_CncStand's FINE_MS constant"] += n_ms
+        out.append((name, text))
+    for what, n in found.items():
+        if n != 1:
+            raise PlcLabError(f"--fine-cycle: the program has {n} of {what} (TASK FineTask (INTERVAL := T#1ms, "
+                              f"...) and FINE_MS : LREAL := 1.0;), one expected")
+    return out
 
 
 STUDENT_BLOCK = "FB_CncEvalLinear"      # Task 4: the block a student writes (the package ships its stub)
@@ -147,6 +208,7 @@ class PartRun:
     frames_start: float = 0.0  # s: when frame 1 started
     method: str = "evalfn"
     drive: str = "step"
+    fine_s: float = FINE_CYCLE_S   # the program's fine cycle
 
 
 SB1_HOLD_S = 0.005          # run_part's press of SB1
@@ -159,7 +221,7 @@ def run_part(s: Session, frames: list[Frame], method: str = "evalfn", diagonal: 
     that sees SB1 (the press is held SB1_HOLD_S while the recording runs)."""
     load_frames(s, frames, method, diagonal, drive)
     run = PartRun(frames, s.plant.step_mm, start=s.now, frames_start=s.now, method=method, drive=drive,
-                  origin=tuple(s.plant.axes[a].steps for a in "XYZ"))
+                  origin=tuple(s.plant.axes[a].steps for a in "XYZ"), fine_s=fine_cycle_s(s))
     s.plant.press("SB1")                 # held 5 ms, recorded from the first scan that sees it
     s.log("SB1 pressed (0.005 s)")
     record_until(s, run, "ProgramEnd", timeout, release=("SB1", s.now + SB1_HOLD_S))
@@ -352,12 +414,13 @@ BLANK_TOLERANCE_STEPS = 3      # the holes' centres are measured within a step: 
 
 def _require_on_contour(s: Session, run: "PartRun", method: str) -> None:
     """Every frame of `run` within its bound and at its end point (the scenario's verdict)."""
-    from plclab.cnc.toolpath import check_blocks
+    from plclab.nc.toolpath import check_blocks
 
     if not run.finished:
         raise ScenarioFailure(f"t={s.now:.2f} s: the part program did not end")
     s.cnc_run = run                        # type: ignore[attr-defined]
-    for block in check_blocks(run.executed, run.points, run.step_mm, method, run.frames_start, run.origin):
+    for block in check_blocks(run.executed, run.points, run.step_mm, method, run.frames_start, run.origin,
+                              fine_s=run.fine_s):
         if not block.ok:
             raise ScenarioFailure(f"frame {block.index} (line {block.line}): contour error "
                                   f"{block.error_mm:.4f} mm (bound {block.bound_mm:.4f} mm), "

@@ -18,7 +18,7 @@ from plclab.plants.mp9c import FACE
 from plclab.scenario import ABSENT, ScenarioFailure, Session
 from plclab.stands import Stand, Task, Variant, gvl_labels
 from plclab.stands import exploration
-from plclab.stands.base import Fault, FaultParam, StandSpec
+from plclab.stands.base import Fault, FaultParam, StandSpec, StartPress
 
 # the starting program (Appendix 1: main program, manual / automatic / continuous /
 # step-by-step subroutines), shipped; every task's reference is this program with the task's
@@ -367,5 +367,7 @@ SPEC = StandSpec(
     stand=STAND, console=CONSOLE, lamps=tuple(label for label, _ in FACE.lamps), sensors=tuple(SENSORS), actuators=tuple(VALVES),
     faults=FAULTS, observables=OBSERVABLES, scenarios=SCENARIOS, timeline=timeline,
     check_never=check_never, plot_signals=tuple(PLOT_SIGNALS),
-    explore=exploration.MP9C)
+    explore=exploration.MP9C,
+    start=StartPress("SB1", ("SA1", 1), (("SA1", "manual", "automatic"), ("SA6", "continuous", "step by step"),
+                                         ("I07", "off", "on")), tuple(VALVES)))
 session = SPEC.session

@@ -16,11 +16,12 @@ from dataclasses import dataclass
 from typing import Callable, Iterable, Iterator, Optional
 
 from plclab.modbus.maps import TwidoMap
-from plclab.modbus.profiles import AUTO1, AUTO2, MANUAL, THERMO_MODES, THERMO_RULES, twido_profile, valid_range
+from plclab.modbus.profiles import AUTO1, AUTO2, MANUAL, THERMO_MODES, THERMO_RULES, valid_range
 from plclab.modbus.protocol import ModbusException, Table
 from plclab.plants.base import signed16
 from plclab.plants.thermo import FACE, ThermoParams
 from plclab.scenario import ScenarioFailure, Session
+from plclab.stands import twido_profile
 from plclab.stands import Stand, Task, Variant, gvl_labels
 from plclab.stands.base import Fault, StandSpec
 

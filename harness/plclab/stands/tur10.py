@@ -19,7 +19,7 @@ from plclab.plants.tur10 import FACE
 from plclab.scenario import ScenarioFailure, Session
 from plclab.stands import Stand, Task, Variant, gvl_labels
 from plclab.stands import exploration
-from plclab.stands.base import Fault, FaultParam, StandSpec
+from plclab.stands.base import Fault, FaultParam, StandSpec, StartPress
 
 # the starting program (Appendix 2: main program, manual / automatic subroutines, the timer
 # interrupt routine PRG_Tur10Regulators), shipped; every task's reference is this program
@@ -342,5 +342,7 @@ SPEC = StandSpec(
     stand=STAND, console=CONSOLE, lamps=tuple(label for label, _ in FACE.lamps), sensors=SENSOR_BUS, actuators=tuple(DRIVES) + READ_ENABLES,
     faults=FAULTS, observables=OBSERVABLES, scenarios=SCENARIOS, timeline=timeline,
     check_never=check_never, plot_signals=tuple(PLOT_SIGNALS),
-    explore=exploration.TUR10)
+    explore=exploration.TUR10,
+    start=StartPress("SB1", ("SA7", 1), (("SA7", "manual", "automatic"), ("SA6", "normal speed", "low speed"),
+                                         ("I15", "off", "on")), tuple(DRIVES)))
 session = SPEC.session

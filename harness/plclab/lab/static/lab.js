@@ -131,6 +131,7 @@ function onHello(h) {
                       "#register-message"]) $(id).replaceChildren();
     notice("the lab was restarted: a new session");
   }
+  if (h.grade && !$("#grade-result").children.length) renderGrade(h.grade);     // the last grade, kept by the lab
   document.title = `PLC Lab: ${h.title}`;
   $("#title").textContent = h.title;
   showPages(h.pages);
@@ -158,9 +159,29 @@ function onHello(h) {
   buildTrendList();
 }
 
+// what the console's push buttons do, said for the stand on the page
+const HOLD_NOTE = "Round buttons are push buttons: pressed while you hold them (mouse, finger, space or enter key). " +
+  "While you hold one the plant runs in real time (x1) whatever the speed, so a hold lasts as long in the plant as you hold it";
+const HOLD_NOTES = {
+  mp9c: " (SB1: a click records a frame or starts / stops playback, a 3-s hold resets).",
+  tur10: " (SB1: a click records a frame or starts / stops playback, a 3-s hold resets; SA1..SA5 forward / backward " +
+    "move their link while held).",
+  cnc: " (SB1 starts or continues the part program, SB2 holds the feed). SB3, the emergency stop, is a mushroom " +
+    "button: a click latches it pressed, another click releases it.",
+};
+
+// a part program's name: its first comment (the handout's programs start with one), else a number
+function partName(text) {
+  const comment = /^\s*\(([^)]+)\)/m.exec(text);
+  lab.parts = (lab.parts || 0) + 1;
+  return comment && comment[1].trim() ? comment[1].trim().slice(0, 60) : `part ${lab.parts}`;
+}
+
 function buildControls(panel) {
   const box = $("#controls");
   box.replaceChildren();
+  // forward / backward pairs (TUR-10's jog buttons) keep to one row
+  box.classList.toggle("paired", panel.controls.some((c) => / forward$/.test(c.label)));
   for (const c of panel.controls) {
     let b;
     if (c.kind === "switch") {
@@ -169,6 +190,13 @@ function buildControls(panel) {
       b.addEventListener("click", () => {
         const on = b.getAttribute("aria-checked") !== "true";
         send("set", { label: c.label, value: on ? 1 : 0 }).catch((e) => notice(e.message));
+      });
+    } else if (c.latching) {              // a mushroom button: a press latches it, the next one releases it
+      b = el("button", { type: "button", class: "push latch", "aria-pressed": "false", "aria-label": c.label,
+        "data-label": c.label, "data-latch": "1" }, el("span", { text: c.label }));
+      b.addEventListener("click", () => {
+        const pressed = b.getAttribute("aria-pressed") === "true";
+        send(pressed ? "release" : "press", { label: c.label }).catch((e) => notice(e.message));
       });
     } else {
       b = el("button", { type: "button", class: "push", "aria-pressed": "false", "aria-label": c.label, "data-label": c.label },
@@ -180,6 +208,7 @@ function buildControls(panel) {
     box.append(el("div", { class: "control" }, b, hint));
   }
   $("#hold-note").hidden = !panel.controls.some((c) => c.kind === "button");
+  $("#hold-note").textContent = HOLD_NOTE + (HOLD_NOTES[panel.stand] || "");
   // settings that are not contacts (the CNC's feed override RP1 and backlash): a slider each
   const knobs = $("#knobs");
   knobs.replaceChildren();
@@ -197,12 +226,20 @@ function buildControls(panel) {
   $("#part").hidden = !part;
   if (part) {
     $("#part-text").value = part.example;
-    $("#part-method").replaceChildren(...part.methods.map((m) => el("option", { value: m, text: m })));
-    $("#part-load").onclick = () => send("part", { text: $("#part-text").value, name: "part.nc", method: $("#part-method").value })
+    $("#part-method").replaceChildren(...part.methods.map((m) => el("option", { value: m, text: m, title: METHODS[m] || "" })));
+    $("#part-load").onclick = () => send("part", { text: $("#part-text").value, name: partName($("#part-text").value),
+      method: $("#part-method").value })
       .then(() => say("#part-message", "part program loaded: press SB1 to run it", true))
       .catch((e) => say("#part-message", e.message, false));
   }
 }
+
+// the interpolation methods, as the handout names them (a tooltip on the choice and the drawing)
+const METHODS = {
+  evalfn: "evalfn: the evaluation-function method (a step on X or Y by the sign of the deviation function)",
+  dda: "dda: the digital differential analyser (pulses from accumulators that overflow)",
+  integration: "integration: digital integration (accumulated increments per interpolation cycle)",
+};
 
 // A push button stays pressed while the pointer (mouse, finger, pen) or the space / enter key
 // holds it, as on the stand: it is let go on pointerup, when the pointer leaves it, when the
@@ -366,7 +403,15 @@ async function grade(task) {
     r = { ok: false, message: `the lab did not answer (${e.message})` };
   }
   if (!r.ok) { say("#grade-message", r.message, false); return; }
-  say("#grade-message", `${r.title.replace(/[.:\s]+$/, "")}: ${r.summary}`, r.passed);
+  renderGrade(r);
+}
+
+// A grade's table (also the last one again, when the page is reloaded: the lab keeps it)
+function renderGrade(r) {
+  const task = r.task;
+  $("#grade-result").replaceChildren();
+  say("#grade-message", `${r.title.replace(/[.:\s]+$/, "")}: ${r.summary}` + (r.program ? ` (program: ${r.program})` : ""),
+    r.passed);
   const out = $("#grade-result");
   if (r.errors.length) {
     out.append(el("ol", {}, ...r.errors.map((e) => el("li", { class: "bad", text: e }))));
@@ -376,19 +421,20 @@ async function grade(task) {
     el("thead", {}, el("tr", {}, ...["id", "requirement", "result", "why", "trace"].map((x) => el("th", { text: x })))));
   const body = el("tbody");
   for (const row of r.rows) {
-    const why = row.result === "FAIL"
-      ? [row.expected && `expected: ${row.expected}`, row.observed && `observed: ${row.observed}`,
+    const why = row.result !== "PASS"          // FAIL, and NOT CHECKED / ERROR with their reason
+      ? [row.expected && `expected: ${row.expected}`, row.observed && (row.result === "FAIL" ? `observed: ${row.observed}` : row.observed),
          row.time !== null && row.time !== undefined ? `at t = ${row.time.toFixed(2)} s` : ""].filter(Boolean).join("; ")
       : "";
     const links = el("td");
-    if (row.result === "FAIL") {
+    if (row.result !== "PASS") {
       for (const t of row.traces) links.append(el("a", { href: t.url, download: t.name, text: t.name }), " ");
     }
     const whyCell = el("td", { text: why });
     const where = /(<[^>]+>|[^\s:]+\.st):(\d+)/.exec(`${row.observed || ""} ${row.expected || ""} ${row.text}`);
+    if (row.graded && row.result !== "PASS") whyCell.append(el("div", { class: "graded", text: row.graded }));
     if (where) {
       whyCell.append(" ", el("button", { type: "button", class: "link", text: `open ${where[1].split("/").pop()}:${where[2]}`,
-        onclick: () => openSource(where[1].trim(), Number(where[2])) }));
+        onclick: () => openSource(where[1].trim(), Number(where[2]), row) }));
     }
     body.append(el("tr", {}, el("td", { text: row.id }), el("td", { text: row.text }),
       el("td", { class: row.result, text: row.result }), whyCell, links));
@@ -425,17 +471,28 @@ function onState(s) {
 
 function render(s) {
   const badge = $("#plc-state");
-  badge.textContent = s.plc.state;
-  badge.dataset.state = s.plc.state;
+  const pausedRun = s.paused && s.plc.state === "RUN";      // the PLC in RUN, the lab's clock stopped
+  badge.textContent = pausedRun ? "RUN, paused" : s.plc.state;
+  badge.dataset.state = pausedRun ? "PAUSED" : s.plc.state;
+  badge.title = pausedRun ? "the PLC is in RUN mode but the lab's clock is paused: no scan runs until Run (or Single scan)"
+    : s.plc.state === "FAULT" ? "the PLC stopped on a fault: see the line below" : "";
   const fd = $("#fault-detail");
   if (s.plc.fault) {
     fd.hidden = false;
-    fd.textContent = s.plc.fault;
-  } else fd.hidden = true;
+    if (fd.dataset.fault !== s.plc.fault) {          // the fault, a way to its statement, and what to do next
+      fd.dataset.fault = s.plc.fault;
+      const where = s.plc.file ? `${s.plc.file.split("/").pop()}:${s.plc.line}` : null;
+      fd.replaceChildren(el("span", { class: "fault-text", text: s.plc.fault }), " ",
+        ...(where ? [el("button", { type: "button", class: "link fault-open", text: `open ${where} in Program online` })] : []),
+        el("span", { class: "fault-next", text: " Next: correct the program and load it again, or Restart PLC " +
+          "to run it once more (the PLC stays in FAULT, every output off, until one of them)." }));
+    }
+  } else { fd.hidden = true; delete fd.dataset.fault; }
   $("#clock").textContent = `t = ${s.t.toFixed(2)} s`;
+  const held = s.held_labels || [];
   $("#speed-shown").textContent = s.paused ? "paused"
-    : s.held && s.held.length ? `x1 while ${s.held.join(", ")} held (then x${s.speed})`
-    : `x${s.speed}` + (s.actual_speed && s.actual_speed < s.speed * 0.9 ? ` (reaching x${s.actual_speed})` : "");
+    : held.length && s.speed !== 1 ? `x1 while ${held.join(", ")} held (then x${s.speed})`
+    : `x${s.speed}` + (!held.length && s.actual_speed && s.actual_speed < s.speed * 0.9 ? ` (reaching x${s.actual_speed})` : "");
   $("#pause").textContent = s.paused ? "Run" : "Pause";
   $("#pause").setAttribute("aria-pressed", s.paused ? "true" : "false");
   $("#scan").disabled = !s.paused;
@@ -446,6 +503,9 @@ function render(s) {
     speed.value = String(s.speed);
   }
   $("#program-name").textContent = s.program;
+  const refused = $("#start-refused");
+  refused.hidden = !s.start_refused;
+  if (refused.textContent !== (s.start_refused || "")) refused.textContent = s.start_refused || "";
   renderScript(s.script);
   if (s.loads !== lab.loads) {               // another program: the online listing is read again
     const shown = lab.pous !== null && lab.pous !== undefined;
@@ -459,7 +519,17 @@ function render(s) {
     for (const node of document.querySelectorAll(`[aria-label="${CSS.escape(label)}"]`)) {
       if (node.dataset.knob !== undefined) {
         if (document.activeElement !== node && node.value !== String(v)) { node.value = String(v); node.oninput(); }
-      } else if (node.getAttribute("role") === "switch") node.setAttribute("aria-checked", v ? "true" : "false");
+      } else if (node.dataset.latch) {
+        node.setAttribute("aria-pressed", v ? "true" : "false");
+      } else if (node.getAttribute("role") === "switch") {
+        node.setAttribute("aria-checked", v ? "true" : "false");
+        const forced = (s.forced_labels || []).includes(label);     // the value the PLC reads, marked forced
+        const title = forced ? `${label} forced to ${v ? "on" : "off"} (watch and force table): the PLC reads this, not the switch` : "";
+        if (node.title !== title) node.title = title;
+        const tag = node.querySelector(".forced-tag");
+        if (forced && !tag) node.append(el("span", { class: "forced-tag", text: " forced" }));
+        else if (!forced && tag) tag.remove();
+      }
       else if (node.dataset.state !== undefined) node.dataset.state = v ? "on" : "off";
     }
   }
@@ -573,7 +643,14 @@ async function showPou(name, instance) {
   await send("monitor", { pou: name, instance }).catch((e) => notice(e.message));
 }
 
-function openSource(file, line) {
+// `row`: opened from a grade row; the values beside the source are the lab's live ones, so the
+// graded run's are shown above it (its console and outputs at the row's time)
+function openSource(file, line, row) {
+  const note = $("#graded-note");
+  note.hidden = !row;
+  note.textContent = row ? `Opened from grade row ${row.id}: the values beside the source are the lab's, live now, ` +
+    `not the graded run's. ` + (row.graded ? `${row.graded[0].toUpperCase()}${row.graded.slice(1)}.` : "") +
+    (row.traces && row.traces.length ? " Its trace: the row's links." : "") : "";
   loadSource().then((pous) => {
     const pou = pous.find((p) => p.file === file && line >= p.line && line < p.line + p.lines.length)
       || pous.find((p) => p.display === file.split("/").pop() && line >= p.line && line < p.line + p.lines.length);
@@ -823,11 +900,16 @@ function renderFrames(f) {
   body.replaceChildren(...f.rows.map((r, i) => {
     const tr = el("tr", {}, ...r.map((c) => el("td", { text: c })));
     if (f.current === i + 1) { tr.className = "current"; tr.setAttribute("aria-current", "true"); }
+    else if (f.done === i + 1) { tr.className = "done"; tr.title = "the frame last done"; }
     return tr;
   }));
+  const n = `${f.rows.length} frame(s); `;
   $("#frames-status").textContent = !f.rows.length ? "no frame recorded (a short SB1 press in manual mode records one)"
-    : f.current ? `${f.rows.length} frame(s); executing frame ${f.current}`
-    : `${f.rows.length} frame(s); stopped (next: frame ${f.next})`;
+    : f.current ? `${n}executing frame ${f.current}`
+    : f.phase === "pause" ? `${n}frame ${f.done} done, its pause (then frame ${f.next})`
+    : f.phase === "wait" ? `${n}frame ${f.done} done; waiting for the next SB1 press (step mode; next: frame ${f.next})`
+    : f.phase === "between" ? `${n}running, between frames (next: frame ${f.next})`
+    : `${n}stopped (next: frame ${f.next})`;
 }
 
 // ------------------------------------------------------------------ trends
@@ -838,13 +920,24 @@ function buildTrendList() {
     const canvas = el("canvas", { width: "600", height: "44", "aria-label": `trend of ${name}`, "data-trend": name });
     const remove = el("button", { type: "button", "aria-label": `remove trend ${name}`, text: "x",
       onclick: () => chooseTrends(lab.trendNames.filter((n) => n !== name)) });
-    list.append(el("div", { class: "trend" }, el("span", { class: "name", title: name, text: name }), canvas, remove));
+    const unit = trendUnit(name), over = trendOverlay(name);
+    const shown = name + (unit ? ` (${unit[1]})` : "") + (over ? ` + ${over}` : "");
+    list.append(el("div", { class: "trend" }, el("span", { class: "name", title: name, text: shown,
+      "data-shown": shown }), canvas, remove));
   }
   $("#trend-add-button").onclick = () => {
     const name = $("#trend-add").value.trim();
     if (name) chooseTrends(lab.trendNames.concat([name]));
   };
   $("#trend-add").onkeydown = (e) => { if (e.key === "Enter") $("#trend-add-button").click(); };
+}
+
+// a trend shown in a unit of its own (thermo's raw ADC in degC: [factor, unit]), and the signal
+// drawn over it on the same scale (the setpoint over the temperature)
+function trendUnit(name) { const u = lab.hello && lab.hello.panel.trend_units; return (u && u[name]) || null; }
+function trendOverlay(name) {
+  const o = lab.hello && lab.hello.panel.trend_overlays;
+  return o && o[name] && lab.trendNames.includes(o[name]) ? o[name] : null;
 }
 
 function chooseTrends(names) {
@@ -886,13 +979,19 @@ function drawTrends() {
     const cw = Math.max(60, Math.round(canvas.clientWidth * dpr)), ch = Math.round(44 * dpr);
     if (canvas.width !== cw || canvas.height !== ch) { canvas.width = cw; canvas.height = ch; }
     const name = canvas.dataset.trend;
-    const pts = lab.trends.get(name) || [];
+    const scaled = (n) => {               // a signal's points in the unit shown
+      const u = trendUnit(n), k = u ? u[0] : 1;
+      return (lab.trends.get(n) || []).map(([t, v]) => [t, typeof v === "number" && k !== 1 ? Math.round(v * k * 1000) / 1000 : v]);
+    };
+    const pts = scaled(name);
+    const overName = trendOverlay(name);
+    const over = overName ? scaled(overName) : [];
     const ctx = canvas.getContext("2d");
     ctx.setTransform(dpr, 0, 0, dpr, 0, 0);
     const w = cw / dpr, h = ch / dpr, plot = w - 64;
     ctx.clearRect(0, 0, w, h);
     if (!pts.length) continue;
-    const nums = pts.map((p) => Number(p[1])).filter((v) => Number.isFinite(v));
+    const nums = pts.concat(over).map((p) => Number(p[1])).filter((v) => Number.isFinite(v));
     let lo = Math.min(...nums), hi = Math.max(...nums);
     if (nums.every((v) => v === 0 || v === 1)) { lo = 0; hi = 1; }      // a bit: low and high
     else if (hi - lo < 1e-9) { lo -= 1; hi += 1; }
@@ -910,6 +1009,20 @@ function drawTrends() {
     }
     ctx.lineTo(plot, last);
     ctx.stroke();
+    if (over.length) {                               // the overlaid signal, dashed, on the same scale
+      ctx.strokeStyle = "#ea580c";
+      ctx.setLineDash([4, 3]);
+      ctx.beginPath();
+      let lastO = null;
+      for (const [t, v] of over) {
+        const vy = y(Number(v));
+        if (lastO === null) ctx.moveTo(x(t), vy); else { ctx.lineTo(x(t), lastO); ctx.lineTo(x(t), vy); }
+        lastO = vy;
+      }
+      ctx.lineTo(plot, lastO);
+      ctx.stroke();
+      ctx.setLineDash([]);
+    }
     ctx.strokeStyle = "#e5e7eb";
     ctx.beginPath(); ctx.moveTo(plot + 2, 0); ctx.lineTo(plot + 2, h); ctx.stroke();
     ctx.fillStyle = "#111";
@@ -931,7 +1044,15 @@ function renderRegisters(regs) {
     body.replaceChildren();
     for (const r of regs) {
       const write = el("td");
-      if (r.access === "read/write") {
+      if (r.access === "read/write" && r.choices) {        // the mode: chosen by name
+        const choose = el("select", { "aria-label": `new value of %MW${r.address}` },
+          ...r.choices.map(([v, n]) => el("option", { value: String(v), text: `${v} ${n}` })));
+        const b = el("button", { type: "button", text: "Write", "aria-label": `write %MW${r.address}` });
+        b.onclick = () => send("register", { address: r.address, value: Number(choose.value) })
+          .then(() => say("#register-message", `%MW${r.address} = ${choose.value} written`, true))
+          .catch((e) => say("#register-message", e.message, false));
+        write.append(choose, b);
+      } else if (r.access === "read/write") {
         const input = el("input", { type: "text", inputmode: "numeric", "aria-label": `new value of %MW${r.address}` });
         const b = el("button", { type: "button", text: "Write", "aria-label": `write %MW${r.address}` });
         b.onclick = () => {
@@ -950,14 +1071,16 @@ function renderRegisters(regs) {
         input.onkeydown = (e) => { if (e.key === "Enter") b.click(); };
         write.append(input, b);
       }
-      body.append(el("tr", {}, el("td", { text: `%MW${r.address}` }), el("td", { text: r.name, title: r.description }),
+      const title = [r.description, r.valid && `valid: ${r.valid}`, r.rule].filter(Boolean).join("; ");
+      body.append(el("tr", {}, el("td", { text: `%MW${r.address}` }), el("td", { text: r.name, title }),
         el("td", { "aria-label": `value of %MW${r.address}`, "data-register": String(r.address) }),
         el("td", { text: r.access }), el("td", { text: r.valid }), el("td", { text: r.rule }), write));
     }
   }
   for (const r of regs) {
     const cell = body.querySelector(`[data-register="${r.address}"]`);
-    if (cell) cell.textContent = String(r.value);
+    const named = r.choices && r.choices.find(([v]) => v === r.value);
+    if (cell) cell.textContent = named ? `${r.value} (${named[1]})` : String(r.value);
   }
 }
 

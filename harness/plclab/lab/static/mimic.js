@@ -104,13 +104,18 @@ const Mimic = (() => {
 
   // ---------------------------------------------------------------- TUR-10
   const AXES = ["shoulder", "raceme rotation", "raceme inclination", "platform rotation", "hand"];
+  const RACEME = "the raceme is the robot's wrist, at the end of the forearm";
+  const AXIS_TIPS = ["link 1: the shoulder lifts and lowers the upper arm", `link 2: ${RACEME}; it turns about the forearm's axis`,
+    `link 3: ${RACEME}; it tilts up and down`, "link 4: the platform turns the whole arm about the vertical",
+    "link 5: the hand's jaws open and close"];
   function buildTur10() {
     s("text", { class: "mimic-text", x: 10, y: 18, text: "links: position code (sensor), target of the frame (triangle), DAC reference (bar)" });
     parts.links = [];
     for (let k = 0; k < 5; k++) {
       const y0 = 30 + k * 52;
       const g = s("g", { class: "gauge", transform: `translate(0,${y0})` });
-      s("text", { class: "mimic-text", x: 10, y: 14, text: `${k + 1} ${AXES[k]}` }, g);
+      const name = s("text", { class: "mimic-text", x: 10, y: 14, text: `${k + 1} ${AXES[k]}` }, g);
+      s("title", { text: AXIS_TIPS[k] }, name);
       const track = s("rect", { x: 150, y: 4, width: 360, height: 14, fill: "#e5e7eb", stroke: "#9ca3af" }, g);
       const working = s("rect", { x: 150, y: 4, width: 0, height: 14, fill: "#d1fae5" }, g);
       const target = s("path", { id: `target-${k + 1}`, d: "M0,0 l-6,-8 h12 z", fill: "#7c3aed", visibility: "hidden",
@@ -124,7 +129,11 @@ const Mimic = (() => {
       const refText = s("text", { id: `dac-${k + 1}`, class: "mimic-small", x: 520, y: 34, text: "" }, g);
       parts.links.push({ track, working, target, marker, code, ref, refText, bus });
     }
-    parts.busLine = s("text", { class: "mimic-text", x: 10, y: 298, text: "" });
+    const bus = s("g", {});
+    s("title", { text: "the sensor bus: the five position sensors share one set of PLC inputs; the program enables " +
+      "one sensor at a time (its read-enable output) and reads that link's code. 'enabled' lists the sensors " +
+      "enabled now; two at once is bus contention" }, bus);
+    parts.busLine = s("text", { class: "mimic-text", x: 10, y: 298, text: "" }, bus);
     buildRobot();
   }
 
@@ -252,7 +261,11 @@ const Mimic = (() => {
     parts.blades = s("g", {}, parts.fan);
     for (let i = 0; i < 4; i++) s("ellipse", { rx: 8, ry: 28, fill: "#64748b", transform: `rotate(${i * 90}) translate(0,-16)` }, parts.blades);
     parts.fanText = s("text", { class: "mimic-text", x: 330, y: 275, text: "" });
+    parts.mode = s("text", { id: "thermo-mode", class: "mimic-text", x: 10, y: 44, text: "" });
+    parts.setpoint = s("text", { id: "thermo-setpoint", class: "mimic-text", x: 420, y: 186, text: "" });
   }
+  const MODE_WORDS = { manual: "manual: %MW1 / %MW2 set the fan and the heater",
+    "automatic-1": "automatic-1: the heater regulates to the setpoint", "automatic-2": "automatic-2: the fan regulates to the setpoint" };
 
   function updateThermo(m, t) {
     const frac = Math.max(0, Math.min(1, (m.temperature - 20) / 60));
@@ -265,21 +278,34 @@ const Mimic = (() => {
     if (lastT !== null && t > lastT) fanAngle = (fanAngle + (m.fan_rpm / 60) * 360 * Math.min(t - lastT, 0.05)) % 360;
     parts.blades.setAttribute("transform", `rotate(${fanAngle})`);
     parts.fanText.textContent = `fan ${Math.round(m.fan_rpm)} rpm (command ${m.fan_command})` + (m.faults.includes("fan_stalled") ? " STALLED" : "");
+    parts.mode.textContent = m.mode_name === null || m.mode_name === undefined ? ""
+      : `mode %MW0 = ${m.mode}, ${MODE_WORDS[m.mode_name] || m.mode_name}`;
+    parts.setpoint.textContent = m.setpoint === null || m.setpoint === undefined ? "" : `setpoint ${m.setpoint} \u00b0C`;
   }
 
   // ---------------------------------------------------------------- CNC
   // The X-Y table seen from above: the contour (as the PLC runs it) grey, the tool path as it
   // is cut blue, the tool a dot; beside it the frame, the contour error against its bound,
   // the drives' step counters and missed steps.
+  const TIPS = {
+    frame: "the part program's frame (block) the interpolator executes; evalfn: evaluation-function method, " +
+      "dda: digital differential analyser, integration: digital integration",
+    bound: "the largest contour error the interpolation method allows for that frame (what plclab cnc checks)",
+    missed: "steps a drive did not make (it was asked faster than it can step), since the part was loaded or the faults cleared",
+  };
   function buildCnc() {
     s("text", { class: "mimic-text", x: 10, y: 18, text: "X-Y table from above: contour (grey), tool path as cut (blue)" });
     s("rect", { x: 10, y: 26, width: 380, height: 284, fill: "#fff", stroke: "#e5e7eb" });
     parts.contour = s("polyline", { id: "cnc-contour", fill: "none", stroke: "#9ca3af", "stroke-width": 3 });
     parts.path = s("polyline", { id: "cnc-path", fill: "none", stroke: "#1d4ed8", "stroke-width": 1.2 });
     parts.tool = s("circle", { id: "cnc-tool", r: 4, fill: "#b91c1c" });
-    const lines = ["frame", "error", "bound", "steps", "missed", "override", "state"];
+    const lines = ["frame", "error", "bound", "verdict", "steps", "missed", "override", "state"];
     parts.cncText = {};
-    lines.forEach((k, i) => { parts.cncText[k] = s("text", { id: `cnc-${k}`, class: "mimic-text", x: 400, y: 50 + i * 22, text: "" }); });
+    lines.forEach((k, i) => {
+      const g = s("g", {});
+      if (TIPS[k]) s("title", { text: TIPS[k] }, g);
+      parts.cncText[k] = s("text", { id: `cnc-${k}`, class: "mimic-text", x: 400, y: 46 + i * 22, text: "" }, g);
+    });
     parts.pathPts = []; parts.contourId = -1; parts.view = null;
   }
   function cncView(points) {
@@ -297,8 +323,10 @@ const Mimic = (() => {
     const v = parts.view;
     parts.contour.setAttribute("points", c.contour.map(([x, y]) => `${v.x(x).toFixed(1)},${v.y(y).toFixed(1)}`).join(" "));
     parts.contour.dataset.points = String(c.contour.length);
-    parts.pathPts = [];
-    parts.path.setAttribute("points", "");
+    // the path cut so far (a page opened or reloaded mid-part draws it again)
+    parts.pathPts = (c.path || []).map(([x, y]) => `${v.x(x).toFixed(1)},${v.y(y).toFixed(1)}`);
+    parts.path.setAttribute("points", parts.pathPts.join(" "));
+    parts.path.dataset.points = String(parts.pathPts.length);
   }
   function updateCnc(m) {
     if (m.contour_id !== parts.contourId && !parts.asking) {        // a new part (or its executed form)
@@ -315,17 +343,22 @@ const Mimic = (() => {
     parts.tool.setAttribute("cx", v.x(m.x).toFixed(1));
     parts.tool.setAttribute("cy", v.y(m.y).toFixed(1));
     const t = parts.cncText;
-    t.frame.textContent = m.part ? `frame ${m.frame} of ${m.frames} (${m.part}, ${m.method})` : "no part program loaded";
+    // a frame number beyond this part's (the PLC still counts the last one's) is no frame of it
+    const frame = m.frame >= 1 && m.frame <= m.frames ? String(m.frame) : m.end ? String(m.frames) : "0";
+    t.frame.textContent = m.part ? `frame ${frame} of ${m.frames} (${m.part}, ${m.method})` : "no part program loaded";
     const over = m.bound_mm !== null && m.error_mm > m.bound_mm + 1e-9;
     t.error.textContent = `contour error ${m.error_now_mm === null ? "-" : m.error_now_mm.toFixed(4)} mm, max ${m.error_mm.toFixed(4)} mm`;
     t.error.setAttribute("fill", over ? "#b91c1c" : "#111");
-    t.bound.textContent = m.bound_mm === null ? "bound: -" : `bound ${m.bound_mm.toFixed(4)} mm (frame ${m.error_frame})` + (over ? "  OUT OF BOUND" : "  ok");
+    t.bound.textContent = m.bound_mm === null ? "bound: -" : `bound ${m.bound_mm.toFixed(4)} mm (frame ${m.error_frame})`;
+    t.verdict.textContent = m.bound_mm === null ? "" : over ? "OUT OF BOUND" : "within the bound: ok";
+    t.verdict.setAttribute("fill", over ? "#b91c1c" : "#15803d");
+    t.verdict.setAttribute("font-weight", over ? "bold" : "normal");
     t.steps.textContent = `steps X ${m.steps.X}  Y ${m.steps.Y}  Z ${m.steps.Z}`;
     const missed = m.missed.X + m.missed.Y + m.missed.Z;
     t.missed.textContent = `missed steps X ${m.missed.X}  Y ${m.missed.Y}  Z ${m.missed.Z}`;
     t.missed.setAttribute("fill", missed ? "#b91c1c" : "#111");
     t.override.textContent = `feed override ${m.override} %`;
-    t.state.textContent = m.end ? "program end" : m.frame ? "running" : "";
+    t.state.textContent = m.end ? "program end" : m.cycle && m.cycle !== "idle" ? m.cycle : m.frame && m.cycle !== "idle" ? "running" : "";
   }
 
   function update(state) {

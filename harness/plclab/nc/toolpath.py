@@ -18,7 +18,7 @@ import math
 from dataclasses import dataclass
 from typing import Sequence
 
-from plclab.cnc.gcode import Frame
+from plclab.nc.gcode import Frame
 
 INTERPOLATION_CYCLE_S = 0.004      # PRG_CncStand: T = 4 fine cycles of 1 ms
 STEP_DRIVE_FEED = 600.0            # mm/min: the top feed the arcs' bound assumes with step/direction bits
@@ -56,9 +56,11 @@ def grid(v: float, h: float) -> int:
 
 def check_blocks(frames: Sequence[Frame], points: Sequence[tuple[float, int, int, int, int]], h: float,
                  method: str, start_time: float = 0.0,
-                 origin: tuple[int, ...] = (0, 0, 0), drive: str = "step") -> list[BlockResult]:
+                 origin: tuple[int, ...] = (0, 0, 0), drive: str = "step",
+                 fine_s: float = 0.001) -> list[BlockResult]:
     """One result per frame; `points` are (time, frame, x, y, z) in steps, in time order;
-    frame 1 starts at `origin` (steps) at `start_time`; `drive` "pulse": the pulse-count drive."""
+    frame 1 starts at `origin` (steps) at `start_time`; `drive` "pulse": the pulse-count drive;
+    `fine_s` the program's fine cycle (the interpolation cycle is 4 of them)."""
     results = []
     prev_end = tuple(origin)
     prev_time = start_time
@@ -72,7 +74,7 @@ def check_blocks(frames: Sequence[Frame], points: Sequence[tuple[float, int, int
         end_error = math.dist(reached, end) * h
         t_end = pts[-1][0] if pts else prev_time
         results.append(BlockResult(k, f.line, f.kind, _length(f), t_end - prev_time, error,
-                                   _bound(f, method, h, drive) + (h / math.sqrt(2) if drive == "pulse" else 0.0),
+                                   _bound(f, method, h, drive, fine_s) + (h / math.sqrt(2) if drive == "pulse" else 0.0),
                                    end_error, _grid_error(f, start, end, h)))
         prev_end, prev_time = reached, t_end
     return results
@@ -111,14 +113,15 @@ def _sweep(f: Frame) -> float:
     return s if s > 1e-12 else 2 * math.pi
 
 
-def _bound(f: Frame, method: str, h: float, drive: str = "step") -> float:
+def _bound(f: Frame, method: str, h: float, drive: str = "step", fine_s: float = 0.001) -> float:
     if method == "evalfn":
         return h
     bound = h / math.sqrt(2)
     if f.is_arc:
         r = math.hypot(f.i, f.j)
-        top = max(STEP_DRIVE_FEED, PULSE_FEED_MAX_STEPS * h * 60.0) if drive == "pulse" else STEP_DRIVE_FEED
-        dphi = min(f.feed, top) / 60.0 * INTERPOLATION_CYCLE_S / r
+        step_top = STEP_DRIVE_FEED * 0.001 / fine_s
+        top = max(step_top, PULSE_FEED_MAX_STEPS * h * 60.0) if drive == "pulse" else step_top
+        dphi = min(f.feed, top) / 60.0 * INTERPOLATION_CYCLE_S * fine_s / 0.001 / r
         n = math.ceil(_sweep(f) / dphi)
         bound += n * r * dphi ** 3 / 6 + r * (1 - math.cos(dphi / 2))
     return bound

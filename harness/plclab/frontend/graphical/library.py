@@ -12,7 +12,7 @@ from typing import Optional
 from lxml import etree
 
 from plclab.frontend.stdsigs import FUNCTION_BLOCKS, FUNCTIONS
-from plclab.plcopen.datatypes import NS, local, type_text
+from plclab.frontend.tc6 import NS, local, type_text
 
 @dataclass(frozen=True)
 class BlockInfo:
@@ -37,7 +37,7 @@ def st_library(texts: list[tuple[str, str]]) -> Library:
     """The blocks and structures of ST files compiled with a plc.xml."""
     from plclab.frontend import ast as A
     from plclab.frontend.parser import parse_source
-    from plclab.plcopen import sttext
+    from plclab.frontend import sttext
 
     lib = Library()
     for name, text in texts:

@@ -36,9 +36,9 @@ from typing import Any, Optional
 from lxml import etree
 
 from plclab.errors import CompileError
-from plclab.plcopen.graphical.diagram import Conn, Element, Pin, read_elements, sections
-from plclab.plcopen.graphical.library import BlockInfo, Library, library_block
-from plclab.plcopen.graphical.places import Place, generation_error
+from plclab.frontend.graphical.diagram import Conn, Element, Pin, read_elements, sections
+from plclab.frontend.graphical.library import BlockInfo, Library, library_block
+from plclab.frontend.graphical.places import Place, generation_error
 
 MAX_VISITS = 200_000   # elements walked per POU: parallel branches fed by parallel branches multiply
 _LITERAL_TYPES = {"T": "TIME", "TIME": "TIME", "D": "DATE", "DATE": "DATE", "TOD": "TOD", "TIME_OF_DAY": "TOD",

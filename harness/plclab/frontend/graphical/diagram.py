@@ -12,7 +12,7 @@ from typing import Optional
 
 from lxml import etree
 
-from plclab.plcopen.datatypes import NS, local
+from plclab.frontend.tc6 import NS, local
 
 _PASSIVE = {"comment", "rightPowerRail", "leftPowerRail"}
 
