@@ -233,7 +233,7 @@ class CProgram:
     source: str
     cdef: str
     layouts: dict[str, Layout]
-    run_functions: dict[str, str]              # PROGRAM key -> exported C function
+    run_functions: dict[str, str]              # PROGRAM key -> the C function of its body
     program_structs: dict[str, str]            # PROGRAM key -> C struct name
     sites: list[Optional[LineInfo]] = field(default_factory=list)
     instances: list[str] = field(default_factory=list)      # State.inst0.. : their PROGRAM keys
@@ -404,8 +404,7 @@ class CGen:
             if p.kind == "PROGRAM":
                 self.pou_body(p, f"PRG_{p.key}")
                 run_functions[p.key] = f"body_PRG_{p.key}"
-        instances = [p.pou.key if hasattr(p, "pou") and not isinstance(p, A.PouDecl) else p.key
-                     for p in self._instances()]
+        instances = self._instance_keys()
         types = "".join(self.defs[n] for n in self.order)
         inst_fields = "".join(f"    PRG_{k} inst{i};\n" for i, k in enumerate(instances))
         state = (f"typedef struct State {{\n    GLOBALS g;\n{inst_fields}    int32_t fault_kind, fault_site;\n"
@@ -437,16 +436,13 @@ class CGen:
         return CProgram(source, cdef, self.layouts, run_functions, program_structs, self.sites,
                         instances, io_bindings)
 
-    def _instances(self):
-        """The PROGRAM instances in the order the PLC makes them (PLC._setup_instances)."""
+    def _instance_keys(self) -> list[str]:
+        """The PROGRAM key of each instance, in the order the PLC makes them
+        (PLC._setup_instances): the RESOURCE's, or every PROGRAM without a CONFIGURATION."""
         config = self.cu.config
         if config is not None:
-            for res in config.resources:
-                for p in res.programs:
-                    if p.pou is not None:
-                        yield p
-        else:
-            yield from (p for p in self.cu.unit.pous if p.kind == "PROGRAM" and self.cu.pous.get(p.key) is p)
+            return [p.pou.key for res in config.resources for p in res.programs if p.pou is not None]
+        return [p.key for p in self.cu.unit.pous if p.kind == "PROGRAM" and self.cu.pous.get(p.key) is p]
 
     def io_functions(self, instances: list[str]) -> tuple[str, list[tuple[str, int]]]:
         """copy_in (io_in) / io_out: the located variables from / to raw image values, in the
