@@ -19,10 +19,11 @@ PROGRAMS_DIR = Path(__file__).resolve().parent / "benchprograms"   # package dat
 
 
 def bench_program(path: Path, sim_seconds: float = 10.0, sources=None, plant_factory=None,
-                  name: str = "", runs: int = 5) -> dict:
+                  name: str = "", runs: int = 5, native: bool = False) -> dict:
     """Microseconds per scan and virtual-time speed-up of one program, with its plant model
     when it has one: the best of `runs` runs, the figure least disturbed by other load on the
-    machine (shared machines here swing by up to 2x between identical runs)."""
+    machine (shared machines here swing by up to 2x between identical runs). On the Python
+    path, or (`native`) on the native one (plclab.runtime.bench)."""
     from plclab.frontend import check_sources, load_files
     from plclab.runtime.compiler import compile_unit
     from plclab.runtime.plc import PLC
@@ -34,7 +35,7 @@ def bench_program(path: Path, sim_seconds: float = 10.0, sources=None, plant_fac
     gc.collect()          # no collection of earlier benchmarks' garbage inside the timed runs
     best = None
     for _ in range(runs):
-        plc = PLC(compile_unit(checked))
+        plc = PLC(compile_unit(checked), native=native)
         sim = Simulation(plc, plants=[plant_factory()] if plant_factory else ())
         t0 = time.perf_counter()
         sim.run(sim_seconds)
@@ -208,6 +209,8 @@ def run_bench(report: Callable[[str], None] = print, quick: bool = False,
         results["programs"].append(r)
         report(f"scan: {r['program']}: {r['us_per_scan']:.1f} us/scan at {r['tick_ms']:g} ms tick, "
                f"{r['speedup']:.0f}x real time")
+    from plclab.runtime.bench import report_native
+    results["native"] = report_native(report, quick=quick)
     results["memory"] = []
     for stand_name in STANDS:
         try:

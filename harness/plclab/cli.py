@@ -22,6 +22,15 @@ def _cmd_check(args: argparse.Namespace) -> int:
         check_sources(sources)
         return 0
     checked = load_files(args.files)
+    if getattr(args, "emit_c", False):
+        from plclab.errors import PlcLabError
+        from plclab.runtime.cgen import Unsupported, emit_c
+        try:
+            print(emit_c(checked).source, end="")
+        except Unsupported as e:
+            raise PlcLabError(f"the native scan path does not cover {e}: this program runs on the Python path "
+                              "(docs/runtime.md)") from None
+        return 0
     if args.emit_python:
         from plclab.runtime.compiler import compile_unit
         print(compile_unit(checked, optimize=not args.plain).annotated_source(), end="")
@@ -411,6 +420,9 @@ def build_parser() -> argparse.ArgumentParser:
     c.add_argument("--emit-python", action="store_true",
                    help="print the Python the program compiles to, each line with its ST file:line")
     c.add_argument("--plain", action="store_true", help="with --emit-python: without the compiler's fast paths")
+    c.add_argument("--emit-c", action="store_true",
+                   help="print the C of the native scan path (docs/runtime.md); an error if it does not cover "
+                        "the program")
     c.add_argument("--emit-st", action="store_true",
                    help="print the ST a plc.xml turns into (its LD / FBD bodies as OpenPLC Editor translates them)")
     c.set_defaults(func=_cmd_check)

@@ -14,6 +14,8 @@ from plclab.runtime.sim import Simulation
 OPTIMIZE = True
 """Whether load() compiles with the compiler's fast paths; the `compile_mode` fixture
 (tests/runtime/conftest.py) runs each semantics test once each way."""
+NATIVE = False
+"""Whether load() runs the program on the native path (where cgen covers it), else Python."""
 
 MS = 1_000_000          # ns per ms
 S = 1_000_000_000       # ns per s
@@ -25,6 +27,7 @@ def load(src: str, *, tick_ms: Optional[int] = None, watch: Iterable[str] = (),
     cu = check_sources([(name, src)])
     if tick_ms is not None:
         plc_kwargs["tick_ns"] = tick_ms * MS
+    plc_kwargs.setdefault("native", NATIVE)
     plc = PLC(compile_unit(cu, optimize=OPTIMIZE), **plc_kwargs)
     return Simulation(plc, watch=list(watch))
 

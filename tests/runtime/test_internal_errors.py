@@ -16,6 +16,12 @@ def _harness_bug(self) -> None:
     raise TypeError("unsupported operand type(s) for +: 'int' and 'NoneType'")
 
 
+@pytest.fixture(autouse=True)
+def _python_path(monkeypatch):
+    """The harness bugs here are injected into the Python path (its TON): run it."""
+    monkeypatch.setenv("PLCLAB_NATIVE", "0")
+
+
 def test_an_error_of_the_harness_is_marked_internal_and_asks_for_a_report(monkeypatch):
     monkeypatch.setattr(stdfb.TON, "_body", _harness_bug)
     sim = program("VAR t : TON; n : INT; END_VAR", "n := n + 1;\nt(IN := TRUE, PT := T#1s);")

@@ -94,6 +94,7 @@ def test_sim_stopped_by_a_harness_bug_exits_70_asking_for_a_report(files, capsys
     def harness_bug(self):
         raise AttributeError("'TON' object has no attribute 'PREV'")
     monkeypatch.setattr(stdfb.TON, "_body", harness_bug)
+    monkeypatch.setenv("PLCLAB_NATIVE", "0")      # the bug is the Python path's (its TON)
     assert main(["sim", str(files["st"]), "--duration", "1"]) == 70
     out = capsys.readouterr().out
     assert f"{files['st']}:5:" in out and "internal error of plclab" in out and "please report it" in out

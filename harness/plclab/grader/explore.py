@@ -557,7 +557,9 @@ def last_writer(ex: Explorer, script: Script, output: str, t: float, since: floa
     in the scan at plant time `t` (looked for up to 5 s back): the script is
     played again, the scans from there under a line tracer; the generated Python's line map
     (`plclab check --emit-python`) names the ST line."""
-    with compiled_once(ex.student.checked, share=ex.student.cache):
+    from plclab.runtime.native import python_only
+    # the line tracer follows the generated Python: this replay runs the Python path
+    with compiled_once(ex.student.checked, share=ex.student.cache), python_only():
         s = ex.session(ex.student, "line")
         target = _output_attr(s, output)
         if target is None:

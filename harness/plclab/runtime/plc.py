@@ -22,6 +22,7 @@ from plclab.frontend import ast as A
 from plclab.frontend.checked import CheckedUnit
 from plclab.iec import types as T
 from plclab.iec.address import SIZE_BITS, Address
+from plclab.runtime import native as _native
 from plclab.runtime.compiler import CompiledProgram, compile_unit, located_attr
 from plclab.runtime.faults import FaultRecord, PlcFault
 from plclab.runtime.image import AREAS, ProcessImage, image_slot
@@ -90,8 +91,11 @@ class PLC:
 
     def __init__(self, compiled: CompiledProgram, image: Optional[ProcessImage] = None,
                  tick_ns: Optional[int] = None, watchdog_s: float = DEFAULT_WATCHDOG_S,
-                 retain: Any = None, retain_period_ns: int = 1_000_000_000, retain_fault: bool = False):
+                 retain: Any = None, retain_period_ns: int = 1_000_000_000, retain_fault: bool = False,
+                 native: Optional[bool] = None):
         self.compiled = compiled
+        # the native scan path (plclab.runtime.native): None where it cannot run this program
+        self.native = _native.for_plc(compiled, native)
         self.checked: CheckedUnit = compiled.checked
         if self.checked.scope_count > 1:
             raise PlcLabError("these files hold the globals of several stands (GVL files): "
@@ -150,6 +154,9 @@ class PLC:
                 if pou.kind == "PROGRAM" and pou.key in self.compiled.program_classes:
                     cls = ns[self.compiled.program_classes[pou.key]]
                     self.instances.append(ProgramInstance(pou.name, cls(), None, None, None))
+        if self.native is not None:
+            # the same initial values, now in C memory; instances and G become its mirrors
+            self.G = self.native.attach(self)
         self.instance_by_name = {i.name.upper(): i for i in self.instances}
 
     def _base_tick(self) -> int:
@@ -165,7 +172,9 @@ class PLC:
             period = 1
             if inst.interval_ns:
                 period = max(1, inst.interval_ns // self.tick_ns)
-            sched.append((period, inst.obj._run))
+            sched.append((period, inst.obj._run if self.native is None else None))
+        if self.native is not None:
+            sched = self.native.schedule(self, sched)     # one C call runs them all
         return sched
 
     def _bind_located(self) -> list[LocatedBinding]:
@@ -271,6 +280,8 @@ class PLC:
         lines_out.append("    pass")
         exec(compile("\n".join(lines_in + lines_out) + "\n", "<plc-io>", "exec"), ns)
         self._copy_in, self._copy_out = ns["_copy_in"], ns["_copy_out"]
+        if self.native is not None:
+            self._copy_in, self._copy_out = self.native.io(self, self._copy_in, self._copy_out)
 
     def scan(self) -> bool:
         """Run one tick at the current PLC time; returns False if the PLC is (now) faulted."""
@@ -332,8 +343,8 @@ class PLC:
         self._safe_outputs()
 
     def _locate(self, exc: BaseException):
+        found = getattr(exc, "st_where", None)      # a fault of the native scan path
         tb = exc.__traceback__
-        found = None
         while tb is not None:
             if tb.tb_frame.f_code.co_filename == self.compiled.filename:
                 info = self.compiled.where(tb.tb_lineno)

@@ -1,0 +1,343 @@
+"""The native scan path (plclab.runtime.native, its C from plclab.runtime.cgen) computes what
+the Python path computes: every stand's scenarios in every variant give the same traces, and
+random operator scripts give the same outputs, variables and retained values scan for scan.
+(The semantics suite, tests/runtime/test_semantics_*.py, also runs every case natively.)
+Also: what it does not cover runs on the Python path, PLCLAB_NATIVE=0 turns it off, faults
+name the same kind, message and ST line, views by name read and write the C memory, and the
+build cache holds up when processes build the same program at once."""
+from __future__ import annotations
+
+import json
+import math
+import os
+import random
+import subprocess
+import sys
+import textwrap
+from pathlib import Path
+from typing import Any
+
+import pytest
+
+from plclab.frontend import check_sources
+from plclab.runtime import native
+from plclab.runtime.compiler import Ref, compile_unit
+from plclab.runtime.plc import FAULT, PLC
+from plclab.stands import stand_module
+from plclab.stands.base import stand_spec
+
+STANDS = ("mp9c", "tur10", "thermo", "cnc")
+VARIANTS = [(s, v) for s in STANDS for v in stand_module(s).SPEC.stand.variants]
+
+
+def _same(v: Any) -> Any:
+    """A value as compared: NaN equals NaN."""
+    return "nan" if isinstance(v, float) and math.isnan(v) else v
+
+
+def _session(spec: Any, variant: str, on_native: bool, monkeypatch: pytest.MonkeyPatch, **kw: Any) -> Any:
+    """A session of `variant` on the path asked for (native: built now, never a fallback)."""
+    if on_native:
+        monkeypatch.setenv(native.ENV, "1")
+        s = spec.session(variant, **kw)
+        assert s.plc.native is not None, "the native path did not take a shipped program"
+    else:
+        with native.python_only():
+            s = spec.session(variant, **kw)
+        assert s.plc.native is None
+    monkeypatch.delenv(native.ENV, raising=False)
+    return s
+
+
+def _play(spec: Any, variant: str, scenario: str, on_native: bool, tmp_path: Path,
+          monkeypatch: pytest.MonkeyPatch) -> dict:
+    path = "native" if on_native else "python"
+    s = _session(spec, variant, on_native, monkeypatch, retain_path=tmp_path / f"{path}-{scenario}.json")
+    if on_native:
+        monkeypatch.setenv(native.ENV, "1")         # a PLC restart in the scenario: native again
+    ctx = native.python_only() if not on_native else _Nothing()
+    with ctx:
+        try:
+            spec.scenario(scenario)(s)
+            outcome = "passed"
+        except AssertionError as e:
+            outcome = f"failed: {e}"
+    monkeypatch.delenv(native.ENV, raising=False)
+    assert (s.plc.native is not None) == on_native
+    return {"trace": {n: [(t, _same(v)) for t, v in s.trace.changes(n)] for n in s.trace.signals()},
+            "outcome": outcome, "retain": s.plc.retain_snapshot(), "fault": str(s.plc.fault),
+            "retain_file": (tmp_path / f"{path}-{scenario}.json").read_text()
+            if (tmp_path / f"{path}-{scenario}.json").exists() else None}
+
+
+class _Nothing:
+    def __enter__(self) -> None:
+        return None
+
+    def __exit__(self, *exc: Any) -> None:
+        return None
+
+
+@pytest.mark.parametrize("stand,variant", VARIANTS, ids=[f"{s}-{v}" for s, v in VARIANTS])
+def test_every_scenario_gives_the_same_trace_on_both_paths(stand, variant, tmp_path, monkeypatch):
+    spec = stand_spec(stand)
+    for scenario in spec.scenarios:
+        py = _play(spec, variant, scenario, False, tmp_path, monkeypatch)
+        na = _play(spec, variant, scenario, True, tmp_path, monkeypatch)
+        assert na["outcome"] == py["outcome"], scenario
+        assert na["fault"] == py["fault"], scenario
+        for name, changes in py["trace"].items():
+            assert na["trace"].get(name) == changes, f"{scenario}: {name} differs"
+        assert na["trace"].keys() == py["trace"].keys(), scenario
+        assert na["retain"] == py["retain"], scenario
+        retain_py = py["retain_file"]
+        assert (na["retain_file"] is None) == (retain_py is None), scenario
+        if retain_py is not None:      # what was saved (the file also holds the wall-clock save time)
+            assert json.loads(na["retain_file"])["values"] == json.loads(retain_py)["values"], scenario
+
+
+def _state(obj: Any, twin: Any, path: str, out: list) -> None:
+    """(path, value) of every variable of Python object `obj`, read from `twin` (the same
+    variables on the other path), appended to `out` as pairs to compare."""
+    if isinstance(obj, list):
+        assert len(twin) == len(obj), path
+        for i, (a, b) in enumerate(zip(obj, twin)):
+            _state(a, b, f"{path}[{i}]", out)
+        return
+    if isinstance(obj, (bool, int, float, str)) or obj is None:
+        out.append((path, _same(obj), _same(twin)))
+        return
+    names = list(obj.__dict__) if hasattr(obj, "__dict__") and not hasattr(type(obj), "__slots__") \
+        else [n for c in type(obj).__mro__ for n in getattr(c, "__slots__", ()) if n != "__dict__"]
+    if not names and hasattr(obj, "__dict__"):
+        names = list(obj.__dict__)
+    for n in names:
+        if n.startswith("_") or not hasattr(obj, n):
+            continue
+        v = getattr(obj, n)
+        if v is None or isinstance(v, Ref):        # a scalar VAR_IN_OUT: compared where it lives
+            assert (getattr(twin, n) is None) == (v is None), f"{path}.{n}"
+            continue
+        _state(v, getattr(twin, n), f"{path}.{n}", out)
+
+
+@pytest.mark.parametrize("stand", STANDS)
+def test_random_operator_scripts_give_the_same_variables_scan_for_scan(stand, tmp_path, monkeypatch):
+    """Console actions at random scans (and, now and then, a Modbus client's write into the
+    memory and output image): after every scan both paths hold the same image, the same value
+    in every variable of every program instance and block, and the same retained values."""
+    spec = stand_spec(stand)
+    variant = spec.stand.richest_variant
+    rng = random.Random(f"native-{stand}")
+    py = _session(spec, variant, False, monkeypatch, watch_internals=False)
+    na = _session(spec, variant, True, monkeypatch, watch_internals=False)
+    # the Python objects of the Python path's program, to enumerate every variable
+    outputs = [b for b in py.plc.bindings if not b.is_input]
+    console = [c for c in spec.console if c in (getattr(py.plant, "CONSOLE", None) or spec.console)]
+    for scan in range(1500 if stand != "cnc" else 700):
+        if console and rng.random() < 0.04:
+            name = rng.choice(console)
+            value = rng.random() < 0.5
+            for s in (py, na):
+                s.plant.set_switch(name, value)
+        if outputs and rng.random() < 0.01:
+            b = rng.choice(outputs)
+            raw = rng.randrange(0, 2 if b.area[1] == "X" else 1 << 16)
+            for s in (py, na):
+                s.plc.image.queue_write(b.area, b.index, [raw])
+        for s in (py, na):
+            s.sim.step(1)
+        assert na.plc.image.areas == py.plc.image.areas, f"scan {scan}: the image differs"
+        assert str(na.plc.fault) == str(py.plc.fault), f"scan {scan}"
+        if scan % 10 == 0 or scan < 50:
+            pairs: list = []
+            _state(py.plc.G, na.plc.G, "G", pairs)
+            for a, b in zip(py.plc.instances, na.plc.instances):
+                _state(a.obj, b.obj, a.name, pairs)
+            diff = [(p, x, y) for p, x, y in pairs if x != y]
+            assert not diff, f"scan {scan}: {diff[:5]}"
+            assert len(pairs) > 20
+        assert na.plc.retain_snapshot() == py.plc.retain_snapshot(), f"scan {scan}"
+
+
+# --------------------------------------------------------------------------- single programs
+
+def _pair(src: str, **kw: Any) -> tuple[PLC, PLC]:
+    cu = check_sources([("t.st", textwrap.dedent(src))])
+    py = PLC(compile_unit(cu), native=False, **kw)
+    na = PLC(compile_unit(cu), native=True, **kw)
+    assert py.native is None and na.native is not None
+    return py, na
+
+
+def _scan_both(py: PLC, na: PLC, n: int = 1) -> None:
+    for _ in range(n):
+        for plc in (py, na):
+            plc.scan()
+            plc.advance()
+
+
+def test_a_fault_names_the_same_kind_message_and_line_natively():
+    src = """
+    PROGRAM main
+    VAR i : DINT := 0; a : ARRAY[1..3] OF DINT; d : DINT := 7; z : DINT; q : DINT; END_VAR
+    i := i + 1;
+    q := d / (3 - i);
+    a[i] := q;
+    END_PROGRAM
+    """
+    py, na = _pair(src)
+    _scan_both(py, na, 3)
+    assert py.state == na.state == FAULT
+    assert na.fault.kind == "division_by_zero" and str(na.fault) == str(py.fault)
+    assert (na.fault.pou, na.fault.file, na.fault.line) == (py.fault.pou, py.fault.file, py.fault.line) == \
+        ("main", "t.st", 5)
+    src = src.replace("q := d / (3 - i);", "q := d;")
+    py, na = _pair(src)
+    _scan_both(py, na, 4)
+    assert na.fault.kind == "index_out_of_range" and na.fault.message == "array index 4 outside 1..3"
+    assert str(na.fault) == str(py.fault) and na.fault.line == py.fault.line == 6
+
+
+def test_overflow_rounding_and_timers_scan_for_scan():
+    """Wraparound per type, REAL rounding (double literals), TON/TOF/TP, counters, edges and
+    bistables, checked value by value over many scans on both paths."""
+    py, na = _pair("""
+    PROGRAM main
+    VAR
+      n : DINT; s : SINT := 120; u : USINT := 250; w : WORD := 16#FFF0; ud : UDINT := 4294967290;
+      r : REAL := 0.0; l : LREAL; q : INT; same : BOOL; m : DINT;
+      t1 : TON; t2 : TOF; t3 : TP; c : CTU; e : R_TRIG; f : F_TRIG; b : SR; x : RS;
+      tq1, tq2, tq3, cq : BOOL; et : TIME;
+    END_VAR
+    n := n + 1;
+    s := s + 3; u := u + 3; w := w XOR SHL(w, 1); ud := ud + 3;
+    r := r + 0.1; l := l + 0.1; same := r = 0.1 * DINT_TO_REAL(n);
+    q := REAL_TO_INT(r * 2.5); m := (n * 7) MOD 5;
+    t1(IN := (n MOD 50) > 10, PT := T#150ms); tq1 := t1.Q; et := t1.ET;
+    t2(IN := (n MOD 40) < 5, PT := T#100ms); tq2 := t2.Q;
+    t3(IN := (n MOD 30) = 3, PT := T#70ms); tq3 := t3.Q;
+    c(CU := (n MOD 4) = 0, R := (n MOD 100) = 0, PV := 7); cq := c.Q;
+    e(CLK := (n MOD 3) = 0); f(CLK := (n MOD 5) = 0);
+    b(S1 := e.Q, R := f.Q); x(S := f.Q, R1 := e.Q);
+    END_PROGRAM
+    """, tick_ns=10_000_000)
+    names = ["n", "s", "u", "w", "ud", "r", "l", "q", "same", "m", "tq1", "tq2", "tq3", "cq", "et",
+             "c.CV", "b.Q1", "x.Q1", "t1.ET", "t2.ET", "t3.ET", "e.Q", "f.Q"]
+    for scan in range(400):
+        _scan_both(py, na)
+        got = [_same(na.read(f"main.{k}")) for k in names]
+        assert got == [_same(py.read(f"main.{k}")) for k in names], f"scan {scan}"
+    assert na.read("main.s") != 120 and isinstance(na.read("main.r"), float)
+
+
+def test_writes_by_name_and_retain_go_through_the_c_memory(tmp_path):
+    """Writing a variable (as forcing and the lab do) changes what the C computes with; a
+    retained variable saved by the native path is restored into the Python path and back."""
+    from plclab.runtime.retain import RetainStore
+    src = """
+    PROGRAM main
+    VAR RETAIN keep : DINT; frames : ARRAY[1..3] OF INT; END_VAR
+    VAR inc : DINT := 1; END_VAR
+    VAR out AT %QW0 : INT; END_VAR
+    keep := keep + inc;
+    frames[2] := DINT_TO_INT(keep);
+    out := frames[2];
+    END_PROGRAM
+    """
+    cu = check_sources([("t.st", textwrap.dedent(src))])
+    store = RetainStore(tmp_path / "r.json")
+    na = PLC(compile_unit(cu), native=True, retain=store, retain_period_ns=0)
+    assert na.native is not None
+    na.scan()
+    na.write("main.inc", 10)
+    na.write("main.frames[1]", -5)
+    na.scan()
+    assert na.read("main.keep") == 11 and na.image.areas["QW"][0] == 11
+    assert na.read("main.frames[1]") == -5
+    na.stop()
+    py = PLC(compile_unit(cu), native=False, retain=RetainStore(tmp_path / "r.json"))
+    assert py.read("main.keep") == 11 and py.read("main.frames") == [-5, 11, 0]
+    back = PLC(compile_unit(cu), native=True, retain=RetainStore(tmp_path / "r.json"))
+    assert back.read("main.keep") == 11 and back.read("main.frames") == [-5, 11, 0]
+
+
+def test_what_the_backend_does_not_cover_runs_on_the_python_path(monkeypatch, capsys):
+    src = "PROGRAM main\nVAR s : STRING; n : INT; END_VAR\ns := CONCAT(s, 'a'); n := LEN(s);\nEND_PROGRAM\n"
+    cu = check_sources([("t.st", src)])
+    plc = PLC(compile_unit(cu), native=True)
+    assert plc.native is None
+    plc.scan()
+    assert plc.read("main.n") == 1
+    assert capsys.readouterr().err == ""            # nobody asked for native: silent
+    monkeypatch.setenv(native.ENV, "1")
+    native._told.clear()
+    PLC(compile_unit(cu))
+    PLC(compile_unit(cu))
+    err = capsys.readouterr().err
+    assert err.count("\n") == 1 and "does not cover STRING variables" in err and "Python path" in err
+
+
+def test_plclab_native_0_turns_it_off(monkeypatch):
+    cu = check_sources([("t.st", "PROGRAM main\nVAR n : INT; END_VAR\nn := n + 1;\nEND_PROGRAM\n")])
+    monkeypatch.setenv(native.ENV, "0")
+    assert PLC(compile_unit(cu), native=None).native is None
+    monkeypatch.setenv(native.ENV, "1")
+    assert PLC(compile_unit(cu), native=None).native is not None
+
+
+def test_concurrent_builds_of_one_program_share_one_cache_entry(tmp_path):
+    """Three processes build the same new program at once into one cache: all three run it
+    natively, and the cache holds one library and no half-written file."""
+    st = tmp_path / "p.st"
+    st.write_text(f"PROGRAM main\nVAR n : DINT; END_VAR\nn := n + {random.randrange(1 << 30)};\nEND_PROGRAM\n")
+    code = textwrap.dedent(f"""
+        from plclab.frontend import load_files
+        from plclab.runtime.compiler import Ref, compile_unit
+        from plclab.runtime.plc import PLC
+        plc = PLC(compile_unit(load_files([{str(st)!r}])), native=True)
+        plc.scan(); plc.advance(); plc.scan()
+        print(plc.native is not None, plc.read("main.n"))
+    """)
+    env = dict(os.environ, XDG_CACHE_HOME=str(tmp_path / "cache"))
+    procs = [subprocess.Popen([sys.executable, "-c", code], env=env, stdout=subprocess.PIPE, text=True)
+             for _ in range(3)]
+    outs = [p.communicate(timeout=120)[0].split() for p in procs]
+    assert all(p.returncode == 0 for p in procs)
+    assert len({tuple(o) for o in outs}) == 1 and outs[0][0] == "True"
+    files = sorted(os.listdir(tmp_path / "cache" / "plclab" / "native"))
+    assert len(files) == 1 and files[0].startswith("_plclab_native_"), files
+
+
+def test_a_program_loaded_again_is_built_in_the_background(tmp_path, monkeypatch):
+    monkeypatch.setenv("XDG_CACHE_HOME", str(tmp_path))
+    monkeypatch.delenv(native.ENV, raising=False)
+    cu = check_sources([("t.st", f"PROGRAM main\nVAR n : DINT; END_VAR\nn := n + {random.randrange(1 << 30)};\n"
+                                 "END_PROGRAM\n")])
+    assert PLC(compile_unit(cu)).native is None          # loaded once: no build
+    assert not (tmp_path / "plclab" / "native").exists()
+    assert PLC(compile_unit(cu)).native is None          # again: built in the background
+    for t in list(native.threading.enumerate()):
+        if t.name == "plclab-native-build":
+            t.join(60)
+    assert PLC(compile_unit(cu)).native is not None       # once built: native
+
+
+def test_check_emit_c_prints_the_c_or_says_what_it_does_not_cover(tmp_path):
+    ok = tmp_path / "ok.st"
+    ok.write_text("PROGRAM main\nVAR n : INT; END_VAR\nn := n + 1;\nEND_PROGRAM\n")
+    r = subprocess.run([sys.executable, "-m", "plclab.cli", "check", "--emit-c", str(ok)],
+                       capture_output=True, text=True)
+    if r.returncode != 0 and "No module named" in r.stderr:
+        r = subprocess.run([str(Path(sys.executable).parent / "plclab"), "check", "--emit-c", str(ok)],
+                           capture_output=True, text=True)
+    assert r.returncode == 0, r.stderr
+    assert "self->f_N = (self->f_N + 1);" in r.stdout and "int scan(State *st" in r.stdout
+    bad = tmp_path / "bad.st"
+    bad.write_text("PROGRAM main\nVAR s : STRING; END_VAR\ns := 'a';\nEND_PROGRAM\n")
+    r = subprocess.run([str(Path(sys.executable).parent / "plclab"), "check", "--emit-c", str(bad)],
+                       capture_output=True, text=True)
+    assert r.returncode != 0 and r.stdout == ""
+    assert r.stderr.strip().splitlines() == [
+        "plclab: error: the native scan path does not cover STRING variables: this program runs on the "
+        "Python path (docs/runtime.md)"]
