@@ -11,9 +11,16 @@ format next to the traces, and the row names the student's ST statement that las
 first differing output in that scan.
 
 Deterministic and bounded: the seed is a hash of the submission's text (the same file gives
-the same report, byte for byte) and the budget is a number of scripts and of shrinking runs,
-never wall-clock time (`plclab bench` reports what one script costs). A budget spent without
-a divergence is a pass of the row; the report says how much was explored.
+the same report, byte for byte; in grade-class the class's, class_seed) and the budget is a
+number of scripts and of shrinking runs, never wall-clock time (`plclab bench` reports what one
+script costs). A budget spent without a divergence is a pass of the row; the report says how
+much was explored.
+
+Cheap where it can be (issue 30): while searching, a play records only the probe's changes
+(full traces only on the report's replay), the model answer's side of a script is played once
+and reused (ModelPlays; across a class too), and the scripts may be played in several
+processes (search, `jobs`) with the same result. The scripts are coverage-guided (issue 29):
+those that take the model answer to states not seen before are kept and mutated (Coverage).
 
 Only the comparison is the grader's; what an operator does, what a stand shows and how
 closely two stands must agree are the stand's (plclab.stands.exploration).
@@ -770,6 +777,7 @@ class ExploreResult:
     seed: int
     inconclusive: int = 0
     finding: Optional[Finding] = None
+    model_plays: int = 0          # plays of the model answer while searching (the others were reused)
 
 
 def _fast_tmp() -> Optional[str]:
@@ -878,9 +886,24 @@ def mutate(ex: Explorer, rng: random.Random, cov: Coverage) -> Script:
                 if e.time >= t2]
         events = [e for e in events if e.time < t] + tail
         duration = round(max(t + 3.0, other.duration - t2 + t + 0.1), 3)
-    events.sort(key=lambda e: e.time)
+    events = _apart(sorted(events, key=lambda e: e.time))
     last = max((e.time + e.hold for e in events), default=0.0)
     return Script(tuple(events), round(max(duration, last + 3.0), 3))
+
+
+def _apart(events: list[Event]) -> list[Event]:
+    """`events` without a press that begins before the last press of its button is released
+    and 0.1 s more (a spliced tail or a burst over a hold would shorten that hold to a length
+    the generator never draws, maybe one a single scan decides)."""
+    free: dict[str, float] = {}
+    out = []
+    for e in events:
+        if e.is_press:
+            if e.time < free.get(e.name, -1.0):
+                continue
+            free[e.name] = e.time + e.hold + 0.1
+        out.append(e)
+    return out
 
 
 def _base(ex: Explorer, seed: Any, k: int, cov: Optional[Coverage]) -> Script:
@@ -1016,17 +1039,19 @@ def search(ex: Explorer, seed: Any, count: int, jobs: int = 1, coverage: bool = 
 
 def explore(expl: Exploration, stand: str, task: str, make_session: Callable, student: Program, model: Program,
             episodes: Optional[int] = None, shrink_runs: int = SHRINK_RUNS, seed: Optional[int] = None,
-            jobs: int = 1, model_plays: Optional[Path] = None, coverage: bool = True) -> ExploreResult:
+            jobs: int = 1, model_plays: Optional[Path] = None, coverage: bool = True,
+            record: bool = False) -> ExploreResult:
     """Up to `episodes` seeded scripts (default: the stand's budget) on both programs, coverage-
     guided (`coverage`); the first confirmed divergence is shrunk and explained. `seed`: default
     the submission's (seed_of); `jobs`: processes playing the scripts (same result whatever the
     number); `model_plays`: a folder sharing the model answer's plays with other graders of the
-    same scripts (grade-class)."""
+    same scripts (grade-class); `record`: every play recorded in full and nothing reused, as
+    before issue 30 (the same result, slower: for `plclab bench` and the tests)."""
     episodes = expl.episodes if episodes is None else episodes
     seed = seed_of(stand, task, student.sources) if seed is None else seed
     with tempfile.TemporaryDirectory(prefix="plclab-explore-", dir=_fast_tmp()) as tmp:
         plays = ModelPlays(_model_salt(f"{stand}\0{task}", model), model_plays)
-        ex = Explorer(expl, task, make_session, student, model, Path(tmp), plays)
+        ex = Explorer(expl, task, make_session, student, model, Path(tmp), plays, record=record)
         result = ExploreResult(0, 0.0, 0, seed)
         for script, status, detail in search(ex, seed, episodes, jobs, coverage):
             result.episodes += 1
@@ -1037,6 +1062,7 @@ def explore(expl: Exploration, stand: str, task: str, make_session: Callable, st
                 small, sdiv = shrink(ex, played, div, shrink_runs)
                 result.finding = explain(ex, small, sdiv)
         result.plays = ex.plays
+        result.model_plays = ex.model_plays.played
     return result
 
 
@@ -1088,8 +1114,8 @@ def requirement_of(stand: str, task: str, f: Finding, expl: Exploration) -> Opti
     return None
 
 
-__all__ = ["Coverage", "Divergence", "ExploreResult", "Explorer", "Finding", "ModelPlays", "Program", "compare",
-           "explain", "explore", "ExploreOptions", "class_seed", "play", "script_stream", "search", "seed_of", "shrink"]
+__all__ = ["Coverage", "Divergence", "ExploreOptions", "ExploreResult", "Explorer", "Finding", "ModelPlays", "Program",
+           "class_seed", "compare", "explain", "explore", "play", "script_stream", "search", "seed_of", "shrink"]
 
 
 # --------------------------------------------------------------------------- the grade's row
@@ -1275,10 +1301,13 @@ EXPLORE_GOAL_S = 20.0      # s of one core per task and program for the default 
 
 
 def bench_explore(stand: str, task: str, episodes: int = 4) -> Optional[dict]:
-    """The CPU cost of exploration: `episodes` scripts of the model answer against itself (both
-    programs played, as for a student), seconds per script, scripts per second, and what the
-    stand's default budget costs (the goal: at most EXPLORE_GOAL_S). None where the model answers
-    are not available (an installed package)."""
+    """The CPU cost of exploration for a correct program (a copy of the model answer, graded
+    against it): `episodes` scripts of the stand's stream played three ways on the same run,
+    as before issue 30 (both programs recorded in full), searching without recording (one
+    student's grade), and in a class (the model answer's side already played for the class:
+    the student's side only); seconds per script, scripts per second, and what the stand's
+    default budget costs (the goal: at most EXPLORE_GOAL_S). None where the model answers are
+    not available (an installed package)."""
     import time
 
     from plclab.grader.registry import requirement_set
@@ -1288,17 +1317,27 @@ def bench_explore(stand: str, task: str, episodes: int = 4) -> Optional[dict]:
     if model is None or expl is None:
         return None
     req = requirement_set(stand, task)
-    start = time.process_time()
-    result = explore(expl, stand, task, req.make_session, model, model, episodes, seed=0)
-    spent = time.process_time() - start
-    per = spent / max(result.episodes, 1)
+    student = Program(list(model.sources), model.checked)
+    per: dict[str, float] = {}
+    result = None
+    with tempfile.TemporaryDirectory(prefix="plclab-bench-", dir=_fast_tmp()) as shared:
+        for how in ("recorded", "search", "class"):
+            start = time.process_time()
+            result = explore(expl, stand, task, req.make_session, student, model, episodes, seed=0,
+                             record=how == "recorded", model_plays=Path(shared) if how != "recorded" else None)
+            per[how] = (time.process_time() - start) / max(result.episodes, 1)
+    assert result is not None
     return {"stand": stand, "task": task, "episodes": result.episodes, "plant_s": result.plant_seconds,
-            "s_per_episode": per, "episodes_per_s": 1 / per if per else 0.0, "budget": expl.episodes,
-            "budget_s": per * expl.episodes, "goal_s": EXPLORE_GOAL_S}
+            "s_per_episode": per["search"], "episodes_per_s": 1 / per["search"] if per["search"] else 0.0,
+            "s_per_episode_recorded": per["recorded"], "s_per_episode_class": per["class"],
+            "budget": expl.episodes, "budget_s": per["search"] * expl.episodes,
+            "budget_s_recorded": per["recorded"] * expl.episodes, "budget_s_class": per["class"] * expl.episodes,
+            "goal_s": EXPLORE_GOAL_S}
 
 
 def report_explore(report: Callable[[str], None], quick: bool = False) -> list[dict]:
-    """`plclab bench`'s exploration lines, one per robot."""
+    """`plclab bench`'s exploration lines, one per robot: a correct program's default-budget
+    exploration as before issue 30, now, and in a class."""
     out = []
     for stand in ("mp9c", "tur10"):
         r = bench_explore(stand, "task3", 2 if quick else 4)
@@ -1306,7 +1345,9 @@ def report_explore(report: Callable[[str], None], quick: bool = False) -> list[d
             report(f"explore: {stand}: no model answer here (a checkout has them)")
             continue
         out.append(r)
-        report(f"explore: {stand} {r['task']}: {r['s_per_episode']:.2f} s CPU per random script "
-               f"({r['plant_s'] / r['episodes']:.0f} s of plant time, both programs), {r['episodes_per_s']:.2f} "
-               f"scripts/s; default budget {r['budget']} scripts = {r['budget_s']:.1f} s (goal <= {r['goal_s']:g} s)")
+        report(f"explore: {stand} {r['task']} ({r['plant_s'] / r['episodes']:.0f} s of plant time per script): "
+               f"{r['episodes_per_s']:.2f} scripts/s; CPU per script {r['s_per_episode_recorded']:.2f} s recorded "
+               f"(before), {r['s_per_episode']:.2f} s searching, {r['s_per_episode_class']:.2f} s in a class; "
+               f"default budget {r['budget']} scripts = {r['budget_s']:.1f} s (before {r['budget_s_recorded']:.1f} s, "
+               f"in a class {r['budget_s_class']:.1f} s; goal <= {r['goal_s']:g} s)")
     return out
