@@ -72,7 +72,7 @@ class _Probe:
         last = self.last
         if last is None:
             self.changes = {k: [(now, x)] for k, x in v.items()}
-        else:
+        elif v != last:                      # most scans change nothing: one C-level comparison
             for k, x in v.items():
                 if x != last[k]:
                     self.changes[k].append((now, x))
