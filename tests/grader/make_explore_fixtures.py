@@ -33,6 +33,7 @@ class Fixture:
     what: str
     edits: tuple[tuple, ...]           # (old, new[, count])
     line: str = ""                     # mistakes: text of the student's line the row must name
+    max_steps: int = 16                # mistakes: the most console steps the shrunk script may keep
 
 
 # ------------------------------------------------------------------ shared edits
@@ -117,7 +118,7 @@ MP9C = (
             (("    IF Cp.Count < MAX_FRAMES THEN\n        Cp.Count := Cp.Count + 1;\n",
               "    IF Cp.Count >= MAX_FRAMES THEN\n        Cp.Count := 0;              (* full: start over at frame 1 *)\n"
               "    END_IF;\n    IF Cp.Count < MAX_FRAMES THEN\n        Cp.Count := Cp.Count + 1;\n"),),
-            line="HL1"),
+            line="HL1", max_steps=48),                  # 32 frames recorded, then the 33rd press
     Fixture("mp9c", "task2_restart_needs_two_presses", "task2", False,
             "a restart that needs two presses: after a PLC power cycle the first SB1 press in automatic mode only "
             "acknowledges the power return; the second starts the program.",

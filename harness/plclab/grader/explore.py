@@ -800,7 +800,9 @@ def seed_of(stand: str, task: str, sources: Sequence[tuple[str, str]]) -> int:
 
 ROUND_UNITS = 4        # units drawn from one state of the coverage (a unit: a script, then one aimed at it)
 MUTATE_SHARE = 0.5     # of the units after the first round: a kept script mutated instead of a new one
-BURST = (1, 6)         # a mutation's burst of button presses: how many
+BURST = (1, 6)         # a mutation's burst of button presses: how many, mostly
+LONG_BURST = (8, 36)   # and one burst in LONG_SHARE: a frame memory filled and more, start/stop at every phase
+LONG_SHARE = 0.3
 
 
 @dataclass
@@ -862,7 +864,7 @@ def mutate(ex: Explorer, rng: random.Random, cov: Coverage) -> Script:
     op = rng.random()
     if op < 0.4:                                      # a burst of presses of the button
         button = expl.buttons[0]
-        n = rng.randint(*BURST)
+        n = rng.randint(*(LONG_BURST if rng.random() < LONG_SHARE else BURST))
         at, added = t, []
         for _ in range(n):
             hold = round(rng.uniform(0.1, 0.3), 2)
@@ -942,17 +944,12 @@ def script_stream(ex: Explorer, seed: Any, count: int, coverage: bool = True) ->
             if n >= count:
                 break
             base = _base(ex, seed, k, cov)
-            yield base
-            n += 1
-            if cov is not None:
-                reached.append((base, states_of(ex, base)))
-            if n >= count:
-                break
-            aimed = _aimed(ex, seed, k, base)
-            yield aimed
-            n += 1
-            if cov is not None:
-                reached.append((aimed, states_of(ex, aimed)))
+            for i in range(min(2, count - n)):
+                script = base if i == 0 else _aimed(ex, seed, k, base)
+                yield script
+                n += 1
+                if cov is not None:
+                    reached.append((script, states_of(ex, script)))
         if cov is not None:
             for script, states in reached:
                 cov.add(script, states)
