@@ -34,6 +34,8 @@ class Fixture:
     edits: tuple[tuple, ...]           # (old, new[, count])
     line: str = ""                     # mistakes: text of the student's line the row must name
     max_steps: int = 16                # mistakes: the most console steps the shrunk script may keep
+    rare: bool = False                 # mistakes few random scripts show: coverage-guided exploration
+                                       # finds them within the default budget, not one script in 30
 
 
 # ------------------------------------------------------------------ shared edits
@@ -118,7 +120,7 @@ MP9C = (
             (("    IF Cp.Count < MAX_FRAMES THEN\n        Cp.Count := Cp.Count + 1;\n",
               "    IF Cp.Count >= MAX_FRAMES THEN\n        Cp.Count := 0;              (* full: start over at frame 1 *)\n"
               "    END_IF;\n    IF Cp.Count < MAX_FRAMES THEN\n        Cp.Count := Cp.Count + 1;\n"),),
-            line="HL1", max_steps=48),                  # 32 frames recorded, then the 33rd press
+            line="Cp.Count := 0;", max_steps=48, rare=True),                  # 32 frames recorded, then the 33rd press
     Fixture("mp9c", "task2_restart_needs_two_presses", "task2", False,
             "a restart that needs two presses: after a PLC power cycle the first SB1 press in automatic mode only "
             "acknowledges the power return; the second starts the program.",
@@ -131,7 +133,8 @@ MP9C = (
              ("Robot(Active := SA1, StepMode := SA6, Press := Button.Press, Sensors := Sensors, Cp := Cp);\n",
               "IF FirstScan THEN\n    NeedAck := WasOn;\n    WasOn := TRUE;\n    FirstScan := FALSE;\nEND_IF;\n"
               "Robot(Active := SA1, StepMode := SA6, Press := Button.Press AND NOT NeedAck, Sensors := Sensors, Cp := Cp);\n"
-              "IF Button.Press AND SA1 THEN\n    NeedAck := FALSE;\nEND_IF;\n"))),
+              "IF Button.Press AND SA1 THEN\n    NeedAck := FALSE;\nEND_IF;\n")),
+            line="Press := Button.Press AND NOT NeedAck"),
     # ------------------------------------------------------------------ correct alternatives
     Fixture("mp9c", "task1_alt_if_valves", "task1", True,
             "other structure: the manual valves set in IF/ELSE blocks, one per mechanism.",
