@@ -311,10 +311,13 @@ def _cmd_grade(args: argparse.Namespace) -> int:
         raise PlcLabError("grade: give the program's ST files (plclab grade STAND TASK FILE.st...)")
     if args.explore is not None and args.explore < 0:
         raise PlcLabError(f"grade: --explore takes a number of scripts >= 0, not {args.explore}")
+    if args.jobs < 1:
+        raise PlcLabError(f"grade: --jobs takes a number of processes >= 1, not {args.jobs}")
+    from plclab.grader.explore import ExploreOptions
     from plclab.limits import memory_limited
     with memory_limited():               # the student's program is untrusted: bounded (docs/reliability.md)
         report = grade(args.stand, args.task, args.files, out_dir=args.out, reference=args.reference,
-                       explore=args.explore)
+                       explore=args.explore, explore_options=ExploreOptions(jobs=args.jobs))
     print(report.text(), end="")
     return report.exit_code
 
@@ -498,6 +501,8 @@ def build_parser() -> argparse.ArgumentParser:
                    "against (default: the checkout's solutions/)")
     c.add_argument("--explore", type=int, metavar="N", help="random operator scripts explored against the model "
                    "answer (default: the stand's budget; 0: scenarios only)")
+    c.add_argument("--jobs", type=int, default=1, metavar="N", help="processes playing the exploration's scripts "
+                   "(default 1; the same verdicts and report whatever N)")
     c.add_argument("--requirements", action="store_true",
                    help="grade nothing: list what the task checks (id and requirement, as the report's rows)")
     c.set_defaults(func=_cmd_grade)

@@ -3,14 +3,17 @@
 Exploration's catch of a mistake must not hang on one random stream: a budget of B scripts
 finds a mistake one script in k shows with probability 1 - (1 - 1/k)^B. This plays N scripts
 of a fixed seed (not the submission's) on each fixture against its task's model answer, as
-exploration plays them (random scripts, every other one aimed at the moments the one before
-changed the model answer's stand), and prints, per fixture, the share of scripts that show
-a confirmed difference and the chance the stand's default budget misses it. Correct
-alternatives must show 0.
+exploration plays them (random or, coverage-guided, kept scripts mutated; every other one
+aimed at the moments the one before changed the model answer's stand), and prints, per
+fixture, the share of scripts that show a confirmed difference and the chance the stand's
+default budget misses it (for a coverage-guided stream the scripts are not independent:
+`first` says where the first hits came). Correct alternatives must show 0. --no-coverage
+gives the rate without coverage guidance (before and after, issue 29).
 
     .venv/bin/python tests/grader/catch_rates.py                 # every exploration fixture, 40 scripts
     .venv/bin/python tests/grader/catch_rates.py --scripts 100 --all --jobs 2 --json rates.json
     .venv/bin/python tests/grader/catch_rates.py mp9c/task3_stop_needs_enable
+    .venv/bin/python tests/grader/catch_rates.py --no-coverage mp9c/task2_full_memory_wraps   # before
     .venv/bin/python tests/grader/catch_rates.py --stand mp9c --task task3 robot.st   # a program of your own
 
 --all adds the scripted scenarios' own fixtures (tests/grader/fixtures/STAND/*.st): mistakes
@@ -50,12 +53,13 @@ def fixtures(all_: bool) -> list[tuple[str, str, Path, bool]]:
 def rate(job: tuple[str, str, str, bool, int, int]) -> dict:
     """Play `scripts` scripts (seeds base..) on one fixture; which of them show a difference."""
     from plclab.frontend import check_sources, read_sources
-    from plclab.grader.explore import Explorer, Program, model_answer, script_stream
+    from plclab.grader.explore import Explorer, Program, model_answer, search
     from plclab.grader.registry import requirement_set
     from plclab.stands.base import stand_spec
     stand, task, path, mistake, scripts, base = job[:6]
     explain_first = job[6] if len(job) > 6 else 0
     no_aim = job[7] if len(job) > 7 else False
+    coverage = job[8] if len(job) > 8 else True
     expl = stand_spec(stand).explore
     if no_aim:
         expl = dataclasses.replace(expl, aim=None)
@@ -66,9 +70,10 @@ def rate(job: tuple[str, str, str, bool, int, int]) -> dict:
     hits, kinds = [], {}
     with tempfile.TemporaryDirectory(prefix="plclab-rates-") as tmp:
         ex = Explorer(expl, task, requirement_set(stand, task).make_session, student, model, Path(tmp))
-        for n, script in enumerate(script_stream(ex, f"rates{base}", scripts)):
-            played, div, _amb = ex.confirmed(script)
-            if div is not None:
+        for n, (script, _status, found) in enumerate(search(ex, f"rates{base}", scripts, coverage=coverage,
+                                                              stop=False)):
+            if found is not None:
+                played, div = found
                 hits.append(n)
                 kinds[div.signal.name] = kinds.get(div.signal.name, 0) + 1
                 if explain_first and len(hits) <= explain_first:
@@ -79,7 +84,7 @@ def rate(job: tuple[str, str, str, bool, int, int]) -> dict:
                           + (f"\n  line {f.line}" if f.line else ""), flush=True)
     p = len(hits) / scripts
     name = f"{stand}/{Path(path).stem}" if HERE in Path(path).resolve().parents else path
-    return {"fixture": name, "task": task, "mistake": mistake, "scripts": scripts,
+    return {"fixture": name, "task": task, "mistake": mistake, "scripts": scripts, "coverage": coverage,
             "hits": len(hits), "rate": p, "miss": (1 - p) ** expl.episodes, "budget": expl.episodes,
             "signals": kinds, "first": hits[:5]}
 
@@ -96,6 +101,8 @@ def main(argv: list[str] | None = None) -> int:
     ap.add_argument("--jobs", type=int, default=1)
     ap.add_argument("--json", help="write the figures here too")
     ap.add_argument("--no-aim", action="store_true", help="random scripts only (none aimed)")
+    ap.add_argument("--no-coverage", action="store_true", help="no coverage guidance (no kept script mutated): "
+                    "the rate before issue 29's coverage-guided exploration")
     ap.add_argument("--explain", type=int, default=0, metavar="N",
                     help="shrink and print the first N differences of each fixture")
     args = ap.parse_args(argv)
@@ -108,8 +115,9 @@ def main(argv: list[str] | None = None) -> int:
         task = args.task or (m.group(1) if m else None)
         if stand not in ("mp9c", "tur10") or task is None:
             ap.error(f"{f}: give --stand and --task (or name it STAND/TASK_....st)")
-        jobs.append((stand, task, f, True, args.scripts, args.base, args.explain, args.no_aim))
-    todo = [(s, t, str(p), m, args.scripts, args.base, args.explain, args.no_aim) for s, t, p, m in fixtures(args.all or bool(names))
+        jobs.append((stand, task, f, True, args.scripts, args.base, args.explain, args.no_aim, not args.no_coverage))
+    todo = [(s, t, str(p), m, args.scripts, args.base, args.explain, args.no_aim, not args.no_coverage)
+            for s, t, p, m in fixtures(args.all or bool(names))
             if (not args.only and not files) or f"{s}/{p.stem}" in names]
     todo += jobs
     with ProcessPoolExecutor(args.jobs) as pool:

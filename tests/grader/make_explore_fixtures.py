@@ -33,6 +33,9 @@ class Fixture:
     what: str
     edits: tuple[tuple, ...]           # (old, new[, count])
     line: str = ""                     # mistakes: text of the student's line the row must name
+    max_steps: int = 16                # mistakes: the most console steps the shrunk script may keep
+    rare: bool = False                 # mistakes few random scripts show: coverage-guided exploration
+                                       # finds them within the default budget, not one script in 30
 
 
 # ------------------------------------------------------------------ shared edits
@@ -110,6 +113,28 @@ MP9C = (
              ("Robot(Active := SA1, StepMode := SA6, Press := Button.Press, Sensors := Sensors, Cp := Cp);\n",
               "Robot(Active := SA1, StepMode := SA6, Press := Button.Press OR (FirstScan AND Resume AND SA1),\n"
               "      Sensors := Sensors, Cp := Cp);\nFirstScan := FALSE;\nResume := Robot.Sequencer.Running;\n"))),
+    # mistakes a random script rarely shows, found by coverage-guided exploration (issue 29)
+    Fixture("mp9c", "task2_full_memory_wraps", "task2", False,
+            "memory full then a refused press: the 33rd frame is not refused (no full-memory blink) but "
+            "starts the memory over at frame 1, as a ring buffer.",
+            (("    IF Cp.Count < MAX_FRAMES THEN\n        Cp.Count := Cp.Count + 1;\n",
+              "    IF Cp.Count >= MAX_FRAMES THEN\n        Cp.Count := 0;              (* full: start over at frame 1 *)\n"
+              "    END_IF;\n    IF Cp.Count < MAX_FRAMES THEN\n        Cp.Count := Cp.Count + 1;\n"),),
+            line="Cp.Count := 0;", max_steps=48, rare=True),                  # 32 frames recorded, then the 33rd press
+    Fixture("mp9c", "task2_restart_needs_two_presses", "task2", False,
+            "a restart that needs two presses: after a PLC power cycle the first SB1 press in automatic mode only "
+            "acknowledges the power return; the second starts the program.",
+            (("VAR RETAIN\n    Cp : ST_ControlProgram;         (* the recorded program survives a PLC restart *)\n",
+              "VAR RETAIN\n    Cp : ST_ControlProgram;         (* the recorded program survives a PLC restart *)\n"
+              "    WasOn : BOOL;                   (* the PLC has run before: a power return to acknowledge *)\n"),
+             ("    Sensors : INT;                  (* the sensor byte SQ1..SQ7 of Fig. 5 *)\n",
+              "    Sensors : INT;                  (* the sensor byte SQ1..SQ7 of Fig. 5 *)\n"
+              "    FirstScan : BOOL := TRUE;\n    NeedAck : BOOL;\n"),
+             ("Robot(Active := SA1, StepMode := SA6, Press := Button.Press, Sensors := Sensors, Cp := Cp);\n",
+              "IF FirstScan THEN\n    NeedAck := WasOn;\n    WasOn := TRUE;\n    FirstScan := FALSE;\nEND_IF;\n"
+              "Robot(Active := SA1, StepMode := SA6, Press := Button.Press AND NOT NeedAck, Sensors := Sensors, Cp := Cp);\n"
+              "IF Button.Press AND SA1 THEN\n    NeedAck := FALSE;\nEND_IF;\n")),
+            line="Press := Button.Press AND NOT NeedAck"),
     # ------------------------------------------------------------------ correct alternatives
     Fixture("mp9c", "task1_alt_if_valves", "task1", True,
             "other structure: the manual valves set in IF/ELSE blocks, one per mechanism.",

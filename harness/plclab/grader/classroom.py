@@ -63,6 +63,7 @@ from plclab.errors import CompileError, PlcLabError
 from plclab.frontend import read_sources
 
 from .engine import grade, grade_sources, requirement_table, task_title
+from .explore import ExploreOptions, _fast_tmp, class_seed
 from .registry import ST_PROGRAM, Submission as SubmissionKind, requirement_set
 from .report import MAX_QUOTE, NOT_CHECKED, GradeReport, Row, clip
 
@@ -287,8 +288,13 @@ def grade_class(stand: str, task: str, folder: str | Path, out_dir: str | Path,
     cleanup = weakref.finalize(report, shutil.rmtree, str(staging), True)   # if never written out
     limits = _Limits(time_limit_s, memory_limit_mib)
     real_grader = grade_one is grade
+    seed = class_seed(stand, task, str(folder)) if explore != 0 else None
+    plays: Optional[str] = None
     if real_grader and (explore != 0 or reference):
-        grade_one = functools.partial(grade, reference=list(reference or ()) or None, explore=explore)
+        # every student under the class's scripts; the model answer's play of each shared (issue 30)
+        plays = tempfile.mkdtemp(prefix="plclab-class-plays-", dir=_fast_tmp()) if explore != 0 else None
+        grade_one = functools.partial(grade, reference=list(reference or ()) or None, explore=explore,
+                                      explore_options=ExploreOptions(seed=seed, model_plays=plays))
     with _stop_signals_raise() as stopped:      # a second signal is ignored until the cleanup is done
         try:
             try:
@@ -302,7 +308,8 @@ def grade_class(stand: str, task: str, folder: str | Path, out_dir: str | Path,
                         raise PlcLabError("grade-class: a cluster grades with the real grader only "
                                           "(grade_one is for tests)")
                     _run_on_cluster(scheduler, stand, task, submissions, out, staging, limits, on_result,
-                                    kind, report.results, explore, _reference_sources(stand, task, explore, reference))
+                                    kind, report.results, explore, _reference_sources(stand, task, explore, reference),
+                                    seed)
             except _Stop:
                 report.results.sort(key=lambda r: r.student)
                 raise ClassInterrupted(stopped[0], report) from None
@@ -310,6 +317,9 @@ def grade_class(stand: str, task: str, folder: str | Path, out_dir: str | Path,
             cleanup()                             # interrupted or failed: no temporary folder stays
             report.staging = None
             raise
+        finally:
+            if plays is not None:
+                shutil.rmtree(plays, ignore_errors=True)
     report.results.sort(key=lambda r: r.student)
     return report
 
@@ -591,7 +601,7 @@ def _died(process) -> str:
 def _run_on_cluster(address: str, stand: str, task: str, submissions: list[Submission], out: Path,
                     staging: Path, limits: _Limits, on_result, handed_in: SubmissionKind,
                     results: list[StudentResult], explore: Optional[int] = 0,
-                    reference: Optional[list[tuple[str, str]]] = None) -> None:
+                    reference: Optional[list[tuple[str, str]]] = None, seed: Optional[int] = None) -> None:
     """Each submission is one task on the Dask cluster at `address`: a worker grades it in a
     process of its own (`grade_on_worker`: the same isolation and limits as on this machine)
     and returns the report with the trace files' bytes, staged here as local grading stages
@@ -621,7 +631,7 @@ def _run_on_cluster(address: str, stand: str, task: str, submissions: list[Submi
                         handed_in, stand, task, 0.0, on_result, len(submissions))
                 continue
             future = client.submit(grade_on_worker, stand, task, sources, limits.time_s, limits.memory_mib,
-                                   explore, reference,
+                                   explore, reference, seed,
                                    key=f"plclab-grade-{n}-{uuid.uuid4().hex}", pure=False)
             futures[future] = (n, sub)
             started[n] = time.monotonic()
@@ -692,7 +702,8 @@ def _write_reference(reference: list[tuple[str, str]], folder: Path) -> list[str
 
 def grade_on_worker(stand: str, task: str, sources: list[tuple[str, str]], time_limit_s: float,
                     memory_limit_mib: Optional[int], explore: Optional[int] = 0,
-                    reference: Optional[list[tuple[str, str]]] = None) -> tuple[str, object, dict[str, bytes]]:
+                    reference: Optional[list[tuple[str, str]]] = None,
+                    seed: Optional[int] = None) -> tuple[str, object, dict[str, bytes]]:
     """A Dask task: grade one program in a fresh process of its own on this worker (a Dask
     worker may not fork children of its own, and runs tasks in threads), held to the time and
     memory limits; returns (kind, value, trace files by name)."""
@@ -700,7 +711,7 @@ def grade_on_worker(stand: str, task: str, sources: list[tuple[str, str]], time_
     try:
         (work / "tmp").mkdir()
         payload = pickle.dumps((stand, task, sources, str(work / "traces"), str(work / "tmp"), memory_limit_mib,
-                                os.getpid(), explore, reference))
+                                os.getpid(), explore, reference, seed))
         env = {**os.environ, "PYTHONPATH": os.pathsep.join(p for p in sys.path if p), "TMPDIR": str(work / "tmp")}
         child = subprocess.Popen([sys.executable, "-c", "from plclab.grader.classroom import _worker_child; "
                                   "_worker_child()"], stdin=subprocess.PIPE, stdout=subprocess.PIPE,
@@ -731,13 +742,13 @@ def _worker_child() -> None:
     """The grading process a Dask worker starts: the arguments pickled on stdin, the outcome
     pickled on stdout (a report of our own grader: trusted data between our processes)."""
     (stand, task, sources, traces, scratch, memory_limit_mib, parent, explore,
-     reference) = pickle.loads(sys.stdin.buffer.read())
+     reference, seed) = pickle.loads(sys.stdin.buffer.read())
     out = sys.stdout.buffer
     _isolate(scratch, memory_limit_mib, parent)
     reference_files = _write_reference(reference, Path(scratch) / "reference") if reference else None
 
     def grade_read(stand: str, task: str, _files, out_dir) -> GradeReport:
-        return grade_sources(stand, task, sources, out_dir, reference_files, explore)
+        return grade_sources(stand, task, sources, out_dir, reference_files, explore, ExploreOptions(seed=seed))
 
     result = _grade_isolated(grade_read, stand, task, [name for name, _ in sources], traces)
     out.write(pickle.dumps(result))

@@ -25,17 +25,19 @@ from plclab.frontend import check_sources, read_sources
 from plclab.scenario import ScenarioFailure, Session, compiled_once
 from plclab.trace import write_csv, write_vcd
 
-from .explore import exploration_rows
+from .explore import ExploreOptions, exploration_rows
 from .registry import EVERY, Checks, Requirement, RequirementSet, requirement_set
 from .report import GradeReport, Row
 
 
 def grade(stand: str, task: str, files: Sequence[str], out_dir: Optional[str] = None,
-          reference: Optional[Sequence[str]] = None, explore: Optional[int] = 0) -> GradeReport:
+          reference: Optional[Sequence[str]] = None, explore: Optional[int] = 0,
+          explore_options: Optional[ExploreOptions] = None) -> GradeReport:
     """Grade the ST `files` (one program) on `task` of `stand`; trace files go to `out_dir`.
     Besides the scenarios, a robot's task is explored against its model answer (the checkout's
     solutions/, or the `reference` files): `explore` random scripts (None: the stand's budget,
     what `plclab grade` uses; 0, the default of this function: none); plclab.grader.explore.
+    `explore_options`: processes, seed and shared model-answer plays of that exploration.
 
     Raises PlcLabError only for a stand or task the grader does not know, or trace files it
     must not write; a program that does not compile or does not run is a report that fails.
@@ -47,12 +49,12 @@ def grade(stand: str, task: str, files: Sequence[str], out_dir: Optional[str] = 
         return GradeReport(stand, task, req.title, [str(f) for f in files],
                            errors=[str(d) for d in e.diagnostics], noun=req.submission.noun,
                            unreadable=req.submission.unreadable)
-    return grade_sources(stand, task, sources, out_dir, reference, explore)
+    return grade_sources(stand, task, sources, out_dir, reference, explore, explore_options)
 
 
 def grade_sources(stand: str, task: str, sources: Sequence[tuple[str, str]],
                   out_dir: Optional[str] = None, reference: Optional[Sequence[str]] = None,
-                  explore: Optional[int] = 0) -> GradeReport:
+                  explore: Optional[int] = 0, explore_options: Optional[ExploreOptions] = None) -> GradeReport:
     """Like `grade`, with the program given as (file name, text) pairs."""
     req = requirement_set(stand, task)
     _check_trace_outputs(req, out_dir)               # a bad --out: one line, before the work
@@ -98,7 +100,7 @@ def grade_sources(stand: str, task: str, sources: Sequence[tuple[str, str]],
             if out_dir is not None:
                 report.traces[scenario.name] = _write_traces(s, req, scenario.name, Path(out_dir))
     report.rows = _rows(req, checks)
-    rows, notes, files = exploration_rows(req, sources, checked, reference, explore, out_dir)
+    rows, notes, files = exploration_rows(req, sources, checked, reference, explore, out_dir, explore_options)
     if rows:
         e1, named = rows[0], rows[1] if len(rows) > 1 else None
         at = next((i for i, r in enumerate(report.rows) if named and r.id == named.id), None)

@@ -11,21 +11,31 @@ format next to the traces, and the row names the student's ST statement that las
 first differing output in that scan.
 
 Deterministic and bounded: the seed is a hash of the submission's text (the same file gives
-the same report, byte for byte) and the budget is a number of scripts and of shrinking runs,
-never wall-clock time (`plclab bench` reports what one script costs). A budget spent without
-a divergence is a pass of the row; the report says how much was explored.
+the same report, byte for byte; in grade-class the class's, class_seed) and the budget is a
+number of scripts and of shrinking runs, never wall-clock time (`plclab bench` reports what one
+script costs). A budget spent without a divergence is a pass of the row; the report says how
+much was explored.
+
+Cheap where it can be (issue 30): while searching, a play records only the probe's changes
+(full traces only on the report's replay), the model answer's side of a script is played once
+and reused (ModelPlays; across a class too), and the scripts may be played in several
+processes (search, `jobs`) with the same result. The scripts are coverage-guided (issue 29):
+those that take the model answer to states not seen before are kept and mutated (Coverage).
 
 Only the comparison is the grader's; what an operator does, what a stand shows and how
 closely two stands must agree are the stand's (plclab.stands.exploration).
 """
 from __future__ import annotations
 
+import contextlib
 import hashlib
 import os
+import pickle
 import random
 import re
 import sys
 import tempfile
+import zlib
 from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Any, Callable, Iterator, Optional, Sequence
@@ -47,10 +57,14 @@ class _Probe:
     """Samples what the stand shows at every scan (a step hook after the plant's own) and keeps
     only the changes: signal -> [(t, value)], the first entry the power-up value."""
 
-    def __init__(self, plant: Any, observe: Callable[[Any, Any], dict[str, Any]], clock: Callable[[], float]):
+    def __init__(self, plant: Any, observe: Callable[[Any, Any], dict[str, Any]], clock: Callable[[], float],
+                 inner: Optional[Callable[[], tuple]] = None):
         self.plant, self.observe, self.clock = plant, observe, clock
         self.last: Optional[dict[str, Any]] = None
         self.changes: dict[str, list[tuple[float, Any]]] = {}
+        # the program's inner state (the model answer's, for coverage): [(t, state)] at each change
+        self.inner, self.states = inner, []
+        self._inner_last: Any = None
 
     def step(self, _dt: float) -> None:
         now = round(self.clock(), 6)         # the session's time of the scan about to run
@@ -58,11 +72,16 @@ class _Probe:
         last = self.last
         if last is None:
             self.changes = {k: [(now, x)] for k, x in v.items()}
-        else:
+        elif v != last:                      # most scans change nothing: one C-level comparison
             for k, x in v.items():
                 if x != last[k]:
                     self.changes[k].append((now, x))
         self.last = v
+        if self.inner is not None:
+            state = self.inner()
+            if state != self._inner_last:
+                self.states.append((now, state))
+                self._inner_last = state
 
 
 def actions(script: Script) -> list[tuple[float, int, str, str, str]]:
@@ -82,14 +101,50 @@ def actions(script: Script) -> list[tuple[float, int, str, str, str]]:
     return sorted(out, key=lambda a: (round(a[0], 6), a[1]))
 
 
+def _inner_reader(s: Session, paths: Sequence[str]) -> Callable[[], tuple]:
+    """A function reading the running program's variables `paths` (those it has; PLC restarts
+    make new objects, so they are looked up again after one)."""
+    cache: dict[str, Any] = {"plc": None, "get": None}
+
+    def read() -> tuple:
+        if cache["plc"] is not s.plc:
+            cache["plc"] = s.plc
+            found = [s.plc.resolve(p) for p in paths if s.has(p)]
+            getters = [(lambda o=o, k=k: o[k]) if isinstance(o, list) else (lambda o=o, k=k: getattr(o, k))
+                       for o, k in found]
+            cache["get"] = getters
+        return tuple(g() for g in cache["get"])
+    return read
+
+
+def unrecorded(s: Session) -> None:
+    """Search without recording (issue 30): while exploring, the comparison needs only what the
+    probe keeps, so the session's simulation is replaced by one that samples no signal, and a
+    plant that writes into the session's trace (the TUR-10's true positions) is detached. The
+    report's traces come from a replay of the failing script with full recording. Called again
+    after each PLC restart (which builds a recording simulation anew)."""
+    from plclab.runtime.sim import Simulation
+    extra = [p for p in s.sim.plants[1:]]              # probes attached after the plant's binding
+    s.sim = Simulation(s.plc, plants=[s.plant], record_located=False)
+    s.sim.plants.extend(extra)
+    if getattr(s.plant, "trace", None) is s.trace:
+        s.plant.trace = None
+
+
 def play(s: Session, script: Script, expl: Optional[Exploration] = None, until: Optional[float] = None,
-         split: Optional[tuple[float, Callable[[], None]]] = None) -> Optional[_Probe]:
+         split: Optional[tuple[float, Callable[[], None]]] = None, record: bool = True,
+         inner: Sequence[str] = ()) -> Optional[_Probe]:
     """Play `script` on session `s` up to `until` (default: its end), logging each action so the
     timeline shows it. With `expl`, a probe records what the stand shows; returns it.
-    `split = (t, fn)`: fn() is called once when plant time t is reached (a line tracer starts)."""
-    probe = _Probe(s.plant, expl.observe, lambda: s.now) if expl is not None else None
+    `split = (t, fn)`: fn() is called once when plant time t is reached (a line tracer starts).
+    `record=False`: no trace is kept (exploration's search: only the probe's changes count).
+    `inner`: ST paths of the program's state the probe keeps too (the model answer's coverage)."""
+    probe = _Probe(s.plant, expl.observe, lambda: s.now, _inner_reader(s, inner) if inner else None) \
+        if expl is not None else None
 
     def attach() -> None:
+        if not record:
+            unrecorded(s)
         if probe is not None and probe not in s.sim.plants:
             s.sim.plants.append(probe)
 
@@ -366,16 +421,97 @@ class Outcome:
     student: Optional[Session] = None
 
 
+@dataclass(frozen=True)
+class ModelPlay:
+    """The model answer's side of one script: what its stand showed (probe changes) and the
+    states its program went through ([(t, state)], Exploration.state_paths)."""
+
+    changes: dict[str, list[tuple[float, Any]]]
+    states: list[tuple[float, tuple]]
+
+    @property
+    def phases(self) -> list[float]:
+        """The moments the model answer's stand changed (where an aimed script acts)."""
+        return sorted({t for ch in self.changes.values() for t, _v in ch[1:]})
+
+
+class ModelPlays:
+    """The model answer's plays, each script played once (issue 30): its play does not depend
+    on the student, so the confirming, jitter and shrink replays of a grade, and in
+    `grade-class` every student of the class (the same scripts: the class's seed), reuse it.
+    Stored compactly (a zlib'd pickle per script), in memory and, with `folder`, on disk for
+    the class's other grading processes (each file written whole, then renamed into place)."""
+
+    def __init__(self, salt: str, folder: Optional[Path] = None):
+        self.salt, self.folder = salt, folder
+        self.memory: dict[str, bytes] = {}
+        self.played = 0                     # plays of the model answer (misses)
+
+    def key(self, script: Script) -> str:
+        return hashlib.sha256(f"{self.salt}\0{script!r}".encode()).hexdigest()[:32]
+
+    def get(self, script: Script) -> Optional[ModelPlay]:
+        k = self.key(script)
+        blob = self.memory.get(k)
+        if blob is None and self.folder is not None:
+            try:
+                blob = (self.folder / f"{k}.play").read_bytes()
+            except OSError:
+                blob = None
+            if blob is not None:
+                self.memory[k] = blob
+        if blob is None:
+            return None
+        changes, states = pickle.loads(zlib.decompress(blob))
+        return ModelPlay(changes, states)
+
+    def put(self, script: Script, play: ModelPlay) -> None:
+        k = self.key(script)
+        blob = zlib.compress(pickle.dumps((play.changes, play.states), protocol=pickle.HIGHEST_PROTOCOL), 6)
+        self.memory[k] = blob
+        if self.folder is not None:
+            with contextlib.suppress(OSError):            # a cache: a failed write costs a replay only
+                tmp = self.folder / f"{k}.{os.getpid()}.tmp"
+                tmp.write_bytes(blob)
+                os.replace(tmp, self.folder / f"{k}.play")
+
+
+def _model_salt(stand_task: str, model: "Program") -> str:
+    h = hashlib.sha256(stand_task.encode())
+    for name, text in model.sources:
+        h.update(f"\0{name}\0{text}".encode("utf-8", "replace"))
+    return h.hexdigest()
+
+
 class Explorer:
-    """Plays scripts on the model answer and the student's program and compares them."""
+    """Plays scripts on the model answer and the student's program and compares them.
+
+    While searching nothing is recorded but what the comparison needs (the probes' changes),
+    and the model answer's side of each script is played once (`model_plays`); `record=True`
+    plays as before issue 30 (both programs, full traces: what the tests compare against)."""
 
     def __init__(self, expl: Exploration, task: str, make_session: Callable, student: Program, model: Program,
-                 workdir: Path):
+                 workdir: Path, model_plays: Optional[ModelPlays] = None, record: bool = False):
         self.expl, self.task, self.make_session = expl, task, make_session
         self.student, self.model, self.workdir = student, model, workdir
         self.observed = expl.compared(task)
         self.plays = 0
         self.phases: list[float] = []
+        self.record = record
+        self.model_plays = model_plays if model_plays is not None else ModelPlays(_model_salt(task, model))
+
+    def model_side(self, script: Script) -> ModelPlay:
+        """The model answer's play of `script`: played once, then reused."""
+        known = None if self.record else self.model_plays.get(script)
+        if known is not None:
+            return known
+        _s, probe = self.run(self.model, "model", script, record=self.record, inner=self.expl.state_paths)
+        assert probe is not None
+        self.model_plays.played += 1
+        out = ModelPlay(probe.changes, probe.states)
+        if not self.record:
+            self.model_plays.put(script, out)
+        return out
 
     def session(self, p: Program, name: str) -> Session:
         retain = self.workdir / f"{name}.retain.json"
@@ -385,26 +521,32 @@ class Explorer:
             return self.make_session(p.sources, retain, p.checked)
 
     def run(self, p: Program, name: str, script: Script, until: Optional[float] = None,
-            expl: bool = True) -> tuple[Session, Optional[_Probe]]:
+            expl: bool = True, record: bool = True, inner: Sequence[str] = ()) -> tuple[Session, Optional[_Probe]]:
         with compiled_once(p.checked, share=p.cache):
             s = self.session(p, name)
-            probe = play(s, script, self.expl if expl else None, until)
+            probe = play(s, script, self.expl if expl else None, until, record=record, inner=inner)
         return s, probe
 
     def outcome(self, script: Script, keep: bool = False, record_phases: bool = False) -> Outcome:
         """Both programs on `script`: the divergence (None: alike) and the ambiguous actions.
         `record_phases`: keep the times the model answer's stand changed (`phases`: where the
-        next script aims its actions)."""
+        next script aims its actions). `keep`: both sessions, fully recorded, for the report."""
         self.plays += 1
-        ms, mp = self.run(self.model, "model", script)
-        ss, sp = self.run(self.student, "student", script)
-        assert mp is not None and sp is not None
+        ms: Optional[Session] = None
+        if keep:
+            ms, mp = self.run(self.model, "model", script)
+            assert mp is not None
+            model = ModelPlay(mp.changes, [])
+        else:
+            model = self.model_side(script)
+        ss, sp = self.run(self.student, "student", script, record=keep or self.record)
+        assert sp is not None
         if record_phases:
-            self.phases = sorted({t for ch in mp.changes.values() for t, _v in ch[1:]})
-        div = compare(mp.changes, sp.changes, self.observed, self.expl, script, script.duration, self.task)
-        sus = suspects(script, div, mp.changes, sp.changes, self.observed, self.expl.tick_s,
+            self.phases = model.phases
+        div = compare(model.changes, sp.changes, self.observed, self.expl, script, script.duration, self.task)
+        sus = suspects(script, div, model.changes, sp.changes, self.observed, self.expl.tick_s,
                        self.expl.max_drift) if div else set()
-        return Outcome(div, sus, ms if keep else None, ss if keep else None)
+        return Outcome(div, sus, ms, ss if keep else None)
 
     def confirmed(self, script: Script, tries: int = 3) -> tuple[Script, Optional[Divergence], bool]:
         """A divergence not owed to an ambiguous action: such actions are moved a little later
@@ -637,6 +779,7 @@ class ExploreResult:
     seed: int
     inconclusive: int = 0
     finding: Optional[Finding] = None
+    model_plays: int = 0          # plays of the model answer while searching (the others were reused)
 
 
 def _fast_tmp() -> Optional[str]:
@@ -655,44 +798,270 @@ def seed_of(stand: str, task: str, sources: Sequence[tuple[str, str]]) -> int:
     return int.from_bytes(h.digest()[:8], "big")
 
 
-def script_stream(ex: Explorer, seed: Any, count: int) -> Iterator[Script]:
-    """`count` scripts for explorer `ex`, seeded by `seed`: random ones (the stand's generate),
-    each but the first of every pair followed by the same script with actions aimed at the
-    moments the model answer's stand changed in it (the stand's aim: a press, a spare input
-    flip, a mode change in the scan a frame starts or a link arrives, or a little after),
-    read from `ex.phases` after the previous script was played (ex.confirmed)."""
+# --------------------------------------------------------------------------- the scripts explored
+
+ROUND_UNITS = 4        # units drawn from one state of the coverage (a unit: a script, then one aimed at it)
+MUTATE_SHARE = 0.5     # of the units after the first round: a kept script mutated instead of a new one
+BURST = (1, 6)         # a mutation's burst of button presses: how many, mostly
+LONG_BURST = (8, 36)   # and one burst in LONG_SHARE: a frame memory filled and more, start/stop at every phase
+LONG_SHARE = 0.3
+
+
+@dataclass
+class Coverage:
+    """Coverage-guided exploration (issue 29): the model answer's states the scripts have
+    reached (console mode x plant fault x the program's phase, frame, memory count and
+    watchdog fault, Exploration.state_paths), and the corpus: the scripts that reached states
+    not seen before, with the moments they first did (where their mutations act)."""
+
+    seen: set = field(default_factory=set)
+    corpus: list[tuple[Script, list[float]]] = field(default_factory=list)
+
+    def add(self, script: Script, states: dict[tuple, float]) -> None:
+        new = sorted(t for s, t in states.items() if s not in self.seen)
+        self.seen.update(states)
+        if new:
+            self.corpus.append((script, new))
+
+
+def states_of(ex: Explorer, script: Script) -> dict[tuple, float]:
+    """The model answer's states `script` reaches, each with the first moment it does."""
+    mode_switch = next((k for k, v in ex.expl.meaning.items() if v == ("manual", "automatic")), None)
+    inner = ex.model_side(script).states
+    points = sorted({t for t, _s in inner} | {e.time for e in script.events
+                                              if e.name in (mode_switch, FAULT) and not e.is_press})
+    out: dict[tuple, float] = {}
+    mode, faulted, k, state = 0, False, 0, ()
+    events = [e for e in script.events if e.name in (mode_switch, FAULT) and not e.is_press]
+    j = 0
+    for t in points:
+        while j < len(events) and events[j].time <= t + 1e-9:
+            if events[j].name == FAULT:
+                faulted = True
+            else:
+                mode = int(float(events[j].value))
+            j += 1
+        while k < len(inner) and inner[k][0] <= t + 1e-9:
+            state = inner[k][1]
+            k += 1
+        out.setdefault((mode, faulted) + tuple(state), t)
+    return out
+
+
+def _shifted(events: Sequence[Event], after: float, by: float) -> list[Event]:
+    return [Event(round(e.time + by, 3), e.name, e.value, e.hold) if e.time >= after else e for e in events]
+
+
+def mutate(ex: Explorer, rng: random.Random, cov: Coverage) -> Script:
+    """A kept script changed where it first reached a new state (as coverage-guided fuzzers
+    mutate their corpus): a burst of button presses there (the later steps moved after it;
+    a full memory and a refused press, a restart and the presses after it), actions aimed at
+    that moment (the stand's aim), a power cycle there, or its steps after that moment
+    replaced by another kept script's (spliced)."""
     expl = ex.expl
-    previous: Optional[Script] = None
-    for n in range(count):
-        rng = random.Random(f"{seed}:{n}")
-        if n % 2 == 1 and previous is not None and ex.phases and expl.aim is not None:
-            script = expl.aim(rng, ex.task, previous, list(ex.phases))
-        else:
-            script = expl.generate(rng, ex.task, expl.episode_s)
-        previous = script
-        yield script
+    parent, times = rng.choice(cov.corpus)
+    t = round(rng.choice(times) + rng.choice((0.0, 0.05, rng.uniform(0.1, 1.0))), 2)
+    events = list(parent.events)
+    duration = parent.duration
+    op = rng.random()
+    if op < 0.4:                                      # a burst of presses of the button
+        button = expl.buttons[0]
+        n = rng.randint(*(LONG_BURST if rng.random() < LONG_SHARE else BURST))
+        at, added = t, []
+        for _ in range(n):
+            hold = round(rng.uniform(0.1, 0.3), 2)
+            added.append(Event(round(at, 2), button, "1", hold))
+            at += hold + rng.uniform(0.2, 0.6)
+        span = round(at - t, 3)
+        events = _shifted(events, t, span) + added
+        duration = round(duration + span, 3)
+    elif op < 0.7 and expl.aim is not None:           # the stand's aimed actions at that moment
+        return expl.aim(rng, ex.task, parent, [t] * 3)
+    elif op < 0.85:                                    # a power cycle there, then a press
+        off = round(rng.uniform(0.2, 1.5), 2)
+        span = round(off + rng.uniform(1.7, 3.0), 2)
+        events = _shifted(events, t, span + 0.3) + [Event(t, POWER, f"{off:g}"),
+                                                    Event(round(t + span, 2), expl.buttons[0], "1", 0.2)]
+        duration = round(duration + span + 0.3, 3)
+    else:                                             # spliced: another kept script's steps after t
+        other, other_times = rng.choice(cov.corpus)
+        t2 = rng.choice(other_times)
+        tail = [Event(round(e.time - t2 + t + 0.1, 3), e.name, e.value, e.hold) for e in other.events
+                if e.time >= t2]
+        events = [e for e in events if e.time < t] + tail
+        duration = round(max(t + 3.0, other.duration - t2 + t + 0.1), 3)
+    events = _apart(sorted(events, key=lambda e: e.time))
+    last = max((e.time + e.hold for e in events), default=0.0)
+    return Script(tuple(events), round(max(duration, last + 3.0), 3))
+
+
+def _apart(events: list[Event]) -> list[Event]:
+    """`events` without a press that begins before the last press of its button is released
+    and 0.1 s more (a spliced tail or a burst over a hold would shorten that hold to a length
+    the generator never draws, maybe one a single scan decides)."""
+    free: dict[str, float] = {}
+    out = []
+    for e in events:
+        if e.is_press:
+            if e.time < free.get(e.name, -1.0):
+                continue
+            free[e.name] = e.time + e.hold + 0.1
+        out.append(e)
+    return out
+
+
+def _base(ex: Explorer, seed: Any, k: int, cov: Optional[Coverage]) -> Script:
+    """Unit k's first script: a new random one, or (coverage-guided, after the first round,
+    one unit in two) a kept script mutated."""
+    if cov is not None and cov.corpus and k >= ROUND_UNITS:
+        mrng = random.Random(f"{seed}:m{k}")
+        if mrng.random() < MUTATE_SHARE:
+            return mutate(ex, mrng, cov)
+    return ex.expl.generate(random.Random(f"{seed}:{2 * k}"), ex.task, ex.expl.episode_s)
+
+
+def _aimed(ex: Explorer, seed: Any, k: int, base: Script) -> Script:
+    """Unit k's second script: the first again with actions aimed at the moments the model
+    answer's stand changed in it (the stand's aim), else a new random one."""
+    rng = random.Random(f"{seed}:{2 * k + 1}")
+    phases = ex.model_side(base).phases
+    if phases and ex.expl.aim is not None:
+        return ex.expl.aim(rng, ex.task, base, list(phases))
+    return ex.expl.generate(rng, ex.task, ex.expl.episode_s)
+
+
+def script_stream(ex: Explorer, seed: Any, count: int, coverage: bool = True) -> Iterator[Script]:
+    """`count` scripts for explorer `ex`, seeded by `seed`, in units of two: a random script
+    (or, `coverage`-guided, a kept one mutated), then the same script with actions aimed at the
+    moments the model answer's stand changed in it (the stand's aim: a press, a spare input
+    flip, a mode change in the scan a frame starts or a link arrives, or a little after). The
+    model answer's states each script reaches are merged into the coverage after every round
+    of ROUND_UNITS units, so the stream depends on the seed and the model answer only: never
+    on the student, nor on how many processes play it (`explore(jobs=)`)."""
+    cov = Coverage() if coverage and ex.expl.state_paths else None
+    n = 0
+    while n < count:
+        reached: list[tuple[Script, dict]] = []
+        for k in range(n // 2, n // 2 + ROUND_UNITS):
+            if n >= count:
+                break
+            base = _base(ex, seed, k, cov)
+            for i in range(min(2, count - n)):
+                script = base if i == 0 else _aimed(ex, seed, k, base)
+                yield script
+                n += 1
+                if cov is not None:
+                    reached.append((script, states_of(ex, script)))
+        if cov is not None:
+            for script, states in reached:
+                cov.add(script, states)
+
+
+# --------------------------------------------------------------------------- searching, on N processes
+
+def _status(ex: Explorer, script: Script) -> tuple[str, Optional[tuple[Script, Divergence]]]:
+    played, div, ambiguous = ex.confirmed(script)
+    if div is not None:
+        return "diverged", (played, div)
+    return ("ambiguous" if ambiguous else "alike"), None
+
+
+_WORKER: dict[str, Any] = {}      # the Explorer a search's worker processes inherit (fork)
+
+
+def _worker_unit(job: tuple[Any, int, Script, int, bool, bool]) -> list[tuple[Script, str, dict]]:
+    """In a worker process: unit k (its first script given, `n` scripts of it) played;
+    (script, status, states reached) of each script, up to the first that diverges (`stop`)."""
+    seed, k, base, n, coverage, stop = job
+    ex: Explorer = _WORKER["ex"]
+    if "dir" not in _WORKER:                         # retain files of this process's own
+        _WORKER["dir"] = ex.workdir = ex.workdir / f"w{os.getpid()}"
+        ex.workdir.mkdir(exist_ok=True)
+    out = []
+    script = base
+    for i in range(n):
+        if i == 1:
+            script = _aimed(ex, seed, k, base)
+        status, _ = _status(ex, script)
+        out.append((script, status, states_of(ex, script) if coverage else {}))
+        if stop and status == "diverged":
+            break
+    return out
+
+
+def search(ex: Explorer, seed: Any, count: int, jobs: int = 1, coverage: bool = True,
+           stop: bool = True) -> Iterator[tuple[Script, str, Optional[tuple[Script, Divergence]]]]:
+    """The scripts of the stream (script_stream) played on both programs, in the stream's
+    order: (script, 'alike' | 'ambiguous' | 'diverged', (played, divergence) of a divergence),
+    up to the first divergence (`stop`). `jobs` > 1: the units of each round are played in
+    that many processes (forked: they inherit the compiled programs); what is yielded is the
+    same as with one, and a divergence found there is confirmed again here."""
+    if jobs <= 1 or not hasattr(os, "fork"):
+        for script in script_stream(ex, seed, count, coverage):
+            status, detail = _status(ex, script)
+            yield script, status, detail
+            if stop and status == "diverged":
+                return
+        return
+    import multiprocessing
+    from concurrent.futures import ProcessPoolExecutor
+    coverage = coverage and bool(ex.expl.state_paths)
+    cov = Coverage() if coverage else None
+    _WORKER.clear()
+    _WORKER["ex"] = ex
+    pool = ProcessPoolExecutor(jobs, mp_context=multiprocessing.get_context("fork"))
+    try:
+        n = 0
+        while n < count:
+            units = []
+            for k in range(n // 2, n // 2 + ROUND_UNITS):
+                if n >= count:
+                    break
+                size = min(2, count - n)
+                units.append((seed, k, _base(ex, seed, k, cov), size, coverage, stop))
+                n += size
+            reached = []
+            for results in pool.map(_worker_unit, units):
+                for script, status, states in results:
+                    detail = _status(ex, script)[1] if status == "diverged" else None
+                    yield script, status, detail
+                    if stop and status == "diverged":
+                        return
+                    reached.append((script, states))
+            if cov is not None:
+                for script, states in reached:
+                    cov.add(script, states)
+    finally:
+        pool.shutdown(wait=True, cancel_futures=True)
+        _WORKER.clear()
 
 
 def explore(expl: Exploration, stand: str, task: str, make_session: Callable, student: Program, model: Program,
-            episodes: Optional[int] = None, shrink_runs: int = SHRINK_RUNS, seed: Optional[int] = None) -> ExploreResult:
-    """Up to `episodes` seeded random scripts (default: the stand's budget) on both programs;
-    the first confirmed divergence is shrunk and explained."""
+            episodes: Optional[int] = None, shrink_runs: int = SHRINK_RUNS, seed: Optional[int] = None,
+            jobs: int = 1, model_plays: Optional[Path] = None, coverage: bool = True,
+            record: bool = False) -> ExploreResult:
+    """Up to `episodes` seeded scripts (default: the stand's budget) on both programs, coverage-
+    guided (`coverage`); the first confirmed divergence is shrunk and explained. `seed`: default
+    the submission's (seed_of); `jobs`: processes playing the scripts (same result whatever the
+    number); `model_plays`: a folder sharing the model answer's plays with other graders of the
+    same scripts (grade-class); `record`: every play recorded in full and nothing reused, as
+    before issue 30 (the same result, slower: for `plclab bench` and the tests)."""
     episodes = expl.episodes if episodes is None else episodes
     seed = seed_of(stand, task, student.sources) if seed is None else seed
     with tempfile.TemporaryDirectory(prefix="plclab-explore-", dir=_fast_tmp()) as tmp:
-        ex = Explorer(expl, task, make_session, student, model, Path(tmp))
+        plays = ModelPlays(_model_salt(f"{stand}\0{task}", model), model_plays)
+        ex = Explorer(expl, task, make_session, student, model, Path(tmp), plays, record=record)
         result = ExploreResult(0, 0.0, 0, seed)
-        for script in script_stream(ex, seed, episodes):
+        for script, status, detail in search(ex, seed, episodes, jobs, coverage):
             result.episodes += 1
             result.plant_seconds += script.duration
-            played, div, ambiguous = ex.confirmed(script)
-            if div is None:
-                result.inconclusive += ambiguous                    # still ambiguous after moving
-                continue
-            small, sdiv = shrink(ex, played, div, shrink_runs)
-            result.finding = explain(ex, small, sdiv)
-            break
+            result.inconclusive += status == "ambiguous"          # still ambiguous after moving
+            if detail is not None:
+                played, div = detail
+                small, sdiv = shrink(ex, played, div, shrink_runs)
+                result.finding = explain(ex, small, sdiv)
         result.plays = ex.plays
+        result.model_plays = ex.model_plays.played
     return result
 
 
@@ -744,8 +1113,8 @@ def requirement_of(stand: str, task: str, f: Finding, expl: Exploration) -> Opti
     return None
 
 
-__all__ = ["Divergence", "ExploreResult", "Explorer", "Finding", "Program", "compare", "explain", "explore",
-           "play", "seed_of", "shrink"]
+__all__ = ["Coverage", "Divergence", "ExploreOptions", "ExploreResult", "Explorer", "Finding", "ModelPlays", "Program",
+           "class_seed", "compare", "explain", "explore", "play", "script_stream", "search", "seed_of", "shrink"]
 
 
 # --------------------------------------------------------------------------- the grade's row
@@ -785,9 +1154,31 @@ def row_text(expl: Exploration, task: str) -> str:
             f"model answer's: {names} (timing within {expl.timing_tol:g} s).")
 
 
+@dataclass(frozen=True)
+class ExploreOptions:
+    """How a grade explores, none of which changes its verdict or report but `seed`: `jobs`
+    processes play the scripts (`plclab grade --jobs N`); `seed` replaces the submission's
+    (grade-class: the class's, every student under the same scripts); `model_plays` is a folder
+    where the model answer's plays of those scripts are shared by a class's grading processes."""
+
+    jobs: int = 1
+    seed: Optional[int] = None
+    model_plays: Optional[str] = None
+
+
+def class_seed(stand: str, task: str, folder: str) -> int:
+    """The exploration seed of a class (grade-class): the stand, the task and the class folder's
+    name, so every student of the class is explored under the same scripts (and the model
+    answer's side of each is played once for the class), and a student's regrade in the same
+    class gives the same report."""
+    h = hashlib.sha256(f"{stand}\0{task}\0class\0{Path(folder).resolve().name}".encode())
+    return int.from_bytes(h.digest()[:8], "big")
+
+
 def exploration_rows(req: Any, sources: Sequence[tuple[str, str]], checked: Any,
                      reference: Optional[Sequence[str]] = None, episodes: Optional[int] = None,
-                     out_dir: Optional[str] = None) -> tuple[list[Any], list[str], dict[str, list[Path]]]:
+                     out_dir: Optional[str] = None, options: Optional[ExploreOptions] = None
+                     ) -> tuple[list[Any], list[str], dict[str, list[Path]]]:
     """The exploration row (E1) of a grade, the report's notes about it and the files written
     (the shrunk script and the student's traces under it, in `out_dir`). A difference that
     plainly breaks one of the task's requirements comes with that requirement's row too, after
@@ -806,7 +1197,9 @@ def exploration_rows(req: Any, sources: Sequence[tuple[str, str]], checked: Any,
     text = row_text(expl, req.task)
     student = Program(list(sources), checked)
     try:
-        result = explore(expl, req.stand, req.task, req.make_session, student, model, episodes)
+        opts = options or ExploreOptions()
+        result = explore(expl, req.stand, req.task, req.make_session, student, model, episodes, seed=opts.seed,
+                         jobs=opts.jobs, model_plays=Path(opts.model_plays) if opts.model_plays else None)
     except Exception as e:                           # a bug of the grader: never the student's FAIL
         return [Row(EXPLORE_ID, text, False, "", f"not checked: the grader failed ({type(e).__name__}: {e}); "
                     "this is a bug of the grader, not of your program: please report it", None, "explore",
@@ -907,10 +1300,13 @@ EXPLORE_GOAL_S = 20.0      # s of one core per task and program for the default 
 
 
 def bench_explore(stand: str, task: str, episodes: int = 4) -> Optional[dict]:
-    """The CPU cost of exploration: `episodes` scripts of the model answer against itself (both
-    programs played, as for a student), seconds per script, scripts per second, and what the
-    stand's default budget costs (the goal: at most EXPLORE_GOAL_S). None where the model answers
-    are not available (an installed package)."""
+    """The CPU cost of exploration for a correct program (a copy of the model answer, graded
+    against it): `episodes` scripts of the stand's stream played three ways on the same run,
+    as before issue 30 (both programs recorded in full), searching without recording (one
+    student's grade), and in a class (the model answer's side already played for the class:
+    the student's side only); seconds per script, scripts per second, and what the stand's
+    default budget costs (the goal: at most EXPLORE_GOAL_S). None where the model answers are
+    not available (an installed package)."""
     import time
 
     from plclab.grader.registry import requirement_set
@@ -920,17 +1316,27 @@ def bench_explore(stand: str, task: str, episodes: int = 4) -> Optional[dict]:
     if model is None or expl is None:
         return None
     req = requirement_set(stand, task)
-    start = time.process_time()
-    result = explore(expl, stand, task, req.make_session, model, model, episodes, seed=0)
-    spent = time.process_time() - start
-    per = spent / max(result.episodes, 1)
+    student = Program(list(model.sources), model.checked)
+    per: dict[str, float] = {}
+    result = None
+    with tempfile.TemporaryDirectory(prefix="plclab-bench-", dir=_fast_tmp()) as shared:
+        for how in ("recorded", "search", "class"):
+            start = time.process_time()
+            result = explore(expl, stand, task, req.make_session, student, model, episodes, seed=0,
+                             record=how == "recorded", model_plays=Path(shared) if how != "recorded" else None)
+            per[how] = (time.process_time() - start) / max(result.episodes, 1)
+    assert result is not None
     return {"stand": stand, "task": task, "episodes": result.episodes, "plant_s": result.plant_seconds,
-            "s_per_episode": per, "episodes_per_s": 1 / per if per else 0.0, "budget": expl.episodes,
-            "budget_s": per * expl.episodes, "goal_s": EXPLORE_GOAL_S}
+            "s_per_episode": per["search"], "episodes_per_s": 1 / per["search"] if per["search"] else 0.0,
+            "s_per_episode_recorded": per["recorded"], "s_per_episode_class": per["class"],
+            "budget": expl.episodes, "budget_s": per["search"] * expl.episodes,
+            "budget_s_recorded": per["recorded"] * expl.episodes, "budget_s_class": per["class"] * expl.episodes,
+            "goal_s": EXPLORE_GOAL_S}
 
 
 def report_explore(report: Callable[[str], None], quick: bool = False) -> list[dict]:
-    """`plclab bench`'s exploration lines, one per robot."""
+    """`plclab bench`'s exploration lines, one per robot: a correct program's default-budget
+    exploration as before issue 30, now, and in a class."""
     out = []
     for stand in ("mp9c", "tur10"):
         r = bench_explore(stand, "task3", 2 if quick else 4)
@@ -938,7 +1344,9 @@ def report_explore(report: Callable[[str], None], quick: bool = False) -> list[d
             report(f"explore: {stand}: no model answer here (a checkout has them)")
             continue
         out.append(r)
-        report(f"explore: {stand} {r['task']}: {r['s_per_episode']:.2f} s CPU per random script "
-               f"({r['plant_s'] / r['episodes']:.0f} s of plant time, both programs), {r['episodes_per_s']:.2f} "
-               f"scripts/s; default budget {r['budget']} scripts = {r['budget_s']:.1f} s (goal <= {r['goal_s']:g} s)")
+        report(f"explore: {stand} {r['task']} ({r['plant_s'] / r['episodes']:.0f} s of plant time per script): "
+               f"{r['episodes_per_s']:.2f} scripts/s; CPU per script {r['s_per_episode_recorded']:.2f} s recorded "
+               f"(before), {r['s_per_episode']:.2f} s searching, {r['s_per_episode_class']:.2f} s in a class; "
+               f"default budget {r['budget']} scripts = {r['budget_s']:.1f} s (before {r['budget_s_recorded']:.1f} s, "
+               f"in a class {r['budget_s_class']:.1f} s; goal <= {r['goal_s']:g} s)")
     return out

@@ -47,6 +47,11 @@ def _hl1(mode_switch: str) -> Observed:
                             "how the full-memory blink answers more presses is free",
                     free_blinks=(mode_switch, 0))
 
+# The model answers' state, as coverage-guided exploration counts it (both robots' model
+# answers share the playback's structure): phase, frame, frames recorded, watchdog fault.
+MODEL_STATE = ("Main.Robot.Sequencer.State", "Main.Robot.Sequencer.Ptr", "Main.Cp.Count",
+               "Main.Robot.Sequencer.Fault")
+
 # --------------------------------------------------------------------------- MP-9C
 
 _MECH = {   # mechanism -> (switch, spool 0 words, spool 1 words, coils)
@@ -119,7 +124,8 @@ MP9C = Exploration(
              "SA3": ("rotation left", "rotation right"), "SA4": ("arm backward", "arm forward"),
              "SA5": ("arm up", "arm down"), "SA6": ("continuous", "step by step"),
              "I07": ("spare input off", "spare input on")},
-    timing_tol=0.06, max_drift=1.0, drift_rate=0.02, episode_s=45.0, episodes=90, tick_s=0.01)
+    state_paths=MODEL_STATE, timing_tol=0.06, max_drift=1.0, drift_rate=0.02, episode_s=45.0, episodes=90,
+    tick_s=0.01)
 
 # --------------------------------------------------------------------------- TUR-10
 
@@ -223,4 +229,5 @@ TUR10 = Exploration(
     buttons=("SB1",) + tuple(f"SA{k}_{d}" for k in (1, 2, 3, 4, 5) for d in ("FWD", "BWD")),
     meaning={"SA7": ("manual", "automatic"), "SA6": ("normal speed", "low speed"),
              "I15": ("spare input off", "spare input on")},
-    timing_tol=0.2, max_drift=5.0, drift_rate=0.12, episode_s=60.0, episodes=50, tick_s=0.01)
+    state_paths=MODEL_STATE, timing_tol=0.2, max_drift=5.0, drift_rate=0.12, episode_s=60.0, episodes=50,
+    tick_s=0.01)

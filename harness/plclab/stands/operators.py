@@ -157,6 +157,10 @@ class Exploration:
     drift_rate: float = 0.0           # s per s: how much more it may lag between two changes the
                                       # longer they are apart (frames nobody sees end: a link
                                       # already at the next frame's position)
+    # ST paths of the model answer's inner state (mode, frame, phase, memory count, watchdog
+    # fault): scripts that take it to states not seen before are kept and mutated (coverage-guided
+    # exploration, plclab.grader.explore); paths a model answer lacks are left out
+    state_paths: tuple[str, ...] = ()
     episode_s: float = 45.0           # plant seconds of one random script
     episodes: int = 40                # default budget: scripts per task and program
     tick_s: float = 0.01
