@@ -60,7 +60,8 @@ def grader_checks(stand: Stand) -> str:
            "--requirements` prints the list."]
     for task in names:
         out += ["", f"### {task}: {task_title(stand.name, task)}", "", "| id | requirement |", "|---|---|"]
-        out += [f"| {rid} | {text.replace('|', chr(92) + '|')} |" for rid, text in requirement_table(stand.name, task)]
+        out += [f"| {rid} | {text.replace('|', chr(92) + '|')} |" for rid, text in
+                requirement_table(stand.name, task, exploration=True)]
     return "\n".join(out) + "\n"
 
 

@@ -777,10 +777,13 @@ def model_answer(stand: str, task: str, reference: Optional[Sequence[str]]) -> t
 
 
 def row_text(expl: Exploration, task: str) -> str:
+    """E1's requirement, one sentence a student understands (the same in `--requirements`, the
+    hand-out's tasks.md and the report)."""
     observed = expl.compared(task)
     names = ", ".join(o.name for o in observed)
-    return (f"Under random operator scripts (any console action, at any moment) the stand behaves like the task's "
-            f"model answer's: {names} (timing within {expl.timing_tol:g} s).")
+    return (f"Whatever the operator does at the console, in any order and at any moment (switches, presses, "
+            f"power cycles, plant faults), your stand shows what the model answer's stand shows ({names}), "
+            f"each change within {expl.timing_tol:g} s, where the task leaves no freedom.")
 
 
 def exploration_rows(req: Any, sources: Sequence[tuple[str, str]], checked: Any,
