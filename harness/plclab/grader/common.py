@@ -331,8 +331,10 @@ def basics_flow(op: Op[Any], ids: tuple[str, str, str], record: Callable[[], flo
                 c.not_checked(bounce, f"HL1 is 0 at power-up (see {lamp}), so it cannot show whether "
                               "the 30 ms press recorded a frame", t)
         released = record()
-        went_off = op.s.trace.first(lambda st: not st.HL1, after=released - 0.2, until=released + 2 * op.tol,
-                                    default=None)
+        # HL1 going OFF while SB1 is still held (a lit lamp's falling edge: where the bounce
+        # already recorded a frame, HL1 is OFF before this press and says nothing of it)
+        fell = op.s.trace.edges("HL1", "falling", after=released - 0.2 - op.tol, until=released + 2 * op.tol)
+        went_off = fell[0] if fell else None
         if went_off is not None and went_off < released - op.tol:
             c.fail(lamp, "HL1=0 once a frame is recorded, at the release of a short SB1 press (+/- one scan)",
                    f"HL1 went 0 at t = {went_off:.2f} s, {released - went_off:.2f} s before SB1 was released: "
@@ -465,29 +467,59 @@ def pauses_flow(op: Op[F], frames: Sequence[F], recorded: Sequence[int], start_c
             _paused(op, _pause_req(recorded[k]), first[k], first[k + 1], wanted[k],
                     f"after frame {k + 1} (recorded with {name} = {recorded[k]})", why)
     with c.requirement("T2.3"):
-        began, run, k, cycle = first[0].start, first[n], 0, 2     # run: frame 1 of cycle 2
-        while not (k == 0 and cycle > 2 and run.done - began > op.frame_timeout + 1.0):
-            nk, done, value = (k + 1) % n, run.done, (k + cycle) % 2
-            op.set_enable(1 - value)                          # as frame k + 1 is reached
-            op.run_until(done + PAUSE_SHORT * 0.3)
-            op.set_enable(value)                              # inside its pause
-            if nk == 0:                                       # 1 at the end of the last pause: a program
-                op.run_until(done + PAUSE_SHORT * 0.7)        # that also does Task 3 goes on to frame 1
-                op.set_enable(1)
-            nxt = op.advance("T2.3", frames[nk], f"frame {nk + 1} (cycle {cycle + (nk == 0)})", done,
-                             on_start=lambda v=value: op.set_enable(1 - v))   # as the next frame starts
-            if nxt is None:
-                return
-            live = PAUSE_LONG if value else PAUSE_SHORT
-            why = (f"the pause followed {name} (switched to {value} inside it) instead of keeping the one recorded "
-                   "with the frame" if abs(nxt.start - done - live) <= op.tol + TAP_PERIOD * op.step else "")
-            if not _paused(op, "T2.3", run, nxt, seen[k], f"after frame {k + 1} in cycle {cycle}, as in the first "
-                           f"cycle, {name} being switched as the frame started, as it was reached and inside its "
-                           f"pause (to {value})", why):
-                return
-            run, k = nxt, nk
-            cycle += k == 0
+        _input_changes_nothing(op, frames, first, seen, wanted)
     op.stop_playback()
+
+
+def _held(k: int, cycle: int) -> int:
+    """T2.3: the input as frame k + 1 of `cycle` starts, is driven and is reached; it is switched
+    to the other value inside the frame's pause. Frame 1 of cycle 2 is played with 1 (the first
+    cycle's measurement); over cycles 2 and 3 every frame is reached once with each value."""
+    return (k + cycle + 1) % 2
+
+
+def _input_changes_nothing(op: Op[F], frames: Sequence[F], first: Sequence[FrameRun], seen: Sequence[float],
+                           wanted: Sequence[float]) -> None:
+    """T2.3 from frame 1 of cycle 2 (`first[-1]`): the input held at one value through each
+    frame's start, drive and arrival and switched to the other inside its pause, each frame
+    with both values over two cycles, and on until playback has run longer than the frame
+    watchdog. Each pause is judged against the pause the program should have had (the one
+    recorded with the frame); where the first cycle (the input steady at 1) already gave
+    another pause, that is T2.1's or T2.2's mistake, and T2.3 asks only that the input changes
+    nothing (the first cycle's pause)."""
+    name, n = op.enable_label, len(frames)
+    tol = op.tol + (TAP_PERIOD if op.step else 0.0)
+    right = all(abs(a - b) <= tol for a, b in zip(seen, wanted))
+    began, run, k, cycle = first[0].start, first[-1], 0, 2
+    while not (k == 0 and cycle > 3 and run.done - began > op.frame_timeout + 1.0):
+        nk, done, held = (k + 1) % n, run.done, _held(k, cycle)
+        op.run_until(done + PAUSE_SHORT * 0.3)
+        op.set_enable(1 - held)                              # inside its pause
+        if nk == 0:                                          # 1 at the end of the last pause: a program
+            op.run_until(done + PAUSE_SHORT * 0.7)           # that also does Task 3 goes on to frame 1
+            op.set_enable(1)
+        ncycle = cycle + (nk == 0)
+        nxt = op.advance("T2.3", frames[nk], f"frame {nk + 1} (cycle {ncycle})", done,
+                         on_start=lambda h=_held(nk, ncycle): op.set_enable(h))
+        if nxt is None:
+            return
+        pause = nxt.start - done
+        why = ""
+        for value, when in ((held, "when the frame was reached"), (1 - held, "inside the pause")):
+            live = PAUSE_LONG if value else PAUSE_SHORT
+            if abs(pause - live) <= tol and abs(pause - (wanted[k] if right else seen[k])) > tol:
+                why = (f"the pause followed {name} as it was {when} ({value}), not the pause recorded with "
+                       "the frame")
+                break
+        recorded = int(wanted[k] == PAUSE_LONG)
+        where = (f"after frame {k + 1} in cycle {cycle} (recorded with {name} = {recorded}), {name} being {held} "
+                 f"as the frame started and was reached and {1 - held} inside its pause")
+        if not right:
+            where += (f": the same as in the first cycle, {name} steady at 1 (that it is not the "
+                      f"{_secs(wanted[k])} s recorded with the frame is {_pause_req(recorded)}'s)")
+        if not _paused(op, "T2.3", run, nxt, wanted[k] if right else seen[k], where, why):
+            return
+        run, k, cycle = nxt, nk, ncycle
 
 
 def _pause_req(recorded: int) -> str:
@@ -509,7 +541,9 @@ def _pause_pattern(seen: Sequence[float], wanted: Sequence[float], tol: float, n
         return (f"the pauses are swapped: frames recorded with {name} = 0 got {_secs(PAUSE_LONG)} s, those "
                 f"recorded with {name} = 1 got {_secs(PAUSE_SHORT)} s")
     if max(seen) - min(seen) <= 2 * tol:
-        return f"every frame got the same {seen[0]:.2f} s pause: the pause recorded with each frame is not used"
+        recorded = ", ".join("1" if w == PAUSE_LONG else "0" for w in wanted)
+        return (f"every frame got the same {seen[0]:.2f} s pause, whatever {name} was when it was recorded "
+                f"({recorded})")
     if like([wanted[(k + 1) % n] for k in range(n)], range(n - 1)):
         return ("off by one: after each frame came the pause recorded with the next frame (the pause read "
                 "from the wrong frame, or stored on every manual scan instead of at the SB1 press, so that "

@@ -32,13 +32,15 @@ from typing import Any, Callable, Iterator, Optional, Sequence
 
 from plclab.errors import PlcLabError
 from plclab.scenario import Session, compiled_once
-from plclab.stands.operators import BLINK_END_TOL, START_S, Exploration, Observed, blink_spans
-from plclab.stands.scripts import FAULT, POWER, Event, Script, fault_params, read_script
+from plclab.stands.operators import (BLINK_END_TOL, BLINK_HALF_MAX, BLINKING, START_S, Exploration, Observed,
+                                     blink_spans)
+from plclab.stands.scripts import FAULT, POWER, Event, Script, fault_params, read_script, without
 
 SUSPECT_MARGIN = 0.1       # s: an action this close to where two drifted programs differ is ambiguous
 MOVE_SUSPECT = 0.35        # s: an ambiguous action is moved this much later and the script played again
 JITTER = 0.03             # s: how far actions are moved to tell a difference from a one-scan coincidence
 SHRINK_RUNS = 200          # default budget of the shrinker, in script plays (both programs)
+MINIMAL_RUNS = 120         # plays more to make the shrunk script 1-minimal (each step needed)
 
 
 # --------------------------------------------------------------------------- playing a script
@@ -178,6 +180,40 @@ def _windows(script: Script, switch: str, value: int, settle: float) -> list[tup
     return [(a, b) for a, b in spans if b > a]
 
 
+def _until_press(script: Script, switch: str, value: int, button: str) -> list[tuple[float, float]]:
+    """The spans from each change of console `switch` to `value` until `button`'s first press
+    after it (or the switch's next change)."""
+    spans: list[tuple[float, float]] = []
+    state, start = 0, None
+    for e in script.events:
+        if e.name == button and e.is_press and start is not None:
+            spans.append((start, e.time))
+            start = None
+        elif e.name == switch and not e.is_press:
+            v = int(float(e.value))
+            if v != state and start is not None:
+                spans.append((start, e.time))
+                start = None
+            if v != state and v == value:
+                start = e.time
+            state = v
+    if start is not None:
+        spans.append((start, float("inf")))
+    return [(a, b) for a, b in spans if b > a]
+
+
+def _outside(windows: list[tuple[float, float]]) -> list[tuple[float, float]]:
+    """The complement of `windows` from 0 on."""
+    out, at = [], 0.0
+    for a, b in sorted(windows):
+        if a > at:
+            out.append((at, a))
+        at = max(at, b)
+    if at != float("inf"):
+        out.append((at, float("inf")))
+    return out
+
+
 def _in(spans: list[tuple[float, float]], t: float) -> bool:
     return any(a <= t < b for a, b in spans)
 
@@ -212,6 +248,15 @@ def _free_after(script: Script, switch: str, conditions: tuple[tuple[str, int], 
     if start is not None:
         spans.append((start, float("inf")))
     return spans
+
+
+def _blink_to_end(shown: list, end: float, tick: float) -> list:
+    """A lamp pattern whose last blink was still going when the script ended: the on/off state
+    its last toggle left is where the script cut it, not a state the lamp settled in (which
+    phase the two lamps stand in at END moves with END): the blink runs to the end."""
+    if len(shown) >= 3 and shown[-2][1] == BLINKING and shown[-1][0] >= end - BLINK_HALF_MAX - 2 * tick:
+        return shown[:-1]
+    return shown
 
 
 def _without(cm: list, cs: list, spans: list[tuple[float, float]]) -> tuple[list, list]:
@@ -262,16 +307,21 @@ def compare(model: dict[str, list], student: dict[str, list], observed: Sequence
             _free_after(script, switch, conditions, expl.settle_s)]
     for o in observed:
         cm, cs = o.shown(model[o.name]), o.shown(student[o.name])
+        if o.pattern is not None:                   # a blink cut by the script's end: not its last state
+            cm, cs = _blink_to_end(cm, end, expl.tick_s), _blink_to_end(cs, end, expl.tick_s)
         spans = list(free)
         if o.free_blinks is not None:
             spans += _free_blinks(cm, cs, _windows(script, *o.free_blinks, 0.0))
         cm, cs = _without(cm, cs, spans)
-        if o.only_when is not None:
-            spans = _windows(script, *o.only_when)
-            cm = cm[:1] + [c for c in cm[1:] if _in(spans, c[0])]
-            cs = cs[:1] + [c for c in cs[1:] if _in(spans, c[0])]
+        if o.only_when is not None or o.until_press is not None:
+            # compared inside its windows only, each window from what both stands show as it
+            # opens (never a value left over from before it)
+            windows = _windows(script, *o.only_when) if o.only_when is not None else []
+            if o.until_press is not None:
+                windows += _until_press(script, *o.until_press)
+            cm, cs = _without(cm, cs, _outside(windows))
         shown[o.name] = (cm, cs)
-        since = 0.0
+        since, moving_lag = 0.0, 0.0
         if not o.equal(cm[0][1], cs[0][1]):
             found.append(Divergence(0.0, o, cm[0][1], cs[0][1], "value", 0.0, 0.0))
             continue
@@ -279,6 +329,13 @@ def compare(model: dict[str, list], student: dict[str, list], observed: Sequence
             if k < len(cm) and k < len(cs):
                 (tm, vm), (ts, vs) = cm[k], cs[k]
                 lag = max(abs(ts - tm), abs(cs[k - 1][0] - cm[k - 1][0]) if k > 1 else 0.0)
+                if o.rest is not None:
+                    # the lag since both last stood still: a stop pressed in the same scan on
+                    # both stands leaves the later starter that much travel short
+                    if o.rest(cm[k - 1][1]) and o.rest(cs[k - 1][1]):
+                        moving_lag = 0.0
+                    moving_lag = max(moving_lag, abs(ts - tm))
+                    lag = max(lag, moving_lag)
                 if not o.equal(vm, vs, lag):
                     t = max(tm, ts)
                     found.append(Divergence(t, o, vm, vs, "value", since, ts - tm))
@@ -520,6 +577,18 @@ def shrink(ex: Explorer, script: Script, div: Divergence, budget: int = SHRINK_R
                         break
         if (len(best.events), best.duration, sum(e.hold for e in best.events)) == before or not left():
             break
+    # 4. 1-minimal: no single action can be removed and the script still show the difference
+    #    (shorter holds and earlier times may have made an action unneeded after its removal
+    #    was tried); a budget of its own, so the report never shows a step that does not matter
+    start, budget = ex.plays, MINIMAL_RUNS
+    removed = True
+    while removed and left():
+        removed = False
+        for i in reversed(range(len(best.events))):
+            if not left():
+                break
+            if i < len(best.events) and accept(without(best, {i})):
+                removed = True
     return best, best_div
 
 

@@ -201,16 +201,27 @@ def _same_link(a: Any, b: Any, extra: float = 0.0) -> bool:
     return a[0] == b[0] and abs(a[1] - b[1]) <= TUR10_BAND + extra
 
 
+def _at_rest(v: Any) -> bool:
+    return v[0] == 0
+
+
 def _same_motion(a: Any, b: Any) -> bool:
     return a[0] == b[0]
 
 
 def _tur10_compared(task: str) -> tuple[Observed, ...]:
-    out = [Observed("link1", _show_link, ("DRIVE1",), _same_link, lag_band=TUR10_TOP_SPEED,
-                    tolerance=f"+/- {TUR10_BAND} codes, plus a link's travel in the time the two stands are apart")]
     if task == "task1":
-        out += [Observed(f"link{k}", _show_link, (f"DRIVE{k}",), _same_motion, only_when=("SA7", 0, 0.5))
-                for k in (2, 3, 4, 5)]
+        # Task 1 is the manual mode: each link's motion there; in automatic mode only that
+        # entering it moves nothing until SB1 is pressed (what playback does then -- one link
+        # regulated as the starting program, or all five -- is not the task's subject)
+        out = [Observed(f"link{k}", _show_link, (f"DRIVE{k}",), _same_motion, only_when=("SA7", 0, 0.5),
+                        until_press=("SA7", 1, "SB1"),
+                        freedom="in automatic mode compared only until the first SB1 press")
+               for k in (1, 2, 3, 4, 5)]
+    else:
+        out = [Observed("link1", _show_link, ("DRIVE1",), _same_link, lag_band=TUR10_TOP_SPEED, rest=_at_rest,
+                        tolerance=f"+/- {TUR10_BAND} codes, plus a link's travel in the time the two stands "
+                                  "are apart")]
     out.append(_hl1("SA7"))
     return tuple(out)
 
