@@ -18,6 +18,7 @@ from typing import Any, Callable, ClassVar, Generic, Optional, Self, Sequence, T
 
 from plclab.scenario import ScenarioFailure, Session
 from plclab.stands import Stand
+from plclab.stands.exploration import Rules
 
 from .registry import EVERY, Checks, Requirement, RequirementSet, Scenario, SessionFactory, register
 
@@ -71,6 +72,7 @@ class Op(ABC, Generic[F]):
     watchdog: ClassVar[str]        # the frame-timeout requirement ("G10")
     frame_timeout: ClassVar[float]  # s a frame may take before the watchdog stops execution
     timeout_tol: ClassVar[str]     # its tolerance as rows print it ("+/- 0.1 s")
+    rules: ClassVar[Rules]         # the stand's freedoms, shared with exploration (stands.exploration)
 
     @classmethod
     def begin(cls, s: Session, c: Checks) -> Self:
@@ -91,6 +93,12 @@ class Op(ABC, Generic[F]):
     @property
     def tol(self) -> float:
         return self.scan + EPS
+
+    @property
+    def lag(self) -> float:
+        """How much later than the model answer a program may be at one start, stop or pause
+        (`Rules.lag_scans` scans), on top of a row's own one-scan tolerance."""
+        return self.rules.lag_scans * self.scan
 
     def _fault(self) -> None:
         f = self.s.fault
@@ -258,8 +266,8 @@ class Op(ABC, Generic[F]):
         if run is None:
             return None
         late = run.start - pressed
-        if not self.c.check(rid, -EPS <= late <= DEBOUNCE + self.tol,
-                            f"{label} starts on the press ({self.press_window})",
+        if not self.c.check(rid, -EPS <= late <= DEBOUNCE + self.tol + self.lag,
+                            f"{label} starts on the press ({self.press_window}{lag_words(self)})",
                             f"{self.started} {late:.2f} s after the press", run.start):
             return None
         return run
@@ -308,6 +316,12 @@ def lamp_requirements(lamp: str, bounce: str, reset: str) -> tuple[Requirement, 
 def within_scan(op: "Op[Any]") -> str:
     """The timing tolerance as a row prints it: '+/- one scan (10 ms)'."""
     return f"+/- one scan ({op.scan * 1000:.0f} ms)"
+
+
+def lag_words(op: "Op[Any]") -> str:
+    """The lag a program may have on the model answer, as a row prints it after its tolerance."""
+    n = op.rules.lag_scans
+    return f", + {'one scan' if n == 1 else f'{n} scans'} a program may lag" if n else ""
 
 
 def basics_flow(op: Op[Any], ids: tuple[str, str, str], record: Callable[[], float],
@@ -368,9 +382,9 @@ def _long_press_resets(op: Op[Any], rid: str, lamp: str) -> None:
         op.run_until(pressed + LONG_PRESS + 1.5)
     else:
         held = on - pressed
-        c.check(rid, LONG_PRESS - op.tol <= held <= LONG_PRESS + DEBOUNCE + op.tol,
+        c.check(rid, LONG_PRESS - op.tol <= held <= LONG_PRESS + DEBOUNCE + op.tol + op.lag,
                 f"the reset (HL1=1) {LONG_PRESS:.1f} s after SB1 is pressed (+ up to {DEBOUNCE * 1000:.0f} ms "
-                f"debounce, {within_scan(op)}), while it is held",
+                f"debounce, {within_scan(op)}{lag_words(op)}), while it is held",
                 f"HL1=1 {held:.2f} s after the press", on)
         op.run_until(pressed + LONG_PRESS + 0.5)
     released = op.now
@@ -462,7 +476,7 @@ def pauses_flow(op: Op[F], frames: Sequence[F], recorded: Sequence[int], start_c
         first.append(run)
     with c.requirement("T2.1", "T2.2"):
         seen = [b.start - a.done for a, b in zip(first, first[1:])]
-        why = _pause_pattern(seen, wanted, op.tol + (TAP_PERIOD if op.step else 0.0), name)
+        why = _pause_pattern(seen, wanted, op.tol + op.lag + (TAP_PERIOD if op.step else 0.0), name)
         for k in range(n):
             _paused(op, _pause_req(recorded[k]), first[k], first[k + 1], wanted[k],
                     f"after frame {k + 1} (recorded with {name} = {recorded[k]})", why)
@@ -488,7 +502,7 @@ def _input_changes_nothing(op: Op[F], frames: Sequence[F], first: Sequence[Frame
     another pause, that is T2.1's or T2.2's mistake, and T2.3 asks only that the input changes
     nothing (the first cycle's pause)."""
     name, n = op.enable_label, len(frames)
-    tol = op.tol + (TAP_PERIOD if op.step else 0.0)
+    tol = op.tol + op.lag + (TAP_PERIOD if op.step else 0.0)
     right = all(abs(a - b) <= tol for a, b in zip(seen, wanted))
     began, run, k, cycle = first[0].start, first[-1], 0, 2
     while not (k == 0 and cycle > 3 and run.done - began > op.frame_timeout + 1.0):
@@ -559,9 +573,9 @@ def _paused(op: Op[Any], rid: str, before: FrameRun, after: FrameRun, seconds: f
     mode +/- the tap period too); the expected value names the pause, its tolerance and
     `where` it is, the observed one what the wrong pauses look like (`why`)."""
     pause = after.start - before.done
-    tol = op.tol + (TAP_PERIOD if op.step else 0.0)
+    tol = op.tol + op.lag + (TAP_PERIOD if op.step else 0.0)
     within = (f"+/- {TAP_PERIOD:g} s (SB1 tapped every {TAP_PERIOD:g} s) + one scan ({op.scan * 1000:.0f} ms)"
-              if op.step else within_scan(op))
+              if op.step else within_scan(op)) + lag_words(op)
     good = abs(pause - seconds) <= tol
     return op.c.check(rid, good, f"{op.mode}a {_secs(seconds)} s pause {within} {where}",
                       f"{pause:.2f} s" + (f": {why}" if why and not good else ""), before.done)
@@ -591,8 +605,9 @@ def task3_requirements(enable: str, remaining: str, stops: str, restarts: str,
                     "enable"),
         Requirement("T3.6", f"After that stop nothing restarts {restarts}; an SB1 press with {enable} = 1 "
                     "starts again from frame 1.", "enable"),
-        Requirement("T3.7", f"{enable} is read when the last frame's pause is over, not when the last frame is "
-                    f"reached: switched to 0 inside that pause, execution stops after it.", "last_pause"),
+        Requirement("T3.7", f"{enable} counts when the last frame's pause is over, not when the last frame is "
+                    f"reached: switched to 0 inside that pause, execution stops after it (read as a level at "
+                    f"the end of the pause, or latched from the moment it drops: both are right).", "last_pause"),
     ))
 
 

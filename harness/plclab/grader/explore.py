@@ -214,6 +214,17 @@ def _outside(windows: list[tuple[float, float]]) -> list[tuple[float, float]]:
     return out
 
 
+def _merged(changes: list, o: Observed) -> list:
+    """`changes` without a change to a value the signal's tolerance takes for the one before (a
+    window opening on a link at rest a few codes, or for a motion-only signal any distance, from
+    where it stood)."""
+    out = changes[:1]
+    for t, v in changes[1:]:
+        if not o.equal(out[-1][1], v):
+            out.append((t, v))
+    return out
+
+
 def _in(spans: list[tuple[float, float]], t: float) -> bool:
     return any(a <= t < b for a, b in spans)
 
@@ -225,25 +236,41 @@ def _free_blinks(cm: list, cs: list, mode: list[tuple[float, float]]) -> list[tu
 
 
 def _free_after(script: Script, switch: str, conditions: tuple[tuple[str, int], ...],
-                settle: float) -> list[tuple[float, float]]:
+                settle: float, after_drop: Optional[str] = None) -> list[tuple[float, float]]:
     """From each change of `switch` while every console switch of `conditions` has its value,
-    until one of them next changes, and `settle` s after (Exploration.free_after)."""
+    until one of them next changes, and `settle` s after (Exploration.free_after). With
+    `after_drop` (a button): only from a change of `switch` back to 1 after it dropped to 0
+    since that button's last press, the conditions holding throughout (Task 3's enable dropped
+    during a run and back before the last pause ends: read as a level then, or latched from
+    its drop, the text allows both)."""
     spans: list[tuple[float, float]] = []
     level: dict[str, int] = {}
     start = None
+    dropped = False
     for e in script.events:
+        if after_drop is not None and e.name == after_drop and e.is_press:
+            dropped = False
+            continue
         if e.is_press or (e.name != switch and e.name not in dict(conditions)):
             continue
         v = int(float(e.value))
         if e.name == switch:
             changed = v != level.get(switch, 0)
             level[switch] = v
-            if changed and start is None and all(level.get(n, 0) == want for n, want in conditions):
+            held = all(level.get(n, 0) == want for n, want in conditions)
+            if after_drop is not None:
+                if changed and held and v == 0:
+                    dropped = True
+                if not (changed and held and v == 1 and dropped):
+                    continue
+            if changed and start is None and held:
                 start = e.time
         else:
-            if v != level.get(e.name, 0) and start is not None:
-                spans.append((start, e.time + settle))
-                start = None
+            if v != level.get(e.name, 0):
+                dropped = False
+                if start is not None:
+                    spans.append((start, e.time + settle))
+                    start = None
             level[e.name] = v
     if start is not None:
         spans.append((start, float("inf")))
@@ -303,8 +330,8 @@ def compare(model: dict[str, list], student: dict[str, list], observed: Sequence
     found: list[Divergence] = []
     pairs: list[tuple[float, float, Observed, float]] = []      # (tm, ts, signal, since)
     shown: dict[str, tuple[list, list]] = {}
-    free = [span for switch, conditions in expl.free_after(task) for span in
-            _free_after(script, switch, conditions, expl.settle_s)]
+    free = [span for switch, conditions, *after_drop in expl.free_after(task) for span in
+            _free_after(script, switch, conditions, expl.settle_s, *after_drop)]
     for o in observed:
         cm, cs = o.shown(model[o.name]), o.shown(student[o.name])
         if o.pattern is not None:                   # a blink cut by the script's end: not its last state
@@ -320,6 +347,7 @@ def compare(model: dict[str, list], student: dict[str, list], observed: Sequence
             if o.until_press is not None:
                 windows += _until_press(script, *o.until_press)
             cm, cs = _without(cm, cs, _outside(windows))
+            cm, cs = _merged(cm, o), _merged(cs, o)
         shown[o.name] = (cm, cs)
         since, moving_lag = 0.0, 0.0
         if not o.equal(cm[0][1], cs[0][1]):
