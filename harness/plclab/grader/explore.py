@@ -142,6 +142,8 @@ class Divergence:
     since: float                 # the last time this signal agreed (where the line search starts)
     drift: float                 # how far the student lagged the model answer just before
     lag: float = 0.0             # late / early: by how much
+    model_since: float = 0.0     # since when each stand showed its value at `time` (its last
+    student_since: float = 0.0   # change at or before it): what each stand did, in the message
 
     def text(self, tick: float) -> str:
         o = self.signal
@@ -152,6 +154,28 @@ class Divergence:
         elif self.kind == "early":
             first += f" (it changes {self.lag:.2f} s earlier than the model answer's)"
         return first
+
+
+def story(expl: Exploration, script: Script, d: Divergence) -> str:
+    """What the operator did last, what the model answer's stand did and what the student's
+    did, in the console's words and from the compared traces only (never a cause they do not
+    show): 'after step 6 (1.59 s SB1 pressed 0.20 s) the model answer's stand showed lift down
+    (L3) from 2.93 s; yours showed lift up (L2) from 0.85 s, unchanged since that step'."""
+    o = d.signal
+    steps = [(n, e) for n, e in enumerate(script.events, 1) if e.time <= d.time + 1e-9]
+    words = []
+    if steps:
+        n, e = steps[-1]
+        words.append(f"after step {n} ({e.time:.2f} s {expl.describe(e)})")
+    else:
+        words.append("before any console step")
+    words.append(f"the model answer's stand showed {o.name} {o.show(d.model)} from {d.model_since:.2f} s")
+    yours = f"yours showed {o.name} {o.show(d.student)} from {d.student_since:.2f} s"
+    if steps and d.student_since < steps[-1][1].time and d.model_since >= steps[-1][1].time:
+        yours += ": it did not change after that step"
+    elif steps and d.model_since < steps[-1][1].time <= d.student_since:
+        yours += ": the model answer's did not change after that step"
+    return f"{words[0]} {words[1]}; {yours}"
 
 
 def _value_at(changes: list[tuple[float, Any]], t: float) -> Any:
@@ -405,8 +429,19 @@ def compare(model: dict[str, list], student: dict[str, list], observed: Sequence
     for tm, ts, _o, _s in sorted(pairs, key=lambda p: (p[0], p[1])):
         if tm < first.time:
             drift = ts - tm
+    cm, cs = shown.get(first.signal.name, ([(0.0, first.model)], [(0.0, first.student)]))
     return Divergence(first.time, first.signal, first.model, first.student, first.kind, first.since, drift,
-                      first.lag)
+                      first.lag, _since(cm, first.time), _since(cs, first.time))
+
+
+def _since(changes: list, t: float) -> float:
+    """When the value shown at `t` began (its last change at or before `t`)."""
+    at = changes[0][0]
+    for ct, _v in changes:
+        if ct > t + 1e-9:
+            break
+        at = ct
+    return at
 
 
 def suspects(script: Script, div: Divergence, model: dict, student: dict, observed: Sequence[Observed],
@@ -883,6 +918,45 @@ def row_text(expl: Exploration, task: str) -> str:
             f"each change within {expl.timing_tol:g} s, where the task leaves no freedom.")
 
 
+def _int_or(v: Any) -> Any:
+    return int(bool(v)) if isinstance(v, bool) else v
+
+
+def row_words(expl: Exploration, f: Finding, sources: Sequence[tuple[str, str]]) -> tuple[str, str]:
+    """E1's expected and observed texts for finding `f`: what the model answer's stand showed
+    (with the tolerance and the task's freedom), what the student's showed, what the operator
+    did and what each stand did then (`story`), the output that first differs where it does
+    not contradict what the stands show, and the statement that last wrote it."""
+    from plclab.plcopen.graphical import drawing_location
+    d = f.divergence
+    o = d.signal
+    tol = f"timing +/- {expl.timing_tol:g} s" + (f", {o.tolerance}" if o.tolerance else "") + \
+        (f"; {o.freedom}" if o.freedom else "")
+    expected = f"{o.name} {o.show(d.model)} at {d.time:.2f} s, as the model answer's stand shows ({tol})"
+    observed = f"{o.name} {o.show(d.student)}"
+    if d.kind == "late":
+        observed += f": the change comes {d.lag:.2f} s later than in the model answer"
+    elif d.kind == "early":
+        observed += f": the change comes {d.lag:.2f} s earlier than in the model answer"
+    observed += f"; {story(expl, f.script, d)}"
+    # the raw output only where it says the same as the stands: a lamp is compared as it is
+    # seen (a blink's on/off at one instant says nothing), and an output differing before the
+    # difference the stands show (inside a freedom) is no evidence of it
+    consistent = o.pattern is None and d.since - 1e-9 <= f.output_time <= d.time + 1e-9
+    if (f.output is not None and f.model_output is not None and f.model_output != f.student_output
+            and consistent):
+        observed += (f"; at {f.output_time:.2f} s {f.output} = {_int_or(f.student_output)} in your program, "
+                     f"{_int_or(f.model_output)} in the model answer")
+    if f.line is not None:
+        file, line, stmt = f.line
+        drawn = drawing_location(sources, file, line)   # a plc.xml: the rung and element, not generated ST
+        if drawn is not None:
+            observed += f"; {f.output} last written in {Path(file).name}: {drawn}"
+        else:
+            observed += f"; {f.output} last written by {Path(file).name}:{line}" + (f" `{stmt}`" if stmt else "")
+    return expected, observed
+
+
 def exploration_rows(req: Any, sources: Sequence[tuple[str, str]], checked: Any,
                      reference: Optional[Sequence[str]] = None, episodes: Optional[int] = None,
                      out_dir: Optional[str] = None) -> tuple[list[Any], list[str], dict[str, list[Path]]]:
@@ -890,7 +964,6 @@ def exploration_rows(req: Any, sources: Sequence[tuple[str, str]], checked: Any,
     (the shrunk script and the student's traces under it, in `out_dir`). A difference that
     plainly breaks one of the task's requirements comes with that requirement's row too, after
     E1's (the engine puts it in place of the scenarios' row if they passed it)."""
-    from plclab.plcopen.graphical import drawing_location
     from plclab.stands.base import stand_spec
     from plclab.trace import write_csv, write_vcd
 
@@ -931,27 +1004,8 @@ def exploration_rows(req: Any, sources: Sequence[tuple[str, str]], checked: Any,
             path = base / f"{req.stand}-{req.task}-explore{suffix}"
             write(s.trace, path, names=names)
             files.append(path)
+    expected, observed = row_words(expl, f, sources)
     d = f.divergence
-    o = d.signal
-    tol = f"timing +/- {expl.timing_tol:g} s" + (f", {o.tolerance}" if o.tolerance else "") + \
-        (f"; {o.freedom}" if o.freedom else "")
-    expected = f"{o.name} {o.show(d.model)} at {d.time:.2f} s, as the model answer's stand shows ({tol})"
-    observed = f"{o.name} {o.show(d.student)}"
-    if d.kind == "late":
-        observed += f": the change comes {d.lag:.2f} s later than in the model answer"
-    elif d.kind == "early":
-        observed += f": the change comes {d.lag:.2f} s earlier than in the model answer"
-    if f.output is not None and f.model_output is not None and f.model_output != f.student_output:
-        observed += (f"; at {f.output_time:.2f} s {f.output} = {int(bool(f.student_output)) if isinstance(f.student_output, bool) else f.student_output}"
-                     f" in your program, {int(bool(f.model_output)) if isinstance(f.model_output, bool) else f.model_output}"
-                     " in the model answer")
-    if f.line is not None:
-        file, line, stmt = f.line
-        drawn = drawing_location(sources, file, line)   # a plc.xml: the rung and element, not generated ST
-        if drawn is not None:
-            observed += f"; {f.output} last written in {Path(file).name}: {drawn}"
-        else:
-            observed += f"; {f.output} last written by {Path(file).name}:{line}" + (f" `{stmt}`" if stmt else "")
     steps = tuple(f.steps) + (f"-> {f.first_difference}",)
     replay = (f"replay: plclab run {req.stand} --program {' '.join(n for n, _ in sources)} --inputs "
               f"{files[0] if files else script_name} --against {req.task}")
