@@ -15,10 +15,17 @@ TUR-10: the stand shows each link's motion (at rest, moving forward or backward,
 fast, from the drive reference the plant receives) and the position where it comes to rest
 (within a band of 40 codes: the 16-code admissible error on each side, plus a scan of
 travel; plus a link's travel at full speed in the time the two stands are apart, since a
-link stopped mid-travel by a program a little behind stands that much further on). Task 1
-writes manual mode for all five drives and leaves automatic mode as the starting program's
-(drive 1 regulated), so links 2..5 are compared in manual mode only (after 0.5 s in it) and
-never by position; Tasks 2 and 3 jog drive 1 only, as the starting program.
+link stopped mid-travel by a program a little behind stands that much further on, counted
+since the link last stood still on both stands). Task 1 is the manual mode (all five drives);
+what automatic mode then does is not its subject (one link regulated, as the starting program,
+or all five), so each link's motion is compared in manual mode (after 0.5 s in it) and in
+automatic mode only until the first SB1 press (entering it moves nothing), never by position;
+Tasks 2 and 3 jog drive 1 only, as the starting program. In Task 3 the enable coming back to 1
+after it dropped during a run leaves the rest of the run to the program (read as a level at
+the end of the last pause, or latched from its drop: Rules.enable_latched).
+
+The freedoms both the scripted rows and exploration honour are declared once per robot in
+`Rules` (MP9C_RULES, TUR10_RULES) below.
 
 HL1 on both robots is compared as the operator sees it: on, off or blinking (operators.
 lamp_pattern). A blink may begin in either phase and end up to 2.5 s apart; in manual mode how
