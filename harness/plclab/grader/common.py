@@ -319,9 +319,10 @@ def within_scan(op: "Op[Any]") -> str:
 
 
 def lag_words(op: "Op[Any]") -> str:
-    """The lag a program may have on the model answer, as a row prints it after its tolerance."""
+    """The lag a program may have on the model answer, as a row prints it after its tolerance
+    (inside the tolerance's parentheses): ', and one scan more a program may lag'."""
     n = op.rules.lag_scans
-    return f", + {'one scan' if n == 1 else f'{n} scans'} a program may lag" if n else ""
+    return f", and {'one scan' if n == 1 else f'{n} scans'} more a program may lag" if n else ""
 
 
 def basics_flow(op: Op[Any], ids: tuple[str, str, str], record: Callable[[], float],
@@ -575,7 +576,9 @@ def _paused(op: Op[Any], rid: str, before: FrameRun, after: FrameRun, seconds: f
     pause = after.start - before.done
     tol = op.tol + op.lag + (TAP_PERIOD if op.step else 0.0)
     within = (f"+/- {TAP_PERIOD:g} s (SB1 tapped every {TAP_PERIOD:g} s) + one scan ({op.scan * 1000:.0f} ms)"
-              if op.step else within_scan(op)) + lag_words(op)
+              if op.step else within_scan(op))
+    if op.rules.lag_scans:
+        within = f"({within}{lag_words(op)})"
     good = abs(pause - seconds) <= tol
     return op.c.check(rid, good, f"{op.mode}a {_secs(seconds)} s pause {within} {where}",
                       f"{pause:.2f} s" + (f": {why}" if why and not good else ""), before.done)

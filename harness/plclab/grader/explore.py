@@ -429,7 +429,8 @@ def compare(model: dict[str, list], student: dict[str, list], observed: Sequence
     for tm, ts, _o, _s in sorted(pairs, key=lambda p: (p[0], p[1])):
         if tm < first.time:
             drift = ts - tm
-    cm, cs = shown.get(first.signal.name, ([(0.0, first.model)], [(0.0, first.student)]))
+    o = first.signal                 # since when: from what each stand showed, not the windows compared
+    cm, cs = o.shown(model[o.name]), o.shown(student[o.name])
     return Divergence(first.time, first.signal, first.model, first.student, first.kind, first.since, drift,
                       first.lag, _since(cm, first.time), _since(cs, first.time))
 

@@ -409,7 +409,7 @@ def stops_on_press(op: Tur10Op, f1: Frame, done: float) -> None:
         op.run_until(settled + op.tol)
         refs = op.refs(at=settled)
         if not c.check(rid, not any(refs.values()), f"every reference 0 within {DEBOUNCE * 1000:.0f} ms + "
-                       f"one scan ({op.scan * 1000:.0f} ms){lag_words(op)} of the stop press (SB1 at t = "
+                       f"one scan ({op.scan * 1000:.0f} ms{lag_words(op)}) of the stop press (SB1 at t = "
                        f"{pressed:.2f} s during frame 2)", fmt_refs(refs), settled):
             return
         if not op.quiet(rid, settled, QUIET, "every reference stays 0 after the stop", "execution went on"):
