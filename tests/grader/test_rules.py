@@ -183,6 +183,13 @@ def test_a_correct_program_inside_a_declared_freedom_passes_every_row(path, tmp_
     assert report.row("E1").passed
 
 
+def test_the_freedom_fixtures_are_what_their_generator_makes_of_todays_independent_solutions():
+    import subprocess
+    r = subprocess.run([sys.executable, str(HERE / "make_rules_fixtures.py"), "--check"], capture_output=True,
+                       text=True, timeout=120)
+    assert r.returncode == 0, r.stdout + r.stderr
+
+
 def test_the_table_of_issue_29_has_a_program_for_each_freedom():
     names = {p.stem for p in RULES}
     for needed in ("task1_coil_dropped", "task1_blink_dark_first_free_clock", "task2_start_scan_later",
