@@ -160,7 +160,8 @@ def story(expl: Exploration, script: Script, d: Divergence) -> str:
     """What the operator did last, what the model answer's stand did and what the student's
     did, in the console's words and from the compared traces only (never a cause they do not
     show): 'after step 6 (1.59 s SB1 pressed 0.20 s) the model answer's stand showed lift down
-    (L3) from 2.93 s; yours showed lift up (L2) from 0.85 s, unchanged since that step'."""
+    (L3) from 2.93 s; yours showed lift up (L2) from 0.85 s: it did not change after that
+    step'."""
     o = d.signal
     steps = [(n, e) for n, e in enumerate(script.events, 1) if e.time <= d.time + 1e-9]
     words = []
