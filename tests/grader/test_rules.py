@@ -219,3 +219,30 @@ def test_a_pause_read_as_each_frame_is_reached_fails_t2_3_and_no_message_claims_
     assert not t21.passed and "whatever I1.5 was when it was recorded (1, 0, 0)" in t21.observed
     assert "not used" not in report.text()
     assert not t23.passed and "the pause followed I1.5 as it was when the frame was reached" in t23.observed
+
+
+def test_task3s_enable_back_before_the_last_pause_is_free_to_read_as_a_level_or_latched(tmp_path):
+    """The enable dropped during a run and back to 1 before the last pause ends: the model
+    answer reads it as a level (goes on to frame 1), the latched program stops after the last
+    pause. Both are right (the text allows both): E1 finds no difference, where without the
+    declared freedom it would."""
+    from dataclasses import replace
+
+    from plclab.frontend import check_sources, read_sources
+    from plclab.grader.explore import Explorer, Program, model_answer
+    from plclab.grader.registry import requirement_set
+    path = HERE / "fixtures" / "rules" / "tur10" / "task3_enable_latched.st"
+    srcs = read_sources([str(path)])
+    student = Program(srcs, check_sources(srcs))
+    model, why = model_answer("tur10", "task3", None)
+    assert model is not None, why
+    press = lambda t: Event(t, "SB1", "1", 0.2)          # noqa: E731
+    script = Script((press(0.5), Event(0.9, "SA1_FWD", "1", 0.5), press(1.8), Event(2.2, "SA1_BWD", "1", 0.3),
+                     press(2.9), Event(3.3, "I15", "1"), Event(3.4, "SA7", "1"), press(3.6),
+                     Event(4.4, "I15", "0"), Event(5.0, "I15", "1")), 16.0)
+    expl = stand_spec("tur10").explore
+    make = requirement_set("tur10", "task3").make_session
+    assert Explorer(expl, "task3", make, student, model, tmp_path).outcome(script).divergence is None
+    strict = replace(expl, free_after=lambda task: ())
+    d = Explorer(strict, "task3", make, student, model, tmp_path).outcome(script).divergence
+    assert d is not None and d.signal.name == "link1"
