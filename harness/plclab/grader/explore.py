@@ -383,9 +383,10 @@ def compare(model: dict[str, list], student: dict[str, list], observed: Sequence
                 (tm, vm), (ts, vs) = cm[k], cs[k]
                 lag = max(abs(ts - tm), abs(cs[k - 1][0] - cm[k - 1][0]) if k > 1 else 0.0)
                 if o.rest is not None:
-                    # the lag since both last stood still: a stop pressed in the same scan on
-                    # both stands leaves the later starter that much travel short
-                    if o.rest(cm[k - 1][1]) and o.rest(cs[k - 1][1]):
+                    # the lag since both last stood still at the same place: a stop pressed in
+                    # the same scan on both stands leaves the later starter that much travel
+                    # short, and a link that cannot move (a stuck drive) keeps that difference
+                    if o.rest(cm[k - 1][1]) and o.rest(cs[k - 1][1]) and o.equal(cm[k - 1][1], cs[k - 1][1]):
                         moving_lag = 0.0
                     moving_lag = max(moving_lag, abs(ts - tm))
                     lag = max(lag, moving_lag)
