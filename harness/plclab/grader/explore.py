@@ -5,10 +5,11 @@ Scripted scenarios check what their authors thought of; a student's mistake ofte
 after a console history nobody scripted (a stop followed by a second run, a restart in the
 middle of a pause). Here the stand's generator (plclab.stands.operators, declared in the
 StandSpec) writes seeded random scripts; both programs play each one; the first moment the
-stands differ beyond the stand's declared tolerances is a divergence. It is then shrunk to a
-minimal script (fewest actions, shortest holds, earliest times), written in the input-CSV
-format next to the traces, and the row names the student's ST statement that last wrote the
-first differing output in that scan.
+stands differ beyond the stand's declared tolerances and freedoms (stands.exploration.Rules,
+which the scripted rows honour too) is a divergence. It is then shrunk to a minimal script
+(fewest actions, shortest holds, earliest times; 1-minimal: each step needed), written in the
+input-CSV format next to the traces, and the row says what the operator did, what each stand
+showed and the student's ST statement that last wrote the first differing output.
 
 Deterministic and bounded: the seed is a hash of the submission's text (the same file gives
 the same report, byte for byte) and the budget is a number of scripts and of shrinking runs,
