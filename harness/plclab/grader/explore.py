@@ -180,13 +180,18 @@ def story(expl: Exploration, script: Script, d: Divergence) -> str:
     return f"{words[0]} {words[1]}; {yours}"
 
 
-def _value_at(changes: list[tuple[float, Any]], t: float) -> Any:
-    v = changes[0][1]
-    for ct, cv in changes:
-        if ct > t + 1e-9:
+def _last_change(changes: list[tuple[float, Any]], t: float) -> tuple[float, Any]:
+    """The change in effect at `t` (time, value): the last one at or before it."""
+    last = changes[0]
+    for c in changes:
+        if c[0] > t + 1e-9:
             break
-        v = cv
-    return v
+        last = c
+    return last
+
+
+def _value_at(changes: list[tuple[float, Any]], t: float) -> Any:
+    return _last_change(changes, t)[1]
 
 
 def _windows(script: Script, switch: str, value: int, settle: float) -> list[tuple[float, float]]:
@@ -440,12 +445,7 @@ def compare(model: dict[str, list], student: dict[str, list], observed: Sequence
 
 def _since(changes: list, t: float) -> float:
     """When the value shown at `t` began (its last change at or before `t`)."""
-    at = changes[0][0]
-    for ct, _v in changes:
-        if ct > t + 1e-9:
-            break
-        at = ct
-    return at
+    return _last_change(changes, t)[0]
 
 
 def suspects(script: Script, div: Divergence, model: dict, student: dict, observed: Sequence[Observed],
