@@ -211,14 +211,14 @@ def _windows(script: Script, switch: str, value: int, settle: float) -> list[tup
     return [(a, b) for a, b in spans if b > a]
 
 
-def _until_press(script: Script, switch: str, value: int, button: str) -> list[tuple[float, float]]:
+def _until_press(script: Script, switch: str, value: int, button: str, after: float = 0.0) -> list[tuple[float, float]]:
     """The spans from each change of console `switch` to `value` until `button`'s first press
-    after it (or the switch's next change)."""
+    after it and `after` s more (or the switch's next change)."""
     spans: list[tuple[float, float]] = []
     state, start = 0, None
     for e in script.events:
         if e.name == button and e.is_press and start is not None:
-            spans.append((start, e.time))
+            spans.append((start, e.time + after))
             start = None
         elif e.name == switch and not e.is_press:
             v = int(float(e.value))

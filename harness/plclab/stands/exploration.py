@@ -178,6 +178,7 @@ TUR10_BAND = 40          # codes: rest positions compared within this band
 TUR10_TOP_SPEED = 6000   # codes/s: a link at full reference (1500, the drive's 4 codes/s per unit)
 _SLOW, _STILL = 700, 50  # |reference| above _STILL moves; up to _SLOW is the low speed
 _AUTO_STILL = 400        # in automatic mode: |reference| above this moves (the regulator's profile is free)
+TUR10_START_S = 1.5      # s: Task 1 compares link 1 this long after the press that starts frame 1
 
 
 def _tur10_teach(w: _Writer, task: str) -> None:
@@ -265,9 +266,11 @@ def _tur10_compared(task: str) -> tuple[Observed, ...]:
         # Task 1 is the manual mode: each link's motion there; in automatic mode only that
         # entering it moves nothing until SB1 is pressed (what playback does then -- one link
         # regulated as the starting program, or all five -- is not the task's subject)
+        # link 1 also while the press starts frame 1 (TUR10_START_S: the regulator's ramp and a
+        # link's start), links 2..5 (regulated or not) only until the press
         out = [Observed(f"link{k}", _show_link, (f"DRIVE{k}",), _same_motion, only_when=("SA7", 0, 0.5),
-                        until_press=("SA7", 1, "SB1"),
-                        freedom="in automatic mode compared only until the first SB1 press")
+                        until_press=("SA7", 1, "SB1", TUR10_START_S if k == 1 else 0.0),
+                        freedom="in automatic mode compared only until the first SB1 press starts frame 1")
                for k in (1, 2, 3, 4, 5)]
     else:
         out = [Observed("link1", _show_link, ("DRIVE1",), _same_link, lag_band=TUR10_TOP_SPEED, rest=_at_rest,
