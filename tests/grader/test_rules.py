@@ -113,7 +113,7 @@ def test_a_window_opens_on_what_both_stands_show_never_a_stale_value():
 def test_task1_automatic_mode_is_compared_only_until_its_first_press():
     # entering automatic mode moves nothing (compared); after SB1, playback is not Task 1's subject
     rows = [(2.0, "SA7", "1"), (3.0, "SB1", "1", 0.2)]
-    # frame 1 starts on the press on both (compared 0.6 s on for link 1); frame 2 comes later
+    # frame 1 starts on the press on both; frame 2 comes later
     # where all five links are regulated (not compared)
     model = [(0.0, (0, 0)), (3.1, (2, 0)), (4.0, (0, 12000)), (4.6, (2, 0)), (5.5, (0, 15000))]
     student = [(0.0, (0, 0)), (3.1, (2, 0)), (4.0, (0, 12000)), (5.4, (2, 0)), (6.3, (0, 15000))]

@@ -179,7 +179,7 @@ TUR10_BAND = 40          # codes: rest positions compared within this band
 TUR10_TOP_SPEED = 6000   # codes/s: a link at full reference (1500, the drive's 4 codes/s per unit)
 _SLOW, _STILL = 700, 50  # |reference| above _STILL moves; up to _SLOW is the low speed
 _AUTO_STILL = 400        # in automatic mode: |reference| above this moves (the regulator's profile is free)
-TUR10_START_S = 0.6      # s: Task 1 compares link 1 this long after the press that starts frame 1 (less than a pause)
+TUR10_START_S = 0.0      # s: Task 1 compares link 1 this long after the first press (0: until the press)
 
 
 def _tur10_teach(w: _Writer, task: str) -> None:
