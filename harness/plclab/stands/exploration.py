@@ -19,8 +19,7 @@ link stopped mid-travel by a program a little behind stands that much further on
 since the link last stood still on both stands). Task 1 is the manual mode (all five drives);
 what automatic mode then does is not its subject (one link regulated, as the starting program,
 or all five), so each link's motion is compared in manual mode (after 0.5 s in it) and in
-automatic mode only until the first SB1 press has started frame 1 (entering it moves nothing;
-link 1 TUR10_START_S past the press), never by position;
+automatic mode only until the first SB1 press (entering it moves nothing), never by position;
 Tasks 2 and 3 jog drive 1 only, as the starting program. In Task 3 the enable coming back to 1
 after it dropped during a run leaves the rest of the run to the program (read as a level at
 the end of the last pause, or latched from its drop: Rules.enable_latched).
@@ -66,7 +65,7 @@ class Rules:
       latched from the moment it drops during a run (the text allows both).
     - `automatic_subject`: the tasks whose subject includes automatic mode; elsewhere (the
       TUR-10's Task 1, the manual mode) exploration compares automatic mode only until its first
-      SB1 press has started frame 1 (entering it moves nothing; link 1 TUR10_START_S past it)."""
+      SB1 press (entering it moves nothing)."""
 
     lag_scans: int = 1
     blink_start_tol: float = BLINK_START_TOL
