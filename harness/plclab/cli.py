@@ -300,7 +300,8 @@ def _cmd_grade(args: argparse.Namespace) -> int:
         if args.files or args.listen or args.traffic or args.duration is not None:
             raise PlcLabError("grade: --requirements lists what the task checks; it grades nothing (no files, "
                               "--listen, --duration or --traffic with it)")
-        print(requirements_text(task_title(args.stand, args.task), requirement_table(args.stand, args.task)), end="")
+        table = requirement_table(args.stand, args.task, exploration=True)
+        print(requirements_text(task_title(args.stand, args.task), table), end="")
         return 0
     if args.stand == "thermo":
         return _cmd_grade_scada(args)

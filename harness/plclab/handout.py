@@ -58,9 +58,15 @@ def grader_checks(stand: Stand) -> str:
            f"`plclab grade {stand.name} TASK ...` gives one row per requirement below, PASS or FAIL with "
            f"what was expected, what your program did and when; `plclab grade {stand.name} TASK "
            "--requirements` prints the list."]
+    tables = {task: requirement_table(stand.name, task, exploration=True) for task in names}
+    if any(rid == "E1" for table in tables.values() for rid, _ in table):
+        out += ["", "The last row, E1, is checked where the task's model answer is at hand (your instructor's "
+                "grading): the grader plays random console histories on your program and on the model answer "
+                "side by side; if your stand ever shows something else, the row gives the shortest history "
+                "that shows it, as steps you can replay (`plclab run ... --inputs FILE.csv`)."]
     for task in names:
         out += ["", f"### {task}: {task_title(stand.name, task)}", "", "| id | requirement |", "|---|---|"]
-        out += [f"| {rid} | {text.replace('|', chr(92) + '|')} |" for rid, text in requirement_table(stand.name, task)]
+        out += [f"| {rid} | {text.replace('|', chr(92) + '|')} |" for rid, text in tables[task]]
     return "\n".join(out) + "\n"
 
 

@@ -223,6 +223,18 @@ TUR10_FIXTURES = (
           "pause recorded with the frame.", "task2",
           ("    AllReached : BOOL;\nEND_VAR", "    AllReached : BOOL;\n    I15 : BOOL;\nEND_VAR"),
           (RECORDED, "Duration := SEL(G := I15, IN0 := T#500ms, IN1 := T#3s)", 2)),
+    tur10("task2_i15_read_when_reached", "task2", "T2.3",
+          "I1.5 read in automatic mode as each frame is reached (the pause latched then), instead of the "
+          "pause recorded with the frame (issue 29: T2.3 passed it while I1.5 was 1 at every arrival).",
+          "task2",
+          ("    Watchdog : FB_FrameWatchdog;\nEND_VAR\nVAR CONSTANT\n    STOPPED",
+           "    Watchdog : FB_FrameWatchdog;\n    ReachedPause : TIME;\nEND_VAR\nVAR_EXTERNAL\n    I15 : BOOL;\n"
+           "END_VAR\nVAR CONSTANT\n    STOPPED"),
+          ("            Pause(Start := TRUE, " + RECORDED + ", Cancel := FALSE);",
+           "            ReachedPause := SEL(G := I15, IN0 := T#500ms, IN1 := T#3s);\n"
+           "            Pause(Start := TRUE, Duration := ReachedPause, Cancel := FALSE);"),
+          ("            Pause(Start := FALSE, " + RECORDED + ", Cancel := FALSE);",
+           "            Pause(Start := FALSE, Duration := ReachedPause, Cancel := FALSE);")),
     tur10("task2_pause_ignored", "task2", "T2.2",
           "the pause is recorded with each frame but never used: playback still holds the fixed 1 s.",
           "task2",

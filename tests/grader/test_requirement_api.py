@@ -112,9 +112,11 @@ def test_grade_requirements_lists_the_rows_a_grade_gives_before_grading(stand, t
     lines = out.splitlines()
     assert lines[0].startswith(("MP-9C", "TUR-10", "Thermo", "CNC")) and lines[2].split() == ["id", "requirement"]
     listed = [line.split()[0] for line in lines[4:] if line[:1].strip()]
-    assert listed == [rid for rid, _ in requirement_table(stand, task)]
+    table = requirement_table(stand, task, exploration=True)
+    assert listed == [rid for rid, _ in table]
+    assert (listed[-1] == "E1") == (stand in ("mp9c", "tur10"))                 # the robots are explored too
     joined = " ".join(" ".join(line.split()[1:] if line[:1].strip() else line.split()) for line in lines[4:])
-    assert all(text in joined for _, text in requirement_table(stand, task))    # each sentence, whole
+    assert all(text in joined for _, text in table)                               # each sentence, whole
     assert list(tmp_path.iterdir()) == []                                         # graded nothing, wrote nothing
 
 
@@ -123,7 +125,7 @@ def test_grade_requirements_ids_are_the_rows_of_a_real_grade(capsys):
 
     assert main(["grade", "mp9c", "task1", "--requirements"]) == 0
     listed = [line.split()[0] for line in capsys.readouterr().out.splitlines()[4:] if line[:1].strip()]
-    report = grade_sources("mp9c", "task1", sources(STAND, "baseline"))
-    assert [row.id for row in report.rows] == listed
+    report = grade_sources("mp9c", "task1", sources(STAND, "baseline"))      # the scenarios' rows, then E1
+    assert [row.id for row in report.rows] + ["E1"] == listed
     assert main(["grade", "mp9c", "task1", "x.st", "--requirements"]) == 1
     assert "grades nothing" in capsys.readouterr().err

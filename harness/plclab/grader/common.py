@@ -18,6 +18,7 @@ from typing import Any, Callable, ClassVar, Generic, Optional, Self, Sequence, T
 
 from plclab.scenario import ScenarioFailure, Session
 from plclab.stands import Stand
+from plclab.stands.exploration import Rules
 
 from .registry import EVERY, Checks, Requirement, RequirementSet, Scenario, SessionFactory, register
 
@@ -71,6 +72,7 @@ class Op(ABC, Generic[F]):
     watchdog: ClassVar[str]        # the frame-timeout requirement ("G10")
     frame_timeout: ClassVar[float]  # s a frame may take before the watchdog stops execution
     timeout_tol: ClassVar[str]     # its tolerance as rows print it ("+/- 0.1 s")
+    rules: ClassVar[Rules]         # the stand's freedoms, shared with exploration (stands.exploration)
 
     @classmethod
     def begin(cls, s: Session, c: Checks) -> Self:
@@ -91,6 +93,12 @@ class Op(ABC, Generic[F]):
     @property
     def tol(self) -> float:
         return self.scan + EPS
+
+    @property
+    def lag(self) -> float:
+        """How much later than the model answer a program may be at one start, stop or pause
+        (`Rules.lag_scans` scans), on top of a row's own one-scan tolerance."""
+        return self.rules.lag_scans * self.scan
 
     def _fault(self) -> None:
         f = self.s.fault
@@ -258,8 +266,8 @@ class Op(ABC, Generic[F]):
         if run is None:
             return None
         late = run.start - pressed
-        if not self.c.check(rid, -EPS <= late <= DEBOUNCE + self.tol,
-                            f"{label} starts on the press ({self.press_window})",
+        if not self.c.check(rid, -EPS <= late <= DEBOUNCE + self.tol + self.lag,
+                            f"{label} starts on the press ({self.press_window}{lag_words(self)})",
                             f"{self.started} {late:.2f} s after the press", run.start):
             return None
         return run
@@ -310,6 +318,13 @@ def within_scan(op: "Op[Any]") -> str:
     return f"+/- one scan ({op.scan * 1000:.0f} ms)"
 
 
+def lag_words(op: "Op[Any]") -> str:
+    """The lag a program may have on the model answer, as a row prints it after its tolerance
+    (inside the tolerance's parentheses): ', and one scan more a program may lag'."""
+    n = op.rules.lag_scans
+    return f", and {'one scan' if n == 1 else f'{n} scans'} more a program may lag" if n else ""
+
+
 def basics_flow(op: Op[Any], ids: tuple[str, str, str], record: Callable[[], float],
                 record_another: Callable[[], object]) -> None:
     """The `lamp_requirements` (`ids`), in manual mode from power-up: `record` records a frame
@@ -331,8 +346,10 @@ def basics_flow(op: Op[Any], ids: tuple[str, str, str], record: Callable[[], flo
                 c.not_checked(bounce, f"HL1 is 0 at power-up (see {lamp}), so it cannot show whether "
                               "the 30 ms press recorded a frame", t)
         released = record()
-        went_off = op.s.trace.first(lambda st: not st.HL1, after=released - 0.2, until=released + 2 * op.tol,
-                                    default=None)
+        # HL1 going OFF while SB1 is still held (a lit lamp's falling edge: where the bounce
+        # already recorded a frame, HL1 is OFF before this press and says nothing of it)
+        fell = op.s.trace.edges("HL1", "falling", after=released - 0.2 - op.tol, until=released + 2 * op.tol)
+        went_off = fell[0] if fell else None
         if went_off is not None and went_off < released - op.tol:
             c.fail(lamp, "HL1=0 once a frame is recorded, at the release of a short SB1 press (+/- one scan)",
                    f"HL1 went 0 at t = {went_off:.2f} s, {released - went_off:.2f} s before SB1 was released: "
@@ -366,9 +383,9 @@ def _long_press_resets(op: Op[Any], rid: str, lamp: str) -> None:
         op.run_until(pressed + LONG_PRESS + 1.5)
     else:
         held = on - pressed
-        c.check(rid, LONG_PRESS - op.tol <= held <= LONG_PRESS + DEBOUNCE + op.tol,
+        c.check(rid, LONG_PRESS - op.tol <= held <= LONG_PRESS + DEBOUNCE + op.tol + op.lag,
                 f"the reset (HL1=1) {LONG_PRESS:.1f} s after SB1 is pressed (+ up to {DEBOUNCE * 1000:.0f} ms "
-                f"debounce, {within_scan(op)}), while it is held",
+                f"debounce, {within_scan(op)}{lag_words(op)}), while it is held",
                 f"HL1=1 {held:.2f} s after the press", on)
         op.run_until(pressed + LONG_PRESS + 0.5)
     released = op.now
@@ -460,34 +477,64 @@ def pauses_flow(op: Op[F], frames: Sequence[F], recorded: Sequence[int], start_c
         first.append(run)
     with c.requirement("T2.1", "T2.2"):
         seen = [b.start - a.done for a, b in zip(first, first[1:])]
-        why = _pause_pattern(seen, wanted, op.tol + (TAP_PERIOD if op.step else 0.0), name)
+        why = _pause_pattern(seen, wanted, op.tol + op.lag + (TAP_PERIOD if op.step else 0.0), name)
         for k in range(n):
             _paused(op, _pause_req(recorded[k]), first[k], first[k + 1], wanted[k],
                     f"after frame {k + 1} (recorded with {name} = {recorded[k]})", why)
     with c.requirement("T2.3"):
-        began, run, k, cycle = first[0].start, first[n], 0, 2     # run: frame 1 of cycle 2
-        while not (k == 0 and cycle > 2 and run.done - began > op.frame_timeout + 1.0):
-            nk, done, value = (k + 1) % n, run.done, (k + cycle) % 2
-            op.set_enable(1 - value)                          # as frame k + 1 is reached
-            op.run_until(done + PAUSE_SHORT * 0.3)
-            op.set_enable(value)                              # inside its pause
-            if nk == 0:                                       # 1 at the end of the last pause: a program
-                op.run_until(done + PAUSE_SHORT * 0.7)        # that also does Task 3 goes on to frame 1
-                op.set_enable(1)
-            nxt = op.advance("T2.3", frames[nk], f"frame {nk + 1} (cycle {cycle + (nk == 0)})", done,
-                             on_start=lambda v=value: op.set_enable(1 - v))   # as the next frame starts
-            if nxt is None:
-                return
-            live = PAUSE_LONG if value else PAUSE_SHORT
-            why = (f"the pause followed {name} (switched to {value} inside it) instead of keeping the one recorded "
-                   "with the frame" if abs(nxt.start - done - live) <= op.tol + TAP_PERIOD * op.step else "")
-            if not _paused(op, "T2.3", run, nxt, seen[k], f"after frame {k + 1} in cycle {cycle}, as in the first "
-                           f"cycle, {name} being switched as the frame started, as it was reached and inside its "
-                           f"pause (to {value})", why):
-                return
-            run, k = nxt, nk
-            cycle += k == 0
+        _input_changes_nothing(op, frames, first, seen, wanted)
     op.stop_playback()
+
+
+def _held(k: int, cycle: int) -> int:
+    """T2.3: the input as frame k + 1 of `cycle` starts, is driven and is reached; it is switched
+    to the other value inside the frame's pause. Frame 1 of cycle 2 is played with 1 (the first
+    cycle's measurement); over cycles 2 and 3 every frame is reached once with each value."""
+    return (k + cycle + 1) % 2
+
+
+def _input_changes_nothing(op: Op[F], frames: Sequence[F], first: Sequence[FrameRun], seen: Sequence[float],
+                           wanted: Sequence[float]) -> None:
+    """T2.3 from frame 1 of cycle 2 (`first[-1]`): the input held at one value through each
+    frame's start, drive and arrival and switched to the other inside its pause, each frame
+    with both values over two cycles, and on until playback has run longer than the frame
+    watchdog. Each pause is judged against the pause the program should have had (the one
+    recorded with the frame); where the first cycle (the input steady at 1) already gave
+    another pause, that is T2.1's or T2.2's mistake, and T2.3 asks only that the input changes
+    nothing (the first cycle's pause)."""
+    name, n = op.enable_label, len(frames)
+    tol = op.tol + op.lag + (TAP_PERIOD if op.step else 0.0)
+    right = all(abs(a - b) <= tol for a, b in zip(seen, wanted))
+    began, run, k, cycle = first[0].start, first[-1], 0, 2
+    while not (k == 0 and cycle > 3 and run.done - began > op.frame_timeout + 1.0):
+        nk, done, held = (k + 1) % n, run.done, _held(k, cycle)
+        op.run_until(done + PAUSE_SHORT * 0.3)
+        op.set_enable(1 - held)                              # inside its pause
+        if nk == 0:                                          # 1 at the end of the last pause: a program
+            op.run_until(done + PAUSE_SHORT * 0.7)           # that also does Task 3 goes on to frame 1
+            op.set_enable(1)
+        ncycle = cycle + (nk == 0)
+        nxt = op.advance("T2.3", frames[nk], f"frame {nk + 1} (cycle {ncycle})", done,
+                         on_start=lambda h=_held(nk, ncycle): op.set_enable(h))
+        if nxt is None:
+            return
+        pause = nxt.start - done
+        why = ""
+        for value, when in ((held, "when the frame was reached"), (1 - held, "inside the pause")):
+            live = PAUSE_LONG if value else PAUSE_SHORT
+            if abs(pause - live) <= tol and abs(pause - (wanted[k] if right else seen[k])) > tol:
+                why = (f"the pause followed {name} as it was {when} ({value}), not the pause recorded with "
+                       "the frame")
+                break
+        recorded = int(wanted[k] == PAUSE_LONG)
+        where = (f"after frame {k + 1} in cycle {cycle} (recorded with {name} = {recorded}), {name} being {held} "
+                 f"as the frame started and was reached and {1 - held} inside its pause")
+        if not right:
+            where += (f": the same as in the first cycle, {name} steady at 1 (that it is not the "
+                      f"{_secs(wanted[k])} s recorded with the frame is {_pause_req(recorded)}'s)")
+        if not _paused(op, "T2.3", run, nxt, wanted[k] if right else seen[k], where, why):
+            return
+        run, k, cycle = nxt, nk, ncycle
 
 
 def _pause_req(recorded: int) -> str:
@@ -509,7 +556,9 @@ def _pause_pattern(seen: Sequence[float], wanted: Sequence[float], tol: float, n
         return (f"the pauses are swapped: frames recorded with {name} = 0 got {_secs(PAUSE_LONG)} s, those "
                 f"recorded with {name} = 1 got {_secs(PAUSE_SHORT)} s")
     if max(seen) - min(seen) <= 2 * tol:
-        return f"every frame got the same {seen[0]:.2f} s pause: the pause recorded with each frame is not used"
+        recorded = ", ".join("1" if w == PAUSE_LONG else "0" for w in wanted)
+        return (f"every frame got the same {seen[0]:.2f} s pause, whatever {name} was when it was recorded "
+                f"({recorded})")
     if like([wanted[(k + 1) % n] for k in range(n)], range(n - 1)):
         return ("off by one: after each frame came the pause recorded with the next frame (the pause read "
                 "from the wrong frame, or stored on every manual scan instead of at the SB1 press, so that "
@@ -525,9 +574,11 @@ def _paused(op: Op[Any], rid: str, before: FrameRun, after: FrameRun, seconds: f
     mode +/- the tap period too); the expected value names the pause, its tolerance and
     `where` it is, the observed one what the wrong pauses look like (`why`)."""
     pause = after.start - before.done
-    tol = op.tol + (TAP_PERIOD if op.step else 0.0)
+    tol = op.tol + op.lag + (TAP_PERIOD if op.step else 0.0)
     within = (f"+/- {TAP_PERIOD:g} s (SB1 tapped every {TAP_PERIOD:g} s) + one scan ({op.scan * 1000:.0f} ms)"
               if op.step else within_scan(op))
+    if op.rules.lag_scans:
+        within = f"({within}{lag_words(op)})"
     good = abs(pause - seconds) <= tol
     return op.c.check(rid, good, f"{op.mode}a {_secs(seconds)} s pause {within} {where}",
                       f"{pause:.2f} s" + (f": {why}" if why and not good else ""), before.done)
@@ -557,8 +608,9 @@ def task3_requirements(enable: str, remaining: str, stops: str, restarts: str,
                     "enable"),
         Requirement("T3.6", f"After that stop nothing restarts {restarts}; an SB1 press with {enable} = 1 "
                     "starts again from frame 1.", "enable"),
-        Requirement("T3.7", f"{enable} is read when the last frame's pause is over, not when the last frame is "
-                    f"reached: switched to 0 inside that pause, execution stops after it.", "last_pause"),
+        Requirement("T3.7", f"{enable} counts when the last frame's pause is over, not when the last frame is "
+                    f"reached: switched to 0 inside that pause, execution stops after it (read as a level at "
+                    f"the end of the pause, or latched from the moment it drops: both are right).", "last_pause"),
     ))
 
 

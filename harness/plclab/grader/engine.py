@@ -179,9 +179,19 @@ def _not_checked(r: Requirement, checks: Checks, scenario: str, partly: bool) ->
     return Row(r.id, r.text, False, "", f"not checked{where}: {why}", None, scenario, unchecked=bool(earlier))
 
 
-def requirement_table(stand: str, task: str) -> list[tuple[str, str]]:
-    """(id, text) of every requirement of a task, e.g. for documentation."""
-    return [(r.id, r.text) for r in requirement_set(stand, task).requirements]
+def requirement_table(stand: str, task: str, exploration: bool = False) -> list[tuple[str, str]]:
+    """(id, text) of every requirement of a task, e.g. for documentation; with `exploration`
+    also the exploration row (E1) where the stand explores the task (what `plclab grade` and
+    the hand-out list: the scenarios' rows, then E1)."""
+    table = [(r.id, r.text) for r in requirement_set(stand, task).requirements]
+    if exploration:
+        from plclab.stands.base import stand_spec
+
+        from .explore import EXPLORE_ID, row_text
+        expl = stand_spec(stand).explore
+        if expl is not None and task in expl.references:
+            table.append((EXPLORE_ID, row_text(expl, task)))
+    return table
 
 
 def task_title(stand: str, task: str) -> str:

@@ -5,10 +5,11 @@ Scripted scenarios check what their authors thought of; a student's mistake ofte
 after a console history nobody scripted (a stop followed by a second run, a restart in the
 middle of a pause). Here the stand's generator (plclab.stands.operators, declared in the
 StandSpec) writes seeded random scripts; both programs play each one; the first moment the
-stands differ beyond the stand's declared tolerances is a divergence. It is then shrunk to a
-minimal script (fewest actions, shortest holds, earliest times), written in the input-CSV
-format next to the traces, and the row names the student's ST statement that last wrote the
-first differing output in that scan.
+stands differ beyond the stand's declared tolerances and freedoms (stands.exploration.Rules,
+which the scripted rows honour too) is a divergence. It is then shrunk to a minimal script
+(fewest actions, shortest holds, earliest times; 1-minimal: each step needed), written in the
+input-CSV format next to the traces, and the row says what the operator did, what each stand
+showed and the student's ST statement that last wrote the first differing output.
 
 Deterministic and bounded: the seed is a hash of the submission's text (the same file gives
 the same report, byte for byte; in grade-class the class's, class_seed) and the budget is a
@@ -42,13 +43,15 @@ from typing import Any, Callable, Iterator, Optional, Sequence
 
 from plclab.errors import PlcLabError
 from plclab.scenario import Session, compiled_once
-from plclab.stands.operators import BLINK_END_TOL, START_S, Exploration, Observed, blink_spans
-from plclab.stands.scripts import FAULT, POWER, Event, Script, fault_params, read_script
+from plclab.stands.operators import (BLINK_END_TOL, BLINK_HALF_MAX, BLINKING, START_S, Exploration, Observed,
+                                     blink_spans)
+from plclab.stands.scripts import FAULT, POWER, Event, Script, fault_params, read_script, without
 
 SUSPECT_MARGIN = 0.1       # s: an action this close to where two drifted programs differ is ambiguous
 MOVE_SUSPECT = 0.35        # s: an ambiguous action is moved this much later and the script played again
 JITTER = 0.03             # s: how far actions are moved to tell a difference from a one-scan coincidence
 SHRINK_RUNS = 200          # default budget of the shrinker, in script plays (both programs)
+MINIMAL_RUNS = 120         # plays more to make the shrunk script 1-minimal (each step needed)
 
 
 # --------------------------------------------------------------------------- playing a script
@@ -195,6 +198,8 @@ class Divergence:
     since: float                 # the last time this signal agreed (where the line search starts)
     drift: float                 # how far the student lagged the model answer just before
     lag: float = 0.0             # late / early: by how much
+    model_since: float = 0.0     # since when each stand showed its value at `time` (its last
+    student_since: float = 0.0   # change at or before it): what each stand did, in the message
 
     def text(self, tick: float) -> str:
         o = self.signal
@@ -207,13 +212,41 @@ class Divergence:
         return first
 
 
-def _value_at(changes: list[tuple[float, Any]], t: float) -> Any:
-    v = changes[0][1]
-    for ct, cv in changes:
-        if ct > t + 1e-9:
+def story(expl: Exploration, script: Script, d: Divergence) -> str:
+    """What the operator did last, what the model answer's stand did and what the student's
+    did, in the console's words and from the compared traces only (never a cause they do not
+    show): 'after step 6 (1.59 s SB1 pressed 0.20 s) the model answer's stand showed lift down
+    (L3) from 2.93 s; yours showed lift up (L2) from 0.85 s: it did not change after that
+    step'."""
+    o = d.signal
+    steps = [(n, e) for n, e in enumerate(script.events, 1) if e.time <= d.time + 1e-9]
+    words = []
+    if steps:
+        n, e = steps[-1]
+        words.append(f"after step {n} ({e.time:.2f} s {expl.describe(e)})")
+    else:
+        words.append("before any console step")
+    words.append(f"the model answer's stand showed {o.name} {o.show(d.model)} from {d.model_since:.2f} s")
+    yours = f"yours showed {o.name} {o.show(d.student)} from {d.student_since:.2f} s"
+    if steps and d.student_since < steps[-1][1].time and d.model_since >= steps[-1][1].time:
+        yours += ": it did not change after that step"
+    elif steps and d.model_since < steps[-1][1].time <= d.student_since:
+        yours += ": the model answer's did not change after that step"
+    return f"{words[0]} {words[1]}; {yours}"
+
+
+def _last_change(changes: list[tuple[float, Any]], t: float) -> tuple[float, Any]:
+    """The change in effect at `t` (time, value): the last one at or before it."""
+    last = changes[0]
+    for c in changes:
+        if c[0] > t + 1e-9:
             break
-        v = cv
-    return v
+        last = c
+    return last
+
+
+def _value_at(changes: list[tuple[float, Any]], t: float) -> Any:
+    return _last_change(changes, t)[1]
 
 
 def _windows(script: Script, switch: str, value: int, settle: float) -> list[tuple[float, float]]:
@@ -233,6 +266,51 @@ def _windows(script: Script, switch: str, value: int, settle: float) -> list[tup
     return [(a, b) for a, b in spans if b > a]
 
 
+def _until_press(script: Script, switch: str, value: int, button: str, after: float = 0.0) -> list[tuple[float, float]]:
+    """The spans from each change of console `switch` to `value` until `button`'s first press
+    after it and `after` s more (or the switch's next change)."""
+    spans: list[tuple[float, float]] = []
+    state, start = 0, None
+    for e in script.events:
+        if e.name == button and e.is_press and start is not None:
+            spans.append((start, e.time + after))
+            start = None
+        elif e.name == switch and not e.is_press:
+            v = int(float(e.value))
+            if v != state and start is not None:
+                spans.append((start, e.time))
+                start = None
+            if v != state and v == value:
+                start = e.time
+            state = v
+    if start is not None:
+        spans.append((start, float("inf")))
+    return [(a, b) for a, b in spans if b > a]
+
+
+def _outside(windows: list[tuple[float, float]]) -> list[tuple[float, float]]:
+    """The complement of `windows` from 0 on."""
+    out, at = [], 0.0
+    for a, b in sorted(windows):
+        if a > at:
+            out.append((at, a))
+        at = max(at, b)
+    if at != float("inf"):
+        out.append((at, float("inf")))
+    return out
+
+
+def _merged(changes: list, o: Observed) -> list:
+    """`changes` without a change to a value the signal's tolerance takes for the one before (a
+    window opening on a link at rest a few codes, or for a motion-only signal any distance, from
+    where it stood)."""
+    out = changes[:1]
+    for t, v in changes[1:]:
+        if not o.equal(out[-1][1], v):
+            out.append((t, v))
+    return out
+
+
 def _in(spans: list[tuple[float, float]], t: float) -> bool:
     return any(a <= t < b for a, b in spans)
 
@@ -244,29 +322,54 @@ def _free_blinks(cm: list, cs: list, mode: list[tuple[float, float]]) -> list[tu
 
 
 def _free_after(script: Script, switch: str, conditions: tuple[tuple[str, int], ...],
-                settle: float) -> list[tuple[float, float]]:
+                settle: float, after_drop: Optional[str] = None) -> list[tuple[float, float]]:
     """From each change of `switch` while every console switch of `conditions` has its value,
-    until one of them next changes, and `settle` s after (Exploration.free_after)."""
+    until one of them next changes, and `settle` s after (Exploration.free_after). With
+    `after_drop` (a button): only from a change of `switch` back to 1 after it dropped to 0
+    since that button's last press, the conditions holding throughout (Task 3's enable dropped
+    during a run and back before the last pause ends: read as a level then, or latched from
+    its drop, the text allows both)."""
     spans: list[tuple[float, float]] = []
     level: dict[str, int] = {}
     start = None
+    dropped = False
     for e in script.events:
+        if after_drop is not None and e.name == after_drop and e.is_press:
+            dropped = False
+            continue
         if e.is_press or (e.name != switch and e.name not in dict(conditions)):
             continue
         v = int(float(e.value))
         if e.name == switch:
             changed = v != level.get(switch, 0)
             level[switch] = v
-            if changed and start is None and all(level.get(n, 0) == want for n, want in conditions):
+            held = all(level.get(n, 0) == want for n, want in conditions)
+            if after_drop is not None:
+                if changed and held and v == 0:
+                    dropped = True
+                if not (changed and held and v == 1 and dropped):
+                    continue
+            if changed and start is None and held:
                 start = e.time
         else:
-            if v != level.get(e.name, 0) and start is not None:
-                spans.append((start, e.time + settle))
-                start = None
+            if v != level.get(e.name, 0):
+                dropped = False
+                if start is not None:
+                    spans.append((start, e.time + settle))
+                    start = None
             level[e.name] = v
     if start is not None:
         spans.append((start, float("inf")))
     return spans
+
+
+def _blink_to_end(shown: list, end: float, tick: float) -> list:
+    """A lamp pattern whose last blink was still going when the script ended: the on/off state
+    its last toggle left is where the script cut it, not a state the lamp settled in (which
+    phase the two lamps stand in at END moves with END): the blink runs to the end."""
+    if len(shown) >= 3 and shown[-2][1] == BLINKING and shown[-1][0] >= end - BLINK_HALF_MAX - 2 * tick:
+        return shown[:-1]
+    return shown
 
 
 def _without(cm: list, cs: list, spans: list[tuple[float, float]]) -> tuple[list, list]:
@@ -313,20 +416,26 @@ def compare(model: dict[str, list], student: dict[str, list], observed: Sequence
     found: list[Divergence] = []
     pairs: list[tuple[float, float, Observed, float]] = []      # (tm, ts, signal, since)
     shown: dict[str, tuple[list, list]] = {}
-    free = [span for switch, conditions in expl.free_after(task) for span in
-            _free_after(script, switch, conditions, expl.settle_s)]
+    free = [span for switch, conditions, *after_drop in expl.free_after(task) for span in
+            _free_after(script, switch, conditions, expl.settle_s, *after_drop)]
     for o in observed:
         cm, cs = o.shown(model[o.name]), o.shown(student[o.name])
+        if o.pattern is not None:                   # a blink cut by the script's end: not its last state
+            cm, cs = _blink_to_end(cm, end, expl.tick_s), _blink_to_end(cs, end, expl.tick_s)
         spans = list(free)
         if o.free_blinks is not None:
             spans += _free_blinks(cm, cs, _windows(script, *o.free_blinks, 0.0))
         cm, cs = _without(cm, cs, spans)
-        if o.only_when is not None:
-            spans = _windows(script, *o.only_when)
-            cm = cm[:1] + [c for c in cm[1:] if _in(spans, c[0])]
-            cs = cs[:1] + [c for c in cs[1:] if _in(spans, c[0])]
+        if o.only_when is not None or o.until_press is not None:
+            # compared inside its windows only, each window from what both stands show as it
+            # opens (never a value left over from before it)
+            windows = _windows(script, *o.only_when) if o.only_when is not None else []
+            if o.until_press is not None:
+                windows += _until_press(script, *o.until_press)
+            cm, cs = _without(cm, cs, _outside(windows))
+            cm, cs = _merged(cm, o), _merged(cs, o)
         shown[o.name] = (cm, cs)
-        since = 0.0
+        since, moving_lag = 0.0, 0.0
         if not o.equal(cm[0][1], cs[0][1]):
             found.append(Divergence(0.0, o, cm[0][1], cs[0][1], "value", 0.0, 0.0))
             continue
@@ -334,6 +443,14 @@ def compare(model: dict[str, list], student: dict[str, list], observed: Sequence
             if k < len(cm) and k < len(cs):
                 (tm, vm), (ts, vs) = cm[k], cs[k]
                 lag = max(abs(ts - tm), abs(cs[k - 1][0] - cm[k - 1][0]) if k > 1 else 0.0)
+                if o.rest is not None:
+                    # the lag since both last stood still at the same place: a stop pressed in
+                    # the same scan on both stands leaves the later starter that much travel
+                    # short, and a link that cannot move (a stuck drive) keeps that difference
+                    if o.rest(cm[k - 1][1]) and o.rest(cs[k - 1][1]) and o.equal(cm[k - 1][1], cs[k - 1][1]):
+                        moving_lag = 0.0
+                    moving_lag = max(moving_lag, abs(ts - tm))
+                    lag = max(lag, moving_lag)
                 if not o.equal(vm, vs, lag):
                     t = max(tm, ts)
                     found.append(Divergence(t, o, vm, vs, "value", since, ts - tm))
@@ -375,8 +492,15 @@ def compare(model: dict[str, list], student: dict[str, list], observed: Sequence
     for tm, ts, _o, _s in sorted(pairs, key=lambda p: (p[0], p[1])):
         if tm < first.time:
             drift = ts - tm
+    o = first.signal                 # since when: from what each stand showed, not the windows compared
+    cm, cs = o.shown(model[o.name]), o.shown(student[o.name])
     return Divergence(first.time, first.signal, first.model, first.student, first.kind, first.since, drift,
-                      first.lag)
+                      first.lag, _since(cm, first.time), _since(cs, first.time))
+
+
+def _since(changes: list, t: float) -> float:
+    """When the value shown at `t` began (its last change at or before `t`)."""
+    return _last_change(changes, t)[0]
 
 
 def suspects(script: Script, div: Divergence, model: dict, student: dict, observed: Sequence[Observed],
@@ -662,6 +786,18 @@ def shrink(ex: Explorer, script: Script, div: Divergence, budget: int = SHRINK_R
                         break
         if (len(best.events), best.duration, sum(e.hold for e in best.events)) == before or not left():
             break
+    # 4. 1-minimal: no single action can be removed and the script still show the difference
+    #    (shorter holds and earlier times may have made an action unneeded after its removal
+    #    was tried); a budget of its own, so the report never shows a step that does not matter
+    start, budget = ex.plays, MINIMAL_RUNS
+    removed = True
+    while removed and left():
+        removed = False
+        for i in reversed(range(len(best.events))):
+            if not left():
+                break
+            if i < len(best.events) and accept(without(best, {i})):
+                removed = True
     return best, best_div
 
 
@@ -1148,10 +1284,52 @@ def model_answer(stand: str, task: str, reference: Optional[Sequence[str]]) -> t
 
 
 def row_text(expl: Exploration, task: str) -> str:
+    """E1's requirement, one sentence a student understands (the same in `--requirements`, the
+    hand-out's tasks.md and the report)."""
     observed = expl.compared(task)
     names = ", ".join(o.name for o in observed)
-    return (f"Under random operator scripts (any console action, at any moment) the stand behaves like the task's "
-            f"model answer's: {names} (timing within {expl.timing_tol:g} s).")
+    return (f"Whatever the operator does at the console, in any order and at any moment (switches, presses, "
+            f"power cycles, plant faults), your stand shows what the model answer's stand shows ({names}), "
+            f"each change within {expl.timing_tol:g} s, where the task leaves no freedom.")
+
+
+def _int_or(v: Any) -> Any:
+    return int(bool(v)) if isinstance(v, bool) else v
+
+
+def row_words(expl: Exploration, f: Finding, sources: Sequence[tuple[str, str]]) -> tuple[str, str]:
+    """E1's expected and observed texts for finding `f`: what the model answer's stand showed
+    (with the tolerance and the task's freedom), what the student's showed, what the operator
+    did and what each stand did then (`story`), the output that first differs where it does
+    not contradict what the stands show, and the statement that last wrote it."""
+    from plclab.frontend.graphical import drawing_location
+    d = f.divergence
+    o = d.signal
+    tol = f"timing +/- {expl.timing_tol:g} s" + (f", {o.tolerance}" if o.tolerance else "") + \
+        (f"; {o.freedom}" if o.freedom else "")
+    expected = f"{o.name} {o.show(d.model)} at {d.time:.2f} s, as the model answer's stand shows ({tol})"
+    observed = f"{o.name} {o.show(d.student)}"
+    if d.kind == "late":
+        observed += f": the change comes {d.lag:.2f} s later than in the model answer"
+    elif d.kind == "early":
+        observed += f": the change comes {d.lag:.2f} s earlier than in the model answer"
+    observed += f"; {story(expl, f.script, d)}"
+    # the raw output only where it says the same as the stands: a lamp is compared as it is
+    # seen (a blink's on/off at one instant says nothing), and an output differing before the
+    # difference the stands show (inside a freedom) is no evidence of it
+    consistent = o.pattern is None and d.since - 1e-9 <= f.output_time <= d.time + 1e-9
+    if (f.output is not None and f.model_output is not None and f.model_output != f.student_output
+            and consistent):
+        observed += (f"; at {f.output_time:.2f} s {f.output} = {_int_or(f.student_output)} in your program, "
+                     f"{_int_or(f.model_output)} in the model answer")
+    if f.line is not None:
+        file, line, stmt = f.line
+        drawn = drawing_location(sources, file, line)   # a plc.xml: the rung and element, not generated ST
+        if drawn is not None:
+            observed += f"; {f.output} last written in {Path(file).name}: {drawn}"
+        else:
+            observed += f"; {f.output} last written by {Path(file).name}:{line}" + (f" `{stmt}`" if stmt else "")
+    return expected, observed
 
 
 @dataclass(frozen=True)
@@ -1183,7 +1361,6 @@ def exploration_rows(req: Any, sources: Sequence[tuple[str, str]], checked: Any,
     (the shrunk script and the student's traces under it, in `out_dir`). A difference that
     plainly breaks one of the task's requirements comes with that requirement's row too, after
     E1's (the engine puts it in place of the scenarios' row if they passed it)."""
-    from plclab.frontend.graphical import drawing_location
     from plclab.stands.base import stand_spec
     from plclab.trace import write_csv, write_vcd
 
@@ -1226,27 +1403,8 @@ def exploration_rows(req: Any, sources: Sequence[tuple[str, str]], checked: Any,
             path = base / f"{req.stand}-{req.task}-explore{suffix}"
             write(s.trace, path, names=names)
             files.append(path)
+    expected, observed = row_words(expl, f, sources)
     d = f.divergence
-    o = d.signal
-    tol = f"timing +/- {expl.timing_tol:g} s" + (f", {o.tolerance}" if o.tolerance else "") + \
-        (f"; {o.freedom}" if o.freedom else "")
-    expected = f"{o.name} {o.show(d.model)} at {d.time:.2f} s, as the model answer's stand shows ({tol})"
-    observed = f"{o.name} {o.show(d.student)}"
-    if d.kind == "late":
-        observed += f": the change comes {d.lag:.2f} s later than in the model answer"
-    elif d.kind == "early":
-        observed += f": the change comes {d.lag:.2f} s earlier than in the model answer"
-    if f.output is not None and f.model_output is not None and f.model_output != f.student_output:
-        observed += (f"; at {f.output_time:.2f} s {f.output} = {int(bool(f.student_output)) if isinstance(f.student_output, bool) else f.student_output}"
-                     f" in your program, {int(bool(f.model_output)) if isinstance(f.model_output, bool) else f.model_output}"
-                     " in the model answer")
-    if f.line is not None:
-        file, line, stmt = f.line
-        drawn = drawing_location(sources, file, line)   # a plc.xml: the rung and element, not generated ST
-        if drawn is not None:
-            observed += f"; {f.output} last written in {Path(file).name}: {drawn}"
-        else:
-            observed += f"; {f.output} last written by {Path(file).name}:{line}" + (f" `{stmt}`" if stmt else "")
     steps = tuple(f.steps) + (f"-> {f.first_difference}",)
     replay = (f"replay: plclab run {req.stand} --program {' '.join(n for n, _ in sources)} --inputs "
               f"{files[0] if files else script_name} --against {req.task}")

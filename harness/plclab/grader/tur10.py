@@ -26,10 +26,11 @@ from typing import Any, Callable, Optional
 from plclab.plants.base import signed16
 from plclab.plants.tur10 import Tur10
 from plclab.scenario import ScenarioFailure, Session
+from plclab.stands.exploration import TUR10_RULES
 from plclab.stands.tur10 import STAND, labels
 from plclab.trace import Trace
 
-from .common import (DEBOUNCE, EPS, NEXT_WAIT, NO_FAULT, FrameRun, Op, basics_flow, enable_flow,
+from .common import (DEBOUNCE, EPS, NEXT_WAIT, NO_FAULT, FrameRun, Op, basics_flow, enable_flow, lag_words,
                      lamp_requirements, last_pause_flow, no_fault, pauses_flow, register_tasks, restart_flow,
                      task2_requirements, task3_requirements)
 from .registry import EVERY, Checks, Requirement, Scenario
@@ -152,6 +153,7 @@ class Tur10Op(Op[Frame]):
     watchdog = "G11"
     frame_timeout = FRAME_TIMEOUT
     timeout_tol = f"+/- {TIMEOUT_TOL:g} s + one scan"
+    rules = TUR10_RULES
 
     @property
     def scan(self) -> float:
@@ -403,12 +405,12 @@ def stops_on_press(op: Tur10Op, f1: Frame, done: float) -> None:
             return
         op.run(0.2)
         pressed = op.press(0.1)
-        settled = pressed + DEBOUNCE + op.tol
+        settled = pressed + DEBOUNCE + op.tol + op.lag
         op.run_until(settled + op.tol)
         refs = op.refs(at=settled)
         if not c.check(rid, not any(refs.values()), f"every reference 0 within {DEBOUNCE * 1000:.0f} ms + "
-                       f"one scan ({op.scan * 1000:.0f} ms) of the stop press (SB1 at t = {pressed:.2f} s during "
-                       "frame 2)", fmt_refs(refs), settled):
+                       f"one scan ({op.scan * 1000:.0f} ms{lag_words(op)}) of the stop press (SB1 at t = "
+                       f"{pressed:.2f} s during frame 2)", fmt_refs(refs), settled):
             return
         if not op.quiet(rid, settled, QUIET, "every reference stays 0 after the stop", "execution went on"):
             return

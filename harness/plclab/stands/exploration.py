@@ -15,10 +15,17 @@ TUR-10: the stand shows each link's motion (at rest, moving forward or backward,
 fast, from the drive reference the plant receives) and the position where it comes to rest
 (within a band of 40 codes: the 16-code admissible error on each side, plus a scan of
 travel; plus a link's travel at full speed in the time the two stands are apart, since a
-link stopped mid-travel by a program a little behind stands that much further on). Task 1
-writes manual mode for all five drives and leaves automatic mode as the starting program's
-(drive 1 regulated), so links 2..5 are compared in manual mode only (after 0.5 s in it) and
-never by position; Tasks 2 and 3 jog drive 1 only, as the starting program.
+link stopped mid-travel by a program a little behind stands that much further on, counted
+since the link last stood still on both stands). Task 1 is the manual mode (all five drives);
+what automatic mode then does is not its subject (one link regulated, as the starting program,
+or all five), so each link's motion is compared in manual mode (after 0.5 s in it) and in
+automatic mode only until the first SB1 press (entering it moves nothing), never by position;
+Tasks 2 and 3 jog drive 1 only, as the starting program. In Task 3 the enable coming back to 1
+after it dropped during a run leaves the rest of the run to the program (read as a level at
+the end of the last pause, or latched from its drop: Rules.enable_latched).
+
+The freedoms both the scripted rows and exploration honour are declared once per robot in
+`Rules` (MP9C_RULES, TUR10_RULES) below.
 
 HL1 on both robots is compared as the operator sees it: on, off or blinking (operators.
 lamp_pattern). A blink may begin in either phase and end up to 2.5 s apart; in manual mode how
@@ -32,10 +39,44 @@ frame adds up over a long playback).
 from __future__ import annotations
 
 import random
+from dataclasses import dataclass
 from typing import Any
 
-from plclab.stands.operators import (Console, Exploration, Observed, _Writer, aim, generate, lamp_pattern, lamp_timing,
-                                     show_lamp)
+from plclab.stands.operators import (BLINK_START_TOL, Console, Exploration, Observed, _Writer, aim, generate,
+                                     lamp_pattern, lamp_timing, show_lamp)
+
+@dataclass(frozen=True)
+class Rules:
+    """The freedoms the task texts leave a correct program and the tolerances they imply,
+    declared once per robot: the scripted rows (plclab.grader.common and .<stand>) and
+    exploration (E1: the Observed declarations below) judge by the same values, so no row can
+    fail what another one lets pass (docs/grading.md, "One rule set").
+
+    - `lag_scans`: a program may lag the model answer by this many scans at each start, stop
+      and pause (a debounce counted from the next scan, a state machine a scan longer); a row
+      that times one such step allows it on top of its own one-scan tolerance, and exploration
+      lets the lags add up to `Exploration.max_drift`.
+    - `blink_start_tol` (s): a blink may begin in either phase (lit or dark half first) and run
+      from a free-running clock (the S7-200 SM0.5 habit): it is judged by its frequency and its
+      span, its first change within half a period of its cause.
+    - `coil_drop`: a double valve's coil may drop once its mechanism has arrived (both coils off
+      keep the spool): the MP-9C's rows read the valves as their spools stand.
+    - `enable_latched`: Task 3's enable may be read as a level at the end of the last pause or
+      latched from the moment it drops during a run (the text allows both).
+    - `automatic_subject`: the tasks whose subject includes automatic mode; elsewhere (the
+      TUR-10's Task 1, the manual mode) exploration compares automatic mode only until its first
+      SB1 press (entering it moves nothing)."""
+
+    lag_scans: int = 1
+    blink_start_tol: float = BLINK_START_TOL
+    coil_drop: bool = False
+    enable_latched: bool = True
+    automatic_subject: tuple[str, ...] = ("task1", "task2", "task3")
+
+
+MP9C_RULES = Rules(coil_drop=True)
+TUR10_RULES = Rules(automatic_subject=("task2", "task3"))
+
 
 def _hl1(mode_switch: str) -> Observed:
     """HL1 as the operator sees it: on, off or blinking. Left open by the tasks: the phase a
@@ -107,10 +148,20 @@ def _mp9c_free_after(task: str) -> tuple[tuple[str, tuple[tuple[str, int], ...]]
     """SA6 flipped in automatic mode (read "at frame boundaries": the next pause's start or
     end, or a press); in Task 3 also I0.7 changed in step mode: whether the press that begins
     frame 1 again after the wrap is "a start" that needs I0.7 = 1 the task leaves open."""
-    free: tuple[tuple[str, tuple[tuple[str, int], ...]], ...] = (("SA6", (("SA1", 1),)),)
+    free: tuple[tuple[Any, ...], ...] = (("SA6", (("SA1", 1),)),)
     if task == "task3":
         free += (("I07", (("SA1", 1), ("SA6", 1))),)
+        if MP9C_RULES.enable_latched:
+            free += _enable_back("I07", "SA1")
     return free
+
+
+def _enable_back(enable: str, mode: str) -> tuple[tuple[Any, ...], ...]:
+    """Task 3's enable back to 1 after it dropped during a run (since the last SB1 press), in
+    automatic mode: a program may read it as a level at the end of the last pause or have
+    latched its drop (Rules.enable_latched), so nothing is compared from there until the
+    robot leaves automatic mode."""
+    return ((enable, ((mode, 1),), "SB1"),)
 
 
 MP9C = Exploration(
@@ -133,6 +184,7 @@ TUR10_BAND = 40          # codes: rest positions compared within this band
 TUR10_TOP_SPEED = 6000   # codes/s: a link at full reference (1500, the drive's 4 codes/s per unit)
 _SLOW, _STILL = 700, 50  # |reference| above _STILL moves; up to _SLOW is the low speed
 _AUTO_STILL = 400        # in automatic mode: |reference| above this moves (the regulator's profile is free)
+TUR10_START_S = 0.0      # s: Task 1 compares link 1 this long after the first press (0: until the press)
 
 
 def _tur10_teach(w: _Writer, task: str) -> None:
@@ -207,16 +259,29 @@ def _same_link(a: Any, b: Any, extra: float = 0.0) -> bool:
     return a[0] == b[0] and abs(a[1] - b[1]) <= TUR10_BAND + extra
 
 
+def _at_rest(v: Any) -> bool:
+    return v[0] == 0
+
+
 def _same_motion(a: Any, b: Any) -> bool:
     return a[0] == b[0]
 
 
 def _tur10_compared(task: str) -> tuple[Observed, ...]:
-    out = [Observed("link1", _show_link, ("DRIVE1",), _same_link, lag_band=TUR10_TOP_SPEED,
-                    tolerance=f"+/- {TUR10_BAND} codes, plus a link's travel in the time the two stands are apart")]
-    if task == "task1":
-        out += [Observed(f"link{k}", _show_link, (f"DRIVE{k}",), _same_motion, only_when=("SA7", 0, 0.5))
-                for k in (2, 3, 4, 5)]
+    if task not in TUR10_RULES.automatic_subject:
+        # Task 1 is the manual mode: each link's motion there; in automatic mode only that
+        # entering it moves nothing until SB1 is pressed (what playback does then -- one link
+        # regulated as the starting program, or all five -- is not the task's subject)
+        # link 1 also while the press starts frame 1 (TUR10_START_S: the regulator's ramp and a
+        # link's start), links 2..5 (regulated or not) only until the press
+        out = [Observed(f"link{k}", _show_link, (f"DRIVE{k}",), _same_motion, only_when=("SA7", 0, 0.5),
+                        until_press=("SA7", 1, "SB1", TUR10_START_S if k == 1 else 0.0),
+                        freedom="in automatic mode compared only until the first SB1 press starts frame 1")
+               for k in (1, 2, 3, 4, 5)]
+    else:
+        out = [Observed("link1", _show_link, ("DRIVE1",), _same_link, lag_band=TUR10_TOP_SPEED, rest=_at_rest,
+                        tolerance=f"+/- {TUR10_BAND} codes, plus a link's travel in the time the two stands "
+                                  "are apart")]
     out.append(_hl1("SA7"))
     return tuple(out)
 
@@ -227,6 +292,7 @@ TUR10 = Exploration(
     observe=_tur10_observe, compared=_tur10_compared,
     references={"task1": "task1", "task2": "task2", "task3": "task3"},
     buttons=("SB1",) + tuple(f"SA{k}_{d}" for k in (1, 2, 3, 4, 5) for d in ("FWD", "BWD")),
+    free_after=lambda task: _enable_back("I15", "SA7") if task == "task3" and TUR10_RULES.enable_latched else (),
     meaning={"SA7": ("manual", "automatic"), "SA6": ("normal speed", "low speed"),
              "I15": ("spare input off", "spare input on")},
     state_paths=MODEL_STATE, timing_tol=0.2, max_drift=5.0, drift_rate=0.12, episode_s=60.0, episodes=50,

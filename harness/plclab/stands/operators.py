@@ -64,6 +64,15 @@ class Observed:
     # more per second of lag (a link stopped mid-travel by a program a scan later stands
     # a scan's travel further on)
     lag_band: float = 0.0
+    # a value where the thing shown stands still (a link at rest): a rest value is judged with
+    # the largest lag the two stands had since each last stood still (a link started a scan
+    # later and stopped by a press in the same scan on both stands stands a scan's travel short)
+    rest: Optional[Callable[[Any], bool]] = None
+    # (switch, value, button, after_s): also compared from each change of the console switch to
+    # that value until the button's first press after it and after_s more (the TUR-10's Task 1:
+    # entering automatic mode moves nothing and a press starts frame 1; what playback then does
+    # is not the task's subject)
+    until_press: Optional[tuple[str, int, str, float]] = None
 
     def equal(self, a: Any, b: Any, lag: float = 0.0) -> bool:
         if self.same is None:
