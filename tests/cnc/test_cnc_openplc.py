@@ -146,3 +146,28 @@ def test_console_part_refuses_bad_input_before_sending_anything(tmp_path, capsys
     assert main(["console", "mp9c", "127.0.0.1:1", "--part", str(bad)]) == 1
     assert capsys.readouterr().err == "plclab: error: console: --part is for the cnc stand (a G-code part " \
                                       "program), not mp9c\n"
+
+
+def test_the_tape_readout_counts_a_new_tape_from_its_load_not_the_last_one_s_count():
+    """The console face's `tape` readout is what `plclab console cnc --part` waits on: loading a
+    tape of the same length as one the PLC stored whole must show 0 at once, not the last
+    tape's count until the next PSM exchange (a fast PLC storing the new tape between two
+    reads of the console would otherwise look like no exchange at all)."""
+    from plclab.modbus.console import ConsoleMap
+    from plclab.modbus.protocol import Table
+    from plclab.plants.cnc import CncTable
+    from plclab.plants.host import PlantHost
+
+    host = PlantHost(CncTable())
+    face = ConsoleMap(host)
+    frames = [(1, 200, 0, 0, 0, 0, 500, 0, 0), (1, 0, 100, 0, 0, 0, 500, 0, 0)]
+    tape = [len(frames), 0] + [v for frame in frames for v in frame]
+    at = [name for name, _unit in CncTable.FACE.readouts].index("tape")
+    for _load in range(2):
+        face.write(Table.HOLDING_REGISTERS, 1, tuple(tape[1:]))
+        face.write(Table.HOLDING_REGISTERS, 0, (tape[0],))          # loads the tape
+        assert face.read(Table.INPUT_REGISTERS, at, 1) == [0]         # none of this tape stored yet
+        ack = 0
+        for _scan in range(6):                                       # the PLC stores what is shown
+            ack = host.exchange({"QW4": ack}).get("IW4", ack)
+        assert face.read(Table.INPUT_REGISTERS, at, 1) == [2]

@@ -109,11 +109,18 @@ class PlantHost:
 
     def load_tape(self, method: int, frames: list[tuple[int, ...]]) -> None:
         """Put a part program on the plant's tape reader (FACE.tape); a bad tape raises the
-        plant's PlantError (a ValueError), a failed plant a ValueError too: nothing is loaded."""
+        plant's PlantError (a ValueError), a failed plant a ValueError too: nothing is loaded.
+        The readouts are taken afresh: from the moment it is loaded, the `tape` readout counts
+        this tape's stored frames (0), never the last tape's until the PLC's next exchange, so
+        a reader of the face cannot take the last tape's count for this one's."""
         with self._lock:
             if self.fault is not None:
                 raise ValueError(f"the plant has failed ({self.fault})")
             self.plant.load_tape(method, frames)
+            try:
+                self._readouts = list(self.plant.readouts())
+            except Exception as exc:  # noqa: BLE001 - as in a step: freeze, report, go on
+                self._freeze(exc)
 
     def lamps(self) -> list[int]:
         """The FACE lamps (PLC outputs of the last exchange), then the plant fault lamp."""
