@@ -29,7 +29,7 @@ import re
 from dataclasses import dataclass
 from typing import Any, Callable, Optional, Sequence
 
-from plclab.runtime.tracing import WILD, StopReplay, Tracer, matches, state_walk
+from plclab.runtime.tracing import WILD, StateReader, StopReplay, Tracer, matches
 
 MAX_CANDIDATES = 3
 SCRATCH_SHARE = 0.5       # under this share of the starting program's lines kept: rewritten from scratch
@@ -190,7 +190,7 @@ def backward_slice(tracer: Tracer, criterion: Sequence[tuple], mapped: Callable[
                 if not paths:
                     continue
                 for p in list(paths):
-                    if matches(k, (k[0], p)):
+                    if p == k[1] or matches(k, (k[0], p)):
                         d = paths[p] if d is None else min(d, paths[p])
                         if strong and p == k[1]:
                             del paths[p]
@@ -242,10 +242,11 @@ class StateLog:
         self.paths: dict[int, str] = {}
         self._last: dict[str, Any] = {}
         self._norm: Optional[dict[str, list[str]]] = None
+        self._reader = StateReader()
 
     def record(self, t: float, plc: Any) -> None:
-        values, paths = state_walk(plc)
-        self.paths.update(paths)
+        values = self._reader.read(plc)
+        self.paths.update(self._reader.paths)
         last = self._last
         for k, v in values.items():
             if k not in last or last[k] != v or type(last[k]) is not type(v):
@@ -321,12 +322,14 @@ def _pattern(base: str, path: str) -> str:
 
 def rank(tracer: Tracer, sl: Slice, failing_scans: set[int], sources: Sequence[tuple[str, str]],
          changed: Optional[set], student: Optional[StateLog] = None, model: Optional[StateLog] = None,
-         limit: int = MAX_CANDIDATES) -> list[Candidate]:
+         limit: int = MAX_CANDIDATES, inputs: frozenset = frozenset()) -> list[Candidate]:
     """The statements on slice `sl`, ranked (see the module docstring). `changed`: the
     student's changed (file, line)s, None for a program rewritten from scratch. A statement is
     changed when any of its lines is (the lines up to the next statement's). With both runs'
     states (`student`, `model`), a statement whose storage departs from the model answer's
-    earlier ranks first (the first departure is the cause, the later ones its effects)."""
+    earlier ranks first (the first departure is the cause, the later ones its effects).
+    `inputs`: storage keys the I/O image writes (a located input's declaration is never a
+    candidate: what it reads is the stand's doing)."""
     import bisect
     compiled = tracer.compiled
     texts = {name: text.splitlines() for name, text in sources}
@@ -379,6 +382,8 @@ def rank(tracer: Tracer, sl: Slice, failing_scans: set[int], sources: Sequence[t
     decls = declaration_lines(compiled.source)
     for (oid, path), d in sl.before.items():
         cls = tracer.types.get(oid)
+        if (oid, path) in inputs:
+            continue
         if cls is None:
             continue
         attr = re.split(r"[.\[]", path)[0] if path else ""
@@ -507,7 +512,8 @@ def localize(student: Any, model: Optional[Any], replay: Replay, output: Optiona
         ch, kept = changed_lines(sources, start)
         if kept >= SCRATCH_SHARE:
             changed, scratch = ch, False
-    cands = rank(tracer, sl, failing, sources, changed, slog, mlog if model is not None else None)
+    inputs = frozenset((id(b.owner), b.attr) for b in student.plc.bindings if b.is_input)
+    cands = rank(tracer, sl, failing, sources, changed, slog, mlog if model is not None else None, inputs=inputs)
     writer = None
     for eid in reversed(tracer.order):                 # the last statement that wrote the output
         if sl.steps.get(eid) == 0 and (info := compiled.where(tracer.events[eid].line)) is not None:

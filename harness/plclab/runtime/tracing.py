@@ -211,31 +211,46 @@ class Tracer:
         self._calls = 0
         self._frames: dict[int, dict] = {}             # id(frame) -> per-call state
         self._old: Any = None
+        self._slotsets: dict[type, frozenset] = {}
 
     # ---------------------------------------------------------------- storage keys
     def _obj_key(self, obj: Any, path: str) -> tuple:
         self.types[id(obj)] = type(obj)
         return (id(obj), path)
 
+    def _slotset(self, cls: type) -> frozenset:
+        got = self._slotsets.get(cls)
+        if got is None:
+            got = self._slotsets[cls] = frozenset(_slots(cls)) if hasattr(cls, "__slots__") else frozenset()
+        return got
+
     def key(self, frame: Any, st: dict, root: str, path: str, write: bool) -> Optional[tuple]:
-        loc = frame.f_locals
-        if root in loc:
-            obj = loc[root]
-        elif root == "G" or root in frame.f_globals and not root.startswith("_") and path:
-            obj = frame.f_globals.get(root)
-            if obj is None or isinstance(obj, _PRIMITIVE) or callable(obj) and not hasattr(obj, "__dict__"):
-                return None
-        elif write or root.startswith("_") or root.startswith("v_"):
+        """The storage key of `root.path` in `frame` (None: a constant, a function, a module's
+        own name). A POU's `v_X` mirrors `self.X` (an object: the same one), so `self` is
+        enough to name it and the frame's locals are read only in a function (FC)."""
+        me = st["self"]
+        if root == "self":
+            obj = me
+        elif root.startswith("v_") and me is not None and root[2:] in self._slotset(type(me)):
+            obj = getattr(me, root[2:], None)
+            if not path and (write or isinstance(obj, _PRIMITIVE)):
+                return self._obj_key(me, root[2:])
+        elif root.startswith("_") and not path:
             return ("L", st["call"], root)
+        elif root == "G" or (not root.startswith("v_") and root in frame.f_globals):
+            obj = frame.f_globals.get(root)
+            if not path or obj is None or isinstance(obj, _PRIMITIVE) or callable(obj) and not hasattr(obj, "__dict__"):
+                return None
         else:
-            return None
-        if not path:
-            if isinstance(obj, _PRIMITIVE) or write:
-                me = loc.get("self")
-                if root.startswith("v_") and me is not None and hasattr(type(me), "__slots__") \
-                        and root[2:] in type(me).__slots__:
-                    return self._obj_key(me, root[2:])
+            loc = frame.f_locals
+            if root not in loc:
+                return ("L", st["call"], root) if write or root.startswith(("_", "v_")) else None
+            obj = loc[root]
+            if not path and (write or isinstance(obj, _PRIMITIVE)):
                 return ("L", st["call"], root)
+        if obj is None:
+            return ("L", st["call"], root)
+        if not path:
             return self._obj_key(obj, "")
         # walk plain attributes down to the last object
         rest = path
@@ -287,7 +302,7 @@ class Tracer:
         caller = self._frames.get(id(back)) if back is not None else None
         self._calls += 1
         st = {"call": self._calls, "parent": caller.get("pending") if caller else None, "headers": {},
-              "pending": None, "caller": caller}
+              "pending": None, "caller": caller, "self": frame.f_locals.get("self")}
         self._frames[id(frame)] = st
         return self._local
 
@@ -354,36 +369,61 @@ def _slots(cls: type) -> list[str]:
     return out
 
 
-def state_walk(plc: Any, max_depth: int = 8) -> tuple[dict[str, Any], dict[int, str]]:
+class StateReader:
     """Every elementary value of the running program by its instance path (`MAIN.ROBOT.PAUSE.
-    DURATION`, `MAIN.CP.FRAMES[3].PAUSE`, globals as `G.SA1`) and each object's path (id ->
-    path, the first path that reaches a shared VAR_IN_OUT object). Two programs that descend
+    DURATION`, `MAIN.CP.FRAMES[3].PAUSE`, globals as `G.SA1`), read as often as each scan: the
+    objects are walked once and again only when one of them was replaced (a restart, a whole
+    struct assigned), their leaves kept as (container, key, path). `paths`: each object's path
+    (id -> the first path that reaches a shared VAR_IN_OUT object). Two programs descended
     from one starting program share the names of what they kept of it."""
-    values: dict[str, Any] = {}
-    paths: dict[int, str] = {}
 
-    def walk(obj: Any, path: str, depth: int) -> None:
-        if isinstance(obj, _PRIMITIVE):
-            values[path] = obj
-            return
-        if id(obj) in paths or depth > max_depth:
-            return
-        if isinstance(obj, list):
+    def __init__(self, max_depth: int = 8) -> None:
+        self.max_depth = max_depth
+        self.leaves: list[tuple[Any, Any, str]] = []
+        self.edges: list[tuple[Any, Any, Any]] = []     # (container, key, the object it held)
+        self.paths: dict[int, str] = {}
+        self._plc: Any = None
+
+    def read(self, plc: Any) -> dict[str, Any]:
+        if plc is not self._plc or any(_get(c, k) is not o for c, k, o in self.edges):
+            self._plc = plc
+            self._walk(plc)
+        return {path: _get(c, k) for c, k, path in self.leaves}
+
+    def _walk(self, plc: Any) -> None:
+        leaves: list[tuple[Any, Any, str]] = []
+        edges: list[tuple[Any, Any, Any]] = [(plc, "G", plc.G)]
+        paths: dict[int, str] = {}
+
+        def walk(obj: Any, path: str, depth: int, container: Any, key: Any) -> None:
+            if isinstance(obj, _PRIMITIVE):
+                leaves.append((container, key, path))
+                return
+            if container is not None:
+                edges.append((container, key, obj))
+            if id(obj) in paths or depth > self.max_depth:
+                return
+            if isinstance(obj, list):
+                paths[id(obj)] = path
+                for i, x in enumerate(obj):
+                    walk(x, f"{path}[{i}]", depth + 1, obj, i)
+                return
+            slots = _slots(type(obj)) if hasattr(type(obj), "__slots__") else \
+                [k for k in getattr(obj, "__dict__", {}) if not k.startswith("_")]
+            if not slots:
+                return
             paths[id(obj)] = path
-            for i, x in enumerate(obj):
-                walk(x, f"{path}[{i}]", depth + 1)
-            return
-        slots = _slots(type(obj)) if hasattr(type(obj), "__slots__") else \
-            [k for k in getattr(obj, "__dict__", {}) if not k.startswith("_")]
-        if not slots:
-            return
-        paths[id(obj)] = path
-        for name in slots:
-            if name in ("EN", "ENO") or name.startswith("_"):
-                continue
-            walk(getattr(obj, name, None), f"{path}.{name}", depth + 1)
+            for name in slots:
+                if name in ("EN", "ENO") or name.startswith("_"):
+                    continue
+                walk(getattr(obj, name, None), f"{path}.{name}", depth + 1, obj, name)
 
-    walk(plc.G, "G", 0)
-    for inst in plc.instances:
-        walk(inst.obj, inst.name.upper(), 0)
-    return values, paths
+        walk(plc.G, "G", 0, None, None)
+        for inst in plc.instances:
+            edges.append((inst, "obj", inst.obj))
+            walk(inst.obj, inst.name.upper(), 0, None, None)
+        self.leaves, self.edges, self.paths = leaves, edges, paths
+
+
+def _get(container: Any, key: Any) -> Any:
+    return container[key] if isinstance(key, int) else getattr(container, key, None)
