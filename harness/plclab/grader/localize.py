@@ -565,6 +565,7 @@ def _traced(session: Any, tracer: Tracer, replay: Replay) -> None:
     finally:
         if started:
             tracer.stop()
+    session.run(0)          # no scan: the session's trace takes what its stand recorded up to the stop
 
 
 def output_attr(session: Any, label: str) -> Optional[tuple[Any, str]]:
