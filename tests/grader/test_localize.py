@@ -6,6 +6,7 @@ from __future__ import annotations
 import pytest
 
 from plclab.frontend import check_sources
+from plclab.grader.report import GradeReport, Row
 from plclab.grader.localize import (StateLog, backward_slice, changed_lines, ochiai, pou_lines, rank)
 from plclab.runtime.compiler import compile_unit
 from plclab.runtime.plc import PLC
@@ -245,6 +246,20 @@ END_PROGRAM
     cands = rank(tr, sl, failing, [("t.st", src)], None, limit=3)
     assert cands[0].line == _line(src, "late := TRUE")      # runs only in the failing scans
     assert cands[0].suspicion == 1.0
+
+
+def test_a_failing_row_lists_the_lines_most_likely_first_and_the_last_writer_last():
+    row = Row("T2.2", "The pause recorded with a frame is held after it.", False, "3.00 s", "1.00 s", 12.5, "pauses",
+              lines=("robot.st:308 `Pause(Start := TRUE, Duration := T#1s, Cancel := FALSE);`",
+                     "robot.st:265 `Cp.Frames[Cp.Count].Pause := SEL(G := I07, IN0 := T#1s, IN1 := T#3s);`"),
+              written="L2 last written by robot.st:463 `L2 := FC_BitOf(Valves, 1);`")
+    text = GradeReport("mp9c", "task2", "MP-9C, Task 2", ["robot.st"], rows=[row]).text().splitlines()
+    at = next(n for n, line in enumerate(text) if "where to look, most likely first:" in line)
+    assert text[at + 1].strip().startswith("1. robot.st:308 `Pause(")
+    assert any(line.strip().startswith("2. robot.st:265") for line in text[at + 2:at + 4])
+    detail_end = next(n for n in range(at, len(text)) if not text[n].strip())
+    assert text[detail_end - 1].strip() == "L2 last written by robot.st:463 `L2 := FC_BitOf(Valves, 1);`"
+    assert all(len(line) <= 100 for line in text)
 
 
 def test_the_changed_line_is_named_by_most_failing_reports_of_the_one_mistake_fixtures(capsys):

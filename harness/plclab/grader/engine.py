@@ -119,11 +119,14 @@ def grade_sources(stand: str, task: str, sources: Sequence[tuple[str, str]],
     return report
 
 
+MAX_LOCALIZED = 2      # failing scripted moments (scenario, time) given their lines per grade: each costs two replays
+
+
 def _with_lines(req: RequirementSet, rows: list[Row], sources: Sequence[tuple[str, str]], checked: object,
                 reference: Optional[Sequence[str]]) -> list[Row]:
     """`rows` with each failing scripted row naming the student's statements where the mistake
     most likely is and the output's last writer (plclab.grader.localize), where the task has a
-    model answer to replay its scenario on."""
+    model answer to replay its scenario on (the first MAX_LOCALIZED failing moments)."""
     from .explore import model_answer
     from .localize import scripted, written_text
     failing = [r for r in rows if not r.passed and not r.internal and not r.unchecked and r.time is not None
@@ -138,6 +141,9 @@ def _with_lines(req: RequirementSet, rows: list[Row], sources: Sequence[tuple[st
     for r in rows:
         if r in failing:
             key = (r.scenario, round(r.time, 6))
+            if key not in found and len(found) >= MAX_LOCALIZED:
+                out.append(r)
+                continue
             if key not in found:
                 scenario = next(sc for sc in req.scenarios if sc.name == r.scenario)
                 found[key] = scripted(req, scenario, sources, checked, model, r.time)
