@@ -146,7 +146,7 @@ def _with_lines(req: RequirementSet, rows: list[Row], sources: Sequence[tuple[st
                 continue
             if key not in found:
                 scenario = next(sc for sc in req.scenarios if sc.name == r.scenario)
-                found[key] = scripted(req, scenario, sources, checked, model, r.time)
+                found[key] = scripted(req, scenario, sources, checked, model, r.time, f"{r.expected} | {r.observed}")
             loc = found[key]
             if loc is not None and (loc.candidates or loc.writer):
                 r = dataclasses.replace(r, lines=tuple(c.where(sources) for c in loc.candidates),

@@ -47,6 +47,7 @@ class Candidate:
     distance: int          # dependence steps from the output's value
     suspicion: float       # Ochiai score over the traced scans (0..1)
     changed: bool          # changed from the starting program
+    departed: Optional[float] = None   # when its values first departed from the model answer's
 
     def where(self, sources: Sequence[tuple[str, str]] = ()) -> str:
         """`FILE.st:LINE `statement`` or, for a drawn (ladder / FBD) program, its rung and element."""
@@ -391,32 +392,29 @@ def rank(tracer: Tracer, sl: Slice, failing_scans: set[int], sources: Sequence[t
         if line is not None:
             consider(line, d + 1, [(oid, attr)], None)
 
-    times: dict[tuple[str, int], Optional[float]] = {}
+    times: dict[tuple[str, int], Optional[tuple[float, int]]] = {}
 
-    def departure(k: tuple) -> tuple[int, float]:
-        """(0, t): its storage departs from the model answer's at t; (1, 0): nothing to compare
-        (a new variable, a condition); (2, 0): it never departs."""
+    def departure(k: tuple) -> tuple[int, float, int]:
+        """(0, t, own): its values depart from the model answer's at t (own 0: its storage, 1: a
+        condition, by the statements it runs); (1, 0, 0): nothing to compare (a new variable);
+        (2, 0, 0): it never departs."""
         if student is None or model is None:
-            return 1, 0.0
+            return 1, 0.0, 0
         if k not in times:
+            times[k] = None                        # a cycle of conditions: nothing known
             patterns = best[k][2]
             if not patterns:
-                kids = [departure(c) for c in best[k][3] if c != k]
-                known = [t for cls, t in kids if cls == 0]
-                times[k] = min(known) if known else None
-                if times[k] is None:
-                    return 1, 0.0
+                known = [t for cls, t, _o in (departure(c) for c in best[k][3] if c != k) if cls == 0]
+                times[k] = (min(known), 1) if known else None
             else:
                 paths = [p for pat in patterns for p in student.matching(pat)]
-                if not any(p in model.changes for p in paths):
-                    times[k] = None
-                    return 1, 0.0
-                t = first_divergence(student, model, paths)
-                times[k] = t if t is not None else float("inf")
-        t = times[k]
-        if t is None:
-            return 1, 0.0
-        return (2, 0.0) if t == float("inf") else (0, t)
+                if any(p in model.changes for p in paths):
+                    t = first_divergence(student, model, paths)
+                    times[k] = (t if t is not None else float("inf"), 0)
+        got = times[k]
+        if got is None:
+            return 1, 0.0, 0
+        return (2, 0.0, 0) if got[0] == float("inf") else (0, got[0], got[1])
 
     out = []
     for (file, line), (d, pou, _w, _kids) in best.items():
@@ -426,13 +424,15 @@ def rank(tracer: Tracer, sl: Slice, failing_scans: set[int], sources: Sequence[t
         score = ochiai(ef, len(scans) - ef, total_failed)
         lines = texts.get(file, [])
         text = lines[line - 1].strip() if 0 < line <= len(lines) else ""
-        out.append((departure((file, line)), Candidate(file, line, text, pou, d, score, is_changed)))
+        dep = departure((file, line))
+        out.append((dep, Candidate(file, line, text, pou, d, score, is_changed, dep[1] if dep[0] == 0 else None)))
     if changed is None:
         out.sort(key=lambda x: (-x[1].suspicion, x[0], x[1].distance, x[1].file, x[1].line))
         return [c for _k, c in out[:limit]]
-    # departed at the same scan: the one further up the path is the cause (values flow down it
-    # within the scan); nothing to compare: nearest to the output first
-    out.sort(key=lambda x: (x[0][0], x[0][1], -x[1].distance if x[0][0] == 0 else x[1].distance,
+    # departed at the same scan: a statement's own values before a condition's (which departs
+    # by what it runs), the one further up the path first (values flow down it within the
+    # scan); nothing to compare: nearest to the output first
+    out.sort(key=lambda x: (x[0][0], x[0][1], x[0][2], -x[1].distance if x[0][0] == 0 else x[1].distance,
                             -x[1].suspicion, x[1].file, x[1].line))
     ranked = [c for _k, c in out if c.changed]
     # the first departure from the model answer, where the student left the starting program's
@@ -466,12 +466,14 @@ Replay = Callable[[Any, Callable[[], None]], None]
 
 def localize(student: Any, model: Optional[Any], replay: Replay, output: Optional[str], t_fail: float,
              sources: Sequence[tuple[str, str]], start: Optional[Sequence[tuple[str, str]]],
-             window: float = WINDOW_S) -> Optional[Localized]:
+             window: float = WINDOW_S, hints: Sequence[str] = ()) -> Optional[Localized]:
     """Replay a failing run on session `student`, traced from `window` s before `t_fail` to the
     scan at `t_fail` (`replay(session, start_tracer)` plays the run and calls `start_tracer()`
     at its start or any time up to `t_fail - window`; it is stopped by StopReplay after
     `t_fail`), slice output label `output` (None: the output that differs from the model
-    answer's at `t_fail`) and rank its statements. `model`: a fresh session of the model answer,
+    answer's at `t_fail`; of those, one of `hints` first, the outputs the failing row speaks of,
+    and one of them when none differs: an adaptive scenario may see the model answer's stand
+    at another point then) and rank its statements. `model`: a fresh session of the model answer,
     replayed the same way: its outputs tell the failing scans (the spectrum) and its state is
     compared with the student's (None: neither). `start`: the starting program's sources
     (None: unknown, ranked as a program rewritten from scratch)."""
@@ -491,7 +493,10 @@ def localize(student: Any, model: Optional[Any], replay: Replay, output: Optiona
         _traced(model, Tracer(model.plc.compiled, lambda: model.now, lines=False, since=t0, stop_at=t_fail,
                               sample=lambda: mlog.record(model.now, model.plc)), replay)
         if output is None:
-            output = differing_output(student, model, labels, t_fail)
+            output = differing_output(student, model, [k for k in hints if k in labels], t_fail) or \
+                differing_output(student, model, labels, t_fail)
+    if output is None:
+        output = next((k for k in hints if k in labels), None)
     if output is None or output not in labels:
         return None
     target = output_attr(student, output)
@@ -585,7 +590,7 @@ def output_attr(session: Any, label: str) -> Optional[tuple[Any, str]]:
 
 
 def candidates(student: Any, model: Optional[Any], replay: Replay, output: Optional[str], t_fail: float,
-               sources: Sequence[tuple[str, str]], stand: Optional[str]) -> Optional[Localized]:
+               sources: Sequence[tuple[str, str]], stand: Optional[str], hints: Sequence[str] = ()) -> Optional[Localized]:
     """`localize` against `stand`'s starting program; None where nothing can be said. Never
     raises: a failing row is reported whether or not its line is found, and a bug here is
     never the student's (it shows as no candidates, and the tests measure how often the
@@ -597,17 +602,18 @@ def candidates(student: Any, model: Optional[Any], replay: Replay, output: Optio
     except Exception:                    # noqa: BLE001 - an installed package without the stand's sources
         start = None
     try:
-        return localize(student, model, replay, output, t_fail, sources, start)
+        return localize(student, model, replay, output, t_fail, sources, start, hints=hints)
     except Exception:                    # noqa: BLE001 - the row stands without its candidates
         return None
 
 
 def scripted(req: Any, scenario: Any, sources: Sequence[tuple[str, str]], checked: Any, model: Any,
-             t_fail: float) -> Optional[Localized]:
+             t_fail: float, message: str = "") -> Optional[Localized]:
     """The candidates of a scripted row that failed at plant time `t_fail` in `scenario` (of
     requirement set `req`): the scenario is played again on the student's program (traced) and
     on the model answer (`model`: sources, checked, cache, as plclab.grader.explore.Program),
-    each on a fresh stand, to the failure; the output followed is the one that differs then."""
+    each on a fresh stand, to the failure; the output followed is the one that differs then,
+    one the row's `message` (its expected and observed texts) names first."""
     import tempfile
     from pathlib import Path
 
@@ -634,7 +640,7 @@ def scripted(req: Any, scenario: Any, sources: Sequence[tuple[str, str]], checke
                 except ScenarioFailure:
                     pass
 
-        return candidates(student, other, replay, None, t_fail, sources, req.stand)
+        return candidates(student, other, replay, None, t_fail, sources, req.stand, hints=named_outputs(message))
 
 
 def written_text(output: Optional[str], writer: Optional[tuple[str, int, str]], sources: Sequence[tuple[str, str]]) -> str:
@@ -650,3 +656,14 @@ def written_text(output: Optional[str], writer: Optional[tuple[str, int, str]], 
     if drawn is not None:
         return f"{output} last written in {Path(file).name}: {drawn}"
     return f"{output} last written by {Path(file).name}:{line}" + (f" `{stmt}`" if stmt else "")
+
+
+def named_outputs(message: str) -> list[str]:
+    """The labels a row's message names with a value (`L2=0 L3=1 | L2=1 L3=0`), those whose
+    values differ between its parts first."""
+    parts = [dict(re.findall(r"\b([A-Za-z]+\d*)\s*=\s*(\w+)", part)) for part in message.split(" | ")]
+    seen: list[str] = []
+    for part in parts:
+        seen += [k for k in part if k not in seen]
+    differ = [k for k in seen if len({p.get(k) for p in parts}) > 1]
+    return differ + [k for k in seen if k not in differ]

@@ -388,7 +388,11 @@ class StateReader:
         if plc is not self._plc or any(_get(c, k) is not o for c, k, o in self.edges):
             self._plc = plc
             self._walk(plc)
-        return {path: _get(c, k) for c, k, path in self.leaves}
+        out = {path: _get(c, k) for c, k, path in self.leaves}
+        if any(not isinstance(v, _PRIMITIVE) for v in out.values()):    # a reference bound since
+            self._walk(plc)
+            out = {path: _get(c, k) for c, k, path in self.leaves}
+        return out
 
     def _walk(self, plc: Any) -> None:
         leaves: list[tuple[Any, Any, str]] = []
@@ -408,8 +412,7 @@ class StateReader:
                 for i, x in enumerate(obj):
                     walk(x, f"{path}[{i}]", depth + 1, obj, i)
                 return
-            slots = _slots(type(obj)) if hasattr(type(obj), "__slots__") else \
-                [k for k in getattr(obj, "__dict__", {}) if not k.startswith("_")]
+            slots = _fields(obj)
             if not slots:
                 return
             paths[id(obj)] = path
@@ -423,6 +426,13 @@ class StateReader:
             edges.append((inst, "obj", inst.obj))
             walk(inst.obj, inst.name.upper(), 0, None, None)
         self.leaves, self.edges, self.paths = leaves, edges, paths
+
+
+def _fields(obj: Any) -> list[str]:
+    """An object's variables: its slots, and what its __dict__ holds (a struct value)."""
+    names = [n for n in _slots(type(obj)) if n not in ("__dict__", "__weakref__")]
+    names += [k for k in getattr(obj, "__dict__", {}) if k not in names]
+    return [n for n in names if not n.startswith("_")]
 
 
 def _get(container: Any, key: Any) -> Any:
