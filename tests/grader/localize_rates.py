@@ -55,13 +55,16 @@ def cases() -> list[Case]:
 
 def changed_lines(text: str, base: str) -> set[int]:
     """The fixture's lines (1-based) that its edits changed: not in an equal block of a line
-    diff against the bundle it was made from (its header comment left out)."""
+    diff against the bundle it was made from (its header comment left out); where a line was
+    only taken out, the lines before and after the gap."""
     a, b = base.splitlines(), text.splitlines()
     sm = difflib.SequenceMatcher(None, a, b, autojunk=False)
     header = next(n for n, line in enumerate(b, 1) if line.rstrip().endswith("*)"))
     out = set()
     for op, _a1, _a2, b1, b2 in sm.get_opcodes():
-        if op != "equal":
+        if op == "delete":              # a line taken out: the statements around the gap
+            out.update(n for n in (b1, b1 + 1) if n > header)
+        elif op != "equal":
             out.update(n + 1 for n in range(b1, b2) if n + 1 > header and b[n].strip())
     return out
 

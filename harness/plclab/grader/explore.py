@@ -35,6 +35,8 @@ from plclab.scenario import Session, compiled_once
 from plclab.stands.operators import BLINK_END_TOL, START_S, Exploration, Observed, blink_spans
 from plclab.stands.scripts import FAULT, POWER, Event, Script, fault_params, read_script
 
+from .localize import output_attr
+
 SUSPECT_MARGIN = 0.1       # s: an action this close to where two drifted programs differ is ambiguous
 MOVE_SUSPECT = 0.35        # s: an ambiguous action is moved this much later and the script played again
 JITTER = 0.03             # s: how far actions are moved to tell a difference from a one-scan coincidence
@@ -538,9 +540,6 @@ def first_differing_output(model: Session, student: Session, div: Divergence) ->
             if model.trace.value_at(o, t) != student.trace.value_at(o, t):
                 return o, t
     return (outputs[0] if outputs else None), div.time
-
-
-from .localize import output_attr  # noqa: E402 - the section's one dependency
 
 
 def last_writer(ex: Explorer, script: Script, output: str, t: float, since: float) -> Optional[tuple[str, int, str]]:

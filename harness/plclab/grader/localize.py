@@ -118,8 +118,9 @@ GLOBALS = ""       # pou_lines' name for the lines outside any POU (compared as 
 
 def changed_lines(student: Sequence[tuple[str, str]], start: Sequence[tuple[str, str]]) -> tuple[set, float]:
     """The student's (file, line) pairs that are not in the starting program's POU of the same
-    name (a POU the starting program has not: all its lines), and the share of the starting
-    program's lines the student kept (near 0: rewritten from scratch)."""
+    name (a POU the starting program has not: all its lines; where lines were taken out, the
+    lines around the gap), and the share of the starting program's lines the student kept
+    (near 0: rewritten from scratch)."""
     start_pous: dict[str, list[str]] = {}
     for _name, text in start:
         for pou, lines in pou_lines(text).items():
@@ -141,6 +142,8 @@ def changed_lines(student: Sequence[tuple[str, str]], start: Sequence[tuple[str,
             for op, _a1, _a2, b1, b2 in sm.get_opcodes():
                 if op == "equal":
                     kept += b2 - b1
+                elif op == "delete":        # lines taken out: the statements around the gap changed
+                    changed.update((name, lines[k][0]) for k in (b1 - 1, b1) if 0 <= k < len(lines))
                 else:
                     changed.update((name, lines[k][0]) for k in range(b1, b2))
     total = sum(len(v) for v in start_pous.values())
