@@ -282,12 +282,18 @@ class StateLog:
 _MISSING = object()
 
 
-def first_divergence(student: StateLog, model: StateLog, paths: Sequence[str]) -> Optional[float]:
+def first_divergence(student: StateLog, model: StateLog, paths: Sequence[str], initial: bool = False) -> Optional[float]:
     """The first time any of `paths` holds another value in the student's run than in the model
-    answer's (None: never, or no such path in the model answer's program)."""
+    answer's (None: never, or no such path in the model answer's program). `initial`: only
+    the values the runs began with (a declaration's initial value)."""
     best: Optional[float] = None
     for p in paths:
         if p not in model.changes:
+            continue
+        if initial:
+            a, b = student.changes.get(p, [(0.0, _MISSING)])[0], model.changes[p][0]
+            if not _same(a[1], b[1]):
+                best = min(a[0], b[0]) if best is None else min(best, a[0], b[0])
             continue
         times = sorted({t for t, _v in student.changes.get(p, ())} | {t for t, _v in model.changes[p]})
         for t in times:
@@ -384,6 +390,7 @@ def rank(tracer: Tracer, sl: Slice, failing_scans: set[int], sources: Sequence[t
             pk = (pi.file, pi.line) if pi is not None else None
         consider(e.line, sl.steps[eid], [k for k, _s in e.writes], pk)
     decls = declaration_lines(compiled.source)
+    declared: set[tuple[str, int]] = set()           # declarations: judged by their initial values
     for (oid, path), d in sl.before.items():
         cls = tracer.types.get(oid)
         if (oid, path) in inputs:
@@ -393,7 +400,9 @@ def rank(tracer: Tracer, sl: Slice, failing_scans: set[int], sources: Sequence[t
         attr = re.split(r"[.\[]", path)[0] if path else ""
         line = decls.get((cls.__name__, attr))
         if line is not None:
-            consider(line, d + 1, [(oid, attr)], None)
+            k = consider(line, d + 1, [(oid, attr)], None)
+            if k is not None:
+                declared.add(k)
 
     times: dict[tuple[str, int], Optional[tuple[float, int]]] = {}
 
@@ -412,7 +421,7 @@ def rank(tracer: Tracer, sl: Slice, failing_scans: set[int], sources: Sequence[t
             else:
                 paths = [p for pat in patterns for p in student.matching(pat)]
                 if any(p in model.changes for p in paths):
-                    t = first_divergence(student, model, paths)
+                    t = first_divergence(student, model, paths, initial=k in declared)
                     times[k] = (t if t is not None else float("inf"), 0)
         got = times[k]
         if got is None:
