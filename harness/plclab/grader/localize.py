@@ -504,17 +504,39 @@ def localize(student: Any, model: Optional[Any], replay: Replay, output: Optiona
     if model is not None:
         _traced(model, Tracer(model.plc.compiled, lambda: model.now, lines=False, since=t0, stop_at=t_fail,
                               sample=lambda: mlog.record(model.now, model.plc)), replay)
-        if output is None:
-            output = differing_output(student, model, [k for k in hints if k in labels], t_fail) or \
-                differing_output(student, model, labels, t_fail)
-    if output is None:
-        output = next((k for k in hints if k in labels), None)
-    if output is None or output not in labels:
+    if output is not None:
+        order = [output]
+    else:
+        named = [k for k in hints if k in labels]
+        differ = differing_outputs(student, model, labels, t_fail) if model is not None else []
+        order = [k for k in differ if k in named] + [k for k in differ if k not in named] + \
+            [k for k in named if k not in differ]
+    order = [k for k in order if output_attr(student, k) is not None]
+    if not order or not tracer.order:
         return None
-    target = output_attr(student, output)
-    if target is None or not tracer.order:
-        return None
-    owner, attr = target
+    changed: Optional[set] = None
+    scratch = True
+    if start is not None:
+        ch, kept = changed_lines(sources, start)
+        if kept >= SCRATCH_SHARE:
+            changed, scratch = ch, False
+    inputs = frozenset((id(b.owner), b.attr) for b in student.plc.bindings if b.is_input)
+    first: Optional[Localized] = None
+    for label in order[:MAX_OUTPUTS]:        # the first output whose path has a candidate
+        found = _ranked(tracer, student, model, label, outs, sources, changed, scratch, slog, mlog, inputs)
+        if found.candidates:
+            return found
+        first = first or found
+    return first
+
+
+MAX_OUTPUTS = 4          # outputs followed, in order, until one's path has a candidate
+
+
+def _ranked(tracer: Tracer, student: Any, model: Optional[Any], output: str, outs: list, sources: Sequence[tuple[str, str]],
+            changed: Optional[set], scratch: bool, slog: StateLog, mlog: StateLog, inputs: frozenset) -> Localized:
+    compiled = tracer.compiled
+    owner, attr = output_attr(student, output)
     # the failing scans: those that leave the output other than the model answer's (the value
     # read as the next scan begins)
     failing: set[int] = set()
@@ -523,13 +545,6 @@ def localize(student: Any, model: Optional[Any], replay: Replay, output: Optiona
                    if output in outs[n + 1] and not _same(model.trace.value_at(output, tracer.scan_times[n + 1]),
                                                           outs[n + 1][output])}
     sl = backward_slice(tracer, [(id(owner), attr)], lambda line: compiled.where(line) is not None)
-    changed: Optional[set] = None
-    scratch = True
-    if start is not None:
-        ch, kept = changed_lines(sources, start)
-        if kept >= SCRATCH_SHARE:
-            changed, scratch = ch, False
-    inputs = frozenset((id(b.owner), b.attr) for b in student.plc.bindings if b.is_input)
     cands = rank(tracer, sl, failing, sources, changed, slog, mlog if model is not None else None, inputs=inputs)
     writer = None
     for eid in reversed(tracer.order):                 # the last statement that wrote the output
@@ -540,16 +555,18 @@ def localize(student: Any, model: Optional[Any], replay: Replay, output: Optiona
     return Localized(cands, scratch, output, writer)
 
 
-def differing_output(student: Any, model: Any, labels: Sequence[str], t: float, back: float = 5.0) -> Optional[str]:
-    """The output label a failure at `t` is most likely about: one that differs between the two
-    runs' traces at `t` (of several, the one whose difference began last: the one a check has
-    just seen), else the one that differed last in the `back` s before."""
-    best: Optional[tuple[float, str]] = None
+def differing_outputs(student: Any, model: Any, labels: Sequence[str], t: float, back: float = 5.0) -> list[str]:
+    """The output labels a failure at `t` may be about, most likely first: those that differ
+    between the two runs' traces at `t` (the longest-standing difference first: a signal that
+    toggles fast, a sensor bus, differs anew at every toggle), then those that differed in the
+    `back` s before (the latest first)."""
+    now: list[tuple[float, str]] = []
+    before: list[tuple[float, str]] = []
     for k in labels:
         if k not in student.trace or k not in model.trace:
             continue
         times = sorted({ns / 1e9 for tr in (student.trace, model.trace) for ns, _v in tr.changes(k)
-                        if t - back - 1e-9 <= ns / 1e9 <= t + 1e-9} | {t})
+                        if t - back - 1e-9 <= ns / 1e9 <= t + 1e-9} | {t, t - back})
         began, last = None, None
         for x in times:
             if not _same(student.trace.value_at(k, x), model.trace.value_at(k, x)):
@@ -559,11 +576,11 @@ def differing_output(student: Any, model: Any, labels: Sequence[str], t: float, 
                 began = None
         if last is None:
             continue
-        rank_ = (1.0 + (began if began is not None and last >= t - 1e-9 else -1.0) + 1e6, k) \
-            if last >= t - 1e-9 else (last, k)
-        if best is None or rank_[0] > best[0]:
-            best = rank_
-    return best[1] if best is not None else None
+        if last >= t - 1e-9 and began is not None:
+            now.append((began, k))
+        else:
+            before.append((-last, k))
+    return [k for _t, k in sorted(now)] + [k for _t, k in sorted(before)]
 
 
 def _traced(session: Any, tracer: Tracer, replay: Replay) -> None:
