@@ -79,8 +79,9 @@ def rate(job: tuple[str, str, str, bool, int, int]) -> dict:
                 if explain_first and len(hits) <= explain_first:
                     from plclab.grader.explore import explain, shrink
                     small, sdiv = shrink(ex, played, div)
-                    f = explain(ex, small, sdiv)
+                    f = explain(ex, small, sdiv, stand)
                     print(f"--- {path}: script {n}\n  " + "\n  ".join(f.steps) + f"\n  -> {f.first_difference}"
+                          + "".join(f"\n  {k}. {c.where()}" for k, c in enumerate(f.candidates, 1))
                           + (f"\n  line {f.line}" if f.line else ""), flush=True)
     p = len(hits) / scripts
     name = f"{stand}/{Path(path).stem}" if HERE in Path(path).resolve().parents else path

@@ -2,6 +2,8 @@
 redrawn in ladder, goes to `plclab grade` as the student saves it (plc.xml)."""
 from __future__ import annotations
 
+import re
+
 import copy
 
 from lxml import etree
@@ -62,9 +64,15 @@ def test_exploration_names_the_rung_and_element_that_last_wrote_the_output(tmp_p
     report = grade("mp9c", "task1", [str(path)], explore=2)
     [e1] = [r for r in report.rows if r.id == "E1"]
     assert not e1.passed
-    assert "last written in plc.xml: FB_Mp9cManual (LD), rung " in e1.observed, e1.observed
-    assert ", coil L" in e1.observed and "localId" in e1.observed
-    assert "plc.xml:" not in e1.observed.replace("plc.xml: FB_", "")    # no generated line number
+    assert "last written in plc.xml: FB_Mp9cManual (LD), rung " in e1.written, e1.written
+    assert ", coil L" in e1.written and "localId" in e1.written
+    assert "plc.xml:" not in e1.written.replace("plc.xml: FB_", "")      # no generated line number
+    # the ranked lines too: each on the drawing, none a line of the generated ST
+    assert e1.lines, report.text()
+    for line in e1.lines:
+        assert line.startswith("plc.xml: ") and (", rung " in line or " line " in line), line
+        assert not re.search(r"plc\.xml:\d", line), line
+
 
 
 def handout_with_located_io() -> bytes:

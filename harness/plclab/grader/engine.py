@@ -32,12 +32,15 @@ from .report import GradeReport, Row
 
 def grade(stand: str, task: str, files: Sequence[str], out_dir: Optional[str] = None,
           reference: Optional[Sequence[str]] = None, explore: Optional[int] = 0,
-          explore_options: Optional[ExploreOptions] = None) -> GradeReport:
+          explore_options: Optional[ExploreOptions] = None, lines: Optional[bool] = None) -> GradeReport:
     """Grade the ST `files` (one program) on `task` of `stand`; trace files go to `out_dir`.
     Besides the scenarios, a robot's task is explored against its model answer (the checkout's
     solutions/, or the `reference` files): `explore` random scripts (None: the stand's budget,
     what `plclab grade` uses; 0, the default of this function: none); plclab.grader.explore.
     `explore_options`: processes, seed and shared model-answer plays of that exploration.
+    `lines`: each failing scripted row names the student's statements where the mistake most
+    likely is (plclab.grader.localize; its scenario is played again on the student's program
+    and the model answer); None: when exploring (explore != 0).
 
     Raises PlcLabError only for a stand or task the grader does not know, or trace files it
     must not write; a program that does not compile or does not run is a report that fails.
@@ -49,12 +52,13 @@ def grade(stand: str, task: str, files: Sequence[str], out_dir: Optional[str] = 
         return GradeReport(stand, task, req.title, [str(f) for f in files],
                            errors=[str(d) for d in e.diagnostics], noun=req.submission.noun,
                            unreadable=req.submission.unreadable)
-    return grade_sources(stand, task, sources, out_dir, reference, explore, explore_options)
+    return grade_sources(stand, task, sources, out_dir, reference, explore, explore_options, lines)
 
 
 def grade_sources(stand: str, task: str, sources: Sequence[tuple[str, str]],
                   out_dir: Optional[str] = None, reference: Optional[Sequence[str]] = None,
-                  explore: Optional[int] = 0, explore_options: Optional[ExploreOptions] = None) -> GradeReport:
+                  explore: Optional[int] = 0, explore_options: Optional[ExploreOptions] = None,
+                  lines: Optional[bool] = None) -> GradeReport:
     """Like `grade`, with the program given as (file name, text) pairs."""
     req = requirement_set(stand, task)
     _check_trace_outputs(req, out_dir)               # a bad --out: one line, before the work
@@ -100,6 +104,8 @@ def grade_sources(stand: str, task: str, sources: Sequence[tuple[str, str]],
             if out_dir is not None:
                 report.traces[scenario.name] = _write_traces(s, req, scenario.name, Path(out_dir))
     report.rows = _rows(req, checks)
+    if lines if lines is not None else explore != 0:
+        report.rows = _with_lines(req, report.rows, sources, checked, reference)
     rows, notes, files = exploration_rows(req, sources, checked, reference, explore, out_dir, explore_options)
     if rows:
         e1, named = rows[0], rows[1] if len(rows) > 1 else None
@@ -108,11 +114,47 @@ def grade_sources(stand: str, task: str, sources: Sequence[tuple[str, str]],
             # the difference is named by the requirement it breaks; E1 points there
             report.rows[at] = named
             e1 = dataclasses.replace(e1, expected="", observed=f"the difference breaks {named.id}: see its row",
-                                     steps=())
+                                     steps=(), lines=(), written="")
         report.rows.append(e1)
     report.notes += notes
     report.traces.update(files)
     return report
+
+
+MAX_LOCALIZED = 2      # failing scripted moments (scenario, time) given their lines per grade: each costs two replays
+
+
+def _with_lines(req: RequirementSet, rows: list[Row], sources: Sequence[tuple[str, str]], checked: object,
+                reference: Optional[Sequence[str]]) -> list[Row]:
+    """`rows` with each failing scripted row naming the student's statements where the mistake
+    most likely is and the output's last writer (plclab.grader.localize), where the task has a
+    model answer to replay its scenario on (the first MAX_LOCALIZED failing moments)."""
+    from .explore import model_answer
+    from .localize import scripted, written_text
+    failing = [r for r in rows if not r.passed and not r.internal and not r.unchecked and r.time is not None
+               and any(sc.name == r.scenario for sc in req.scenarios)]
+    if not failing or req.submission.read is not None:
+        return rows
+    model, _why = model_answer(req.stand, req.task, reference)
+    if model is None:
+        return rows
+    found: dict[tuple[str, float], object] = {}
+    out = []
+    for r in rows:
+        if r in failing:
+            key = (r.scenario, round(r.time, 6))
+            if key not in found and len(found) >= MAX_LOCALIZED:
+                out.append(r)
+                continue
+            if key not in found:
+                scenario = next(sc for sc in req.scenarios if sc.name == r.scenario)
+                found[key] = scripted(req, scenario, sources, checked, model, r.time, f"{r.expected} | {r.observed}")
+            loc = found[key]
+            if loc is not None and (loc.candidates or loc.writer):
+                r = dataclasses.replace(r, lines=tuple(c.where(sources) for c in loc.candidates),
+                                        written=written_text(loc.output, loc.writer, sources))
+        out.append(r)
+    return out
 
 
 def _trace_files(req: RequirementSet, scenario: str, out_dir: Path) -> list[Path]:

@@ -47,6 +47,8 @@ from plclab.stands.operators import (BLINK_END_TOL, BLINK_HALF_MAX, BLINKING, ST
                                      blink_spans)
 from plclab.stands.scripts import FAULT, POWER, Event, Script, fault_params, read_script, without
 
+from .localize import output_attr
+
 SUSPECT_MARGIN = 0.1       # s: an action this close to where two drifted programs differ is ambiguous
 MOVE_SUSPECT = 0.35        # s: an ambiguous action is moved this much later and the script played again
 JITTER = 0.03             # s: how far actions are moved to tell a difference from a one-scan coincidence
@@ -803,18 +805,6 @@ def shrink(ex: Explorer, script: Script, div: Divergence, budget: int = SHRINK_R
 
 # --------------------------------------------------------------------------- the student's line
 
-def _output_attr(s: Session, label: str) -> Optional[tuple[Any, str]]:
-    address = s.labels.get(label)
-    if address is None:
-        return None
-    from plclab.runtime.image import image_slot
-    area, index = image_slot(address)
-    for b in s.plc.bindings:
-        if b.area == area and b.index == index and not b.is_input:
-            return b.owner, b.attr
-    return None
-
-
 def first_differing_output(model: Session, student: Session, div: Divergence) -> tuple[Optional[str], float]:
     """The first output driving the diverging signal that differs between the two programs,
     and the scan it first differs in (from `div.since` to the divergence)."""
@@ -839,7 +829,7 @@ def last_writer(ex: Explorer, script: Script, output: str, t: float, since: floa
     # the line tracer follows the generated Python: this replay runs the Python path
     with compiled_once(ex.student.checked, share=ex.student.cache), python_only():
         s = ex.session(ex.student, "line")
-        target = _output_attr(s, output)
+        target = output_attr(s, output)
         if target is None:
             return None
         owner, attr = target
@@ -853,7 +843,7 @@ def last_writer(ex: Explorer, script: Script, output: str, t: float, since: floa
         def local(frame: Any, event: str, _arg: Any) -> Any:
             if event == "line":
                 if state.get("plc") is not s.plc:                   # a PLC restart makes new objects
-                    state["plc"], state["oa"] = s.plc, _output_attr(s, output) or (owner, attr)
+                    state["plc"], state["oa"] = s.plc, output_attr(s, output) or (owner, attr)
                 o, a = state["oa"]
                 now = getattr(o, a, None)
                 if "value" in state and now != state["value"] and state["line"] is not None:
@@ -903,6 +893,7 @@ class Finding:
     output_time: float
     model_output: Any = None
     student_output: Any = None
+    candidates: list = field(default_factory=list)     # localize.Candidate, most likely first
 
 
 @dataclass
@@ -1195,26 +1186,51 @@ def explore(expl: Exploration, stand: str, task: str, make_session: Callable, st
             if detail is not None:
                 played, div = detail
                 small, sdiv = shrink(ex, played, div, shrink_runs)
-                result.finding = explain(ex, small, sdiv)
+                result.finding = explain(ex, small, sdiv, stand)
         result.plays = ex.plays
         result.model_plays = ex.model_plays.played
     return result
 
 
-def explain(ex: Explorer, script: Script, div: Divergence) -> Finding:
-    """The finding in the console's words: numbered steps, the first difference, the line."""
+def explain(ex: Explorer, script: Script, div: Divergence, stand: Optional[str] = None) -> Finding:
+    """The finding in the console's words: numbered steps, the first difference, the student's
+    lines where the mistake most likely is (ranked against `stand`'s starting program) and the
+    output's last writer."""
     out = ex.outcome(script, keep=True)
     if out.divergence is not None:
         div = out.divergence
     steps = [f"{n}. {e.time:.2f} s {ex.expl.describe(e)}" for n, e in enumerate(script.events, 1)]
-    line, output, t_out, mv, sv = None, None, div.time, None, None
+    line, output, t_out, mv, sv, candidates = None, None, div.time, None, None, []
     if out.model is not None and out.student is not None:
         output, t_out = first_differing_output(out.model, out.student, div)
         if output is not None:
             mv = out.model.trace.value_at(output, t_out)
             sv = out.student.trace.value_at(output, t_out)
-            line = last_writer(ex, script, output, t_out, div.since)
-    return Finding(script, div, steps, div.text(ex.expl.tick_s), line, output, t_out, mv, sv)
+            found = student_lines(ex, script, output, t_out, stand)
+            candidates = found.candidates if found is not None else []
+            line = found.writer if found is not None and found.writer is not None else \
+                last_writer(ex, script, output, t_out, div.since)
+    return Finding(script, div, steps, div.text(ex.expl.tick_s), line, output, t_out, mv, sv, candidates)
+
+
+def student_lines(ex: Explorer, script: Script, output: str, t: float, stand: Optional[str] = None) -> Any:
+    """The student's statements where the mistake most likely is (plclab.grader.localize):
+    `script` played again on the student's program (traced) and on the model answer, the
+    dependence slice of `output` at plant time `t` ranked against `stand`'s starting program
+    (a localize.Localized, None where nothing can be said)."""
+    from .localize import candidates
+    tick = ex.expl.tick_s
+    with compiled_once(ex.model.checked, share=ex.model.cache):
+        m = ex.session(ex.model, "slice-model")
+    with compiled_once(ex.student.checked, share=ex.student.cache):
+        s = ex.session(ex.student, "slice")
+
+    def replay(sess: Session, begin: Callable[[], None]) -> None:
+        p = ex.student if sess is s else ex.model
+        with compiled_once(p.checked, share=p.cache):
+            play(sess, script, None, until=t + tick / 2, split=(0.0, begin))
+
+    return candidates(s, m, replay, output, t, ex.student.sources, stand)
 
 
 # The requirement a divergence breaks, where one plainly matches (else it is E1's own): a
@@ -1301,8 +1317,8 @@ def row_words(expl: Exploration, f: Finding, sources: Sequence[tuple[str, str]])
     """E1's expected and observed texts for finding `f`: what the model answer's stand showed
     (with the tolerance and the task's freedom), what the student's showed, what the operator
     did and what each stand did then (`story`), the output that first differs where it does
-    not contradict what the stands show, and the statement that last wrote it."""
-    from plclab.frontend.graphical import drawing_location
+    not contradict what the stands show (the statement that last wrote it is the row's
+    `written`, plclab.grader.localize.written_text)."""
     d = f.divergence
     o = d.signal
     tol = f"timing +/- {expl.timing_tol:g} s" + (f", {o.tolerance}" if o.tolerance else "") + \
@@ -1322,13 +1338,6 @@ def row_words(expl: Exploration, f: Finding, sources: Sequence[tuple[str, str]])
             and consistent):
         observed += (f"; at {f.output_time:.2f} s {f.output} = {_int_or(f.student_output)} in your program, "
                      f"{_int_or(f.model_output)} in the model answer")
-    if f.line is not None:
-        file, line, stmt = f.line
-        drawn = drawing_location(sources, file, line)   # a plc.xml: the rung and element, not generated ST
-        if drawn is not None:
-            observed += f"; {f.output} last written in {Path(file).name}: {drawn}"
-        else:
-            observed += f"; {f.output} last written by {Path(file).name}:{line}" + (f" `{stmt}`" if stmt else "")
     return expected, observed
 
 
@@ -1364,6 +1373,7 @@ def exploration_rows(req: Any, sources: Sequence[tuple[str, str]], checked: Any,
     from plclab.stands.base import stand_spec
     from plclab.trace import write_csv, write_vcd
 
+    from .localize import written_text
     from .report import Row
     expl = stand_spec(req.stand).explore
     if expl is None or episodes == 0:
@@ -1405,16 +1415,20 @@ def exploration_rows(req: Any, sources: Sequence[tuple[str, str]], checked: Any,
             files.append(path)
     expected, observed = row_words(expl, f, sources)
     d = f.divergence
+    written = written_text(f.output, f.line, sources)
+    lines = tuple(c.where(sources) for c in f.candidates)
     steps = tuple(f.steps) + (f"-> {f.first_difference}",)
     replay = (f"replay: plclab run {req.stand} --program {' '.join(n for n, _ in sources)} --inputs "
               f"{files[0] if files else script_name} --against {req.task}")
     rid = requirement_of(req.stand, req.task, f, expl)
-    rows = [Row(EXPLORE_ID, text, False, expected, observed, d.time, "explore", steps=steps)]
+    rows = [Row(EXPLORE_ID, text, False, expected, observed, d.time, "explore", steps=steps, lines=lines,
+                written=written)]
     if rid is not None and any(r.id == rid for r in req.requirements):
         # named by the requirement it breaks: that row carries it where the scenarios passed it
         # (the engine decides), and E1 points there
         r = next(r for r in req.requirements if r.id == rid)
-        rows.append(Row(rid, r.text, False, expected, observed, d.time, "explore", steps=steps))
+        rows.append(Row(rid, r.text, False, expected, observed, d.time, "explore", steps=steps, lines=lines,
+                        written=written))
     notes = [f"exploration: {amount}: a difference in script {result.episodes}, shrunk to "
              f"{len(f.script.events)} console step{'s' if len(f.script.events) != 1 else ''}", replay]
     return rows, notes, {"explore": files}

@@ -43,6 +43,8 @@ class Row:
     internal: bool = False           # not checked because the grader failed: not the student's fault
     unchecked: bool = False          # not checked because an earlier failure stopped its scenario
     steps: tuple[str, ...] = ()      # exploration: the shortest console history that shows it
+    lines: tuple[str, ...] = ()      # the student's statements where the mistake most likely is, ranked
+    written: str = ""                # where the differing output was last written (the message's last line)
 
     @property
     def result(self) -> str:
@@ -129,6 +131,7 @@ class GradeReport:
                         wrapped = textwrap.wrap(step, detail_width) or [""]
                         out.append(f"{indent}  {wrapped[0]}")
                         out.extend(f"{indent}     {w}" for w in wrapped[1:])
+                out.extend(_where_to_look(r, indent, detail_width))
         out.append("")
         n_pass = sum(r.passed for r in self.rows)
         verdict = "PASS" if self.passed else "FAIL"
@@ -147,6 +150,22 @@ class GradeReport:
             folders = sorted({str(p.parent) for p in written})
             out.append(f"traces (CSV + VCD per scenario) in {', '.join(folders)}")
         return "\n".join(out) + "\n"
+
+
+def _where_to_look(r: Row, indent: str, width: int) -> list[str]:
+    """The ranked statements (plclab.grader.localize) and, last, the output's last writer."""
+    out = []
+    if r.lines:
+        out.append(f"{indent}where to look, most likely first:")
+        for n, line in enumerate(r.lines, 1):
+            wrapped = textwrap.wrap(clip(line, 300), width) or [""]
+            out.append(f"{indent}  {n}. {wrapped[0]}")
+            out.extend(f"{indent}     {w}" for w in wrapped[1:])
+    if r.written:
+        wrapped = textwrap.wrap(clip(r.written, 300), width) or [""]
+        out.append(f"{indent}{wrapped[0]}")
+        out.extend(f"{indent}  {w}" for w in wrapped[1:])
+    return out
 
 
 def requirements_text(title: str, table: list[tuple[str, str]]) -> str:

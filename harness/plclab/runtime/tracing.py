@@ -1,0 +1,439 @@
+"""A dependence tracer for a compiled program: which generated statements ran, in which scan,
+what storage each read and wrote, and which condition (or call) each one ran under.
+
+Why here: a grader that asks "where did this output's value come from?" must follow the
+program's dynamic data and control dependences back through the scans (a dynamic slice). Only
+the runtime knows how ST storage looks in the generated Python (`self.X`, a local `v_X` that
+mirrors `self.X` until the POU returns, `G.X` for globals, a standard FB whose body runs
+outside the compiled code), so the tracer lives beside the compiler and speaks of generated
+lines and storage keys only; what a line means in ST is `CompiledProgram.where`. It knows
+nothing of stands or of grading.
+
+Storage keys: `(id(object), path)`, the object reached from a name through plain attributes
+(`v_ROBOT.SEQUENCER.FAULT` and `self.FAULT` inside that sequencer are one key), the path what
+is left ('FAULT', '[].PAUSE' for an array element: any element, a weak key). `'*'` stands for
+every field of a standard FB (its body reads its inputs and state and writes its outputs).
+A local temporary of one call is `('L', call, name)`, the value a call returns `('R', call)`.
+"""
+from __future__ import annotations
+
+import ast
+import sys
+from dataclasses import dataclass, field
+from typing import Any, Callable, Optional
+
+_PRIMITIVE = (bool, int, float, str, bytes, type(None))
+WILD = "*"
+
+
+@dataclass(frozen=True)
+class LineShape:
+    """What one generated line does, read once from the generated source."""
+
+    reads: tuple[tuple[str, str], ...]       # (root name, path) it reads
+    writes: tuple[tuple[str, str], ...]      # (root name, path) it assigns
+    std_calls: tuple[tuple[str, str], ...]   # (root, path) of an FB whose `_body()` it calls
+    header: Optional[int]                    # the line of the IF/WHILE/FOR/CASE test it runs under
+    is_return: bool = False
+
+
+def _chain(node: ast.AST) -> Optional[tuple[str, str, list[ast.AST]]]:
+    """`v_CP.FRAMES[i].PAUSE` -> ('v_CP', 'FRAMES[].PAUSE', [i]): root, path, index expressions."""
+    parts: list[str] = []
+    indexes: list[ast.AST] = []
+    while True:
+        if isinstance(node, ast.Attribute):
+            parts.append("." + node.attr)
+            node = node.value
+        elif isinstance(node, ast.Subscript):
+            parts.append("[]")
+            indexes.append(node.slice)
+            node = node.value
+        elif isinstance(node, ast.Name):
+            path = "".join(reversed(parts)).lstrip(".")
+            return node.id, path, indexes
+        else:
+            return None
+
+
+class _Reads(ast.NodeVisitor):
+    def __init__(self) -> None:
+        self.reads: list[tuple[str, str]] = []
+        self.writes: list[tuple[str, str]] = []
+        self.std: list[tuple[str, str]] = []
+
+    def visit_NamedExpr(self, node: ast.NamedExpr) -> None:
+        self.writes.append((node.target.id, ""))
+        self.visit(node.value)
+
+    def visit_Call(self, node: ast.Call) -> None:
+        f = node.func
+        if isinstance(f, ast.Attribute) and f.attr in ("_body", "_run"):
+            c = _chain(f.value)
+            if c is not None and f.attr == "_body":
+                self.std.append((c[0], c[1]))
+            if c is not None:
+                for i in c[2]:
+                    self.visit(i)
+        elif not isinstance(f, ast.Name):
+            self.visit(f)
+        for a in node.args:
+            self.visit(a)
+        for k in node.keywords:
+            self.visit(k.value)
+
+    def _access(self, node: ast.AST) -> None:
+        c = _chain(node)
+        if c is None:
+            self.generic_visit(node)
+            return
+        self.reads.append((c[0], c[1]))
+        for i in c[2]:
+            self.visit(i)
+
+    visit_Attribute = _access
+    visit_Subscript = _access
+    visit_Name = _access
+
+
+def _target(t: ast.AST, into: _Reads) -> None:
+    if isinstance(t, (ast.Tuple, ast.List)):
+        for e in t.elts:
+            _target(e, into)
+        return
+    c = _chain(t)
+    if c is None:
+        into.visit(t)
+        return
+    into.writes.append((c[0], c[1]))
+    for i in c[2]:
+        into.visit(i)
+
+
+def line_shapes(source: str) -> dict[int, LineShape]:
+    """Every statement line of the generated `source`: what it reads and writes, and the
+    test line it is control dependent on (None: the function's entry, i.e. its call)."""
+    shapes: dict[int, LineShape] = {}
+
+    def add(line: int, r: _Reads, header: Optional[int], is_return: bool = False) -> None:
+        old = shapes.get(line)
+        reads, writes, std = tuple(r.reads), tuple(r.writes), tuple(r.std)
+        if old is not None:
+            reads, writes, std = old.reads + reads, old.writes + writes, old.std_calls + std
+        shapes[line] = LineShape(reads, writes, std, header, is_return or (old is not None and old.is_return))
+
+    def walk(stmts: list[ast.stmt], header: Optional[int]) -> None:
+        for s in stmts:
+            r = _Reads()
+            if isinstance(s, (ast.FunctionDef, ast.ClassDef)):
+                walk(s.body, None)
+                continue
+            if isinstance(s, ast.If) or isinstance(s, ast.While):
+                r.visit(s.test)
+                add(s.lineno, r, header)
+                walk(s.body, s.lineno)
+                walk(s.orelse, s.lineno)
+            elif isinstance(s, ast.For):
+                r.visit(s.iter)
+                _target(s.target, r)
+                add(s.lineno, r, header)
+                walk(s.body, s.lineno)
+                walk(s.orelse, s.lineno)
+            elif isinstance(s, ast.Try):
+                walk(s.body, header)
+                for h in s.handlers:
+                    walk(h.body, header)
+                walk(s.orelse, header)
+                walk(s.finalbody, header)
+            elif isinstance(s, ast.Assign):
+                r.visit(s.value)
+                for t in s.targets:
+                    _target(t, r)
+                add(s.lineno, r, header)
+            elif isinstance(s, (ast.AugAssign, ast.AnnAssign)):
+                if s.value is not None:
+                    r.visit(s.value)
+                _target(s.target, r)
+                if isinstance(s, ast.AugAssign):
+                    r.visit(s.target)
+                add(s.lineno, r, header)
+            elif isinstance(s, ast.Return):
+                if s.value is not None:
+                    r.visit(s.value)
+                add(s.lineno, r, header, True)
+            else:
+                r.visit(s)
+                add(s.lineno, r, header)
+
+    walk(ast.parse(source).body, None)
+    return shapes
+
+
+@dataclass
+class Event:
+    """One execution of one generated line."""
+
+    line: int
+    scan: int                                  # index into Tracer.scan_times
+    reads: list                                # storage keys
+    writes: list                               # (key, strong)
+    parent: Optional[int]                      # the event it ran under (a test, or its call)
+    call: int = 0
+
+
+class StopReplay(BaseException):
+    """Raised into a replay as the first scan after `Tracer.stop_at` begins: what was to be
+    seen has been (a BaseException, so that a scenario's own `except Exception` lets it by)."""
+
+
+@dataclass
+class Tracer:
+    """Records dependence events of the compiled program `compiled` while installed
+    (`start()` .. `stop()`, through sys.settrace). `clock()` gives the time of the scan that
+    begins whenever the compiled code is entered from outside (a new scan)."""
+
+    compiled: Any
+    clock: Callable[[], float]
+    events: dict[int, Event] = field(default_factory=dict)
+    order: list[int] = field(default_factory=list)        # event ids in completion order
+    scan_times: list[float] = field(default_factory=list)
+    types: dict[int, type] = field(default_factory=dict)  # id(object) -> its class (declarations)
+    sample: Optional[Callable[[], Any]] = None             # called as each scan begins
+    samples: list = field(default_factory=list)            # what it returned
+    lines: bool = True                                     # False: scans and samples only
+    since: float = 0.0                                     # lines traced (and samples) from this time on
+    stop_at: Optional[float] = None                        # a scan that begins after it raises StopReplay
+
+    def __post_init__(self) -> None:
+        self.shapes = line_shapes(self.compiled.source)
+        self._filename = self.compiled.filename
+        self._next = 0
+        self._calls = 0
+        self._frames: dict[int, dict] = {}             # id(frame) -> per-call state
+        self._old: Any = None
+        self._slotsets: dict[type, frozenset] = {}
+
+    # ---------------------------------------------------------------- storage keys
+    def _obj_key(self, obj: Any, path: str) -> tuple:
+        self.types[id(obj)] = type(obj)
+        return (id(obj), path)
+
+    def _slotset(self, cls: type) -> frozenset:
+        got = self._slotsets.get(cls)
+        if got is None:
+            got = self._slotsets[cls] = frozenset(_slots(cls)) if hasattr(cls, "__slots__") else frozenset()
+        return got
+
+    def key(self, frame: Any, st: dict, root: str, path: str, write: bool) -> Optional[tuple]:
+        """The storage key of `root.path` in `frame` (None: a constant, a function, a module's
+        own name). A POU's `v_X` mirrors `self.X` (an object: the same one), so `self` is
+        enough to name it and the frame's locals are read only in a function (FC)."""
+        me = st["self"]
+        if root == "self":
+            obj = me
+        elif root.startswith("v_") and me is not None and root[2:] in self._slotset(type(me)):
+            obj = getattr(me, root[2:], None)
+            if not path and (write or isinstance(obj, _PRIMITIVE)):
+                return self._obj_key(me, root[2:])
+        elif root.startswith("_") and not path:
+            return ("L", st["call"], root)
+        elif root == "G" or (not root.startswith("v_") and root in frame.f_globals):
+            obj = frame.f_globals.get(root)
+            if not path or obj is None or isinstance(obj, _PRIMITIVE) or callable(obj) and not hasattr(obj, "__dict__"):
+                return None
+        else:
+            loc = frame.f_locals
+            if root not in loc:
+                return ("L", st["call"], root) if write or root.startswith(("_", "v_")) else None
+            obj = loc[root]
+            if not path and (write or isinstance(obj, _PRIMITIVE)):
+                return ("L", st["call"], root)
+        if obj is None:
+            return ("L", st["call"], root)
+        if not path:
+            return self._obj_key(obj, "")
+        # walk plain attributes down to the last object
+        rest = path
+        while rest and not rest.startswith("["):
+            head, dot, tail = rest.partition(".")
+            if "[" in head:
+                break
+            nxt = getattr(obj, head, None)
+            if nxt is None or isinstance(nxt, _PRIMITIVE) or not tail and write:
+                break
+            obj, rest = nxt, tail
+        if not rest:
+            return self._obj_key(obj, "")
+        return self._obj_key(obj, rest)
+
+    # ---------------------------------------------------------------- sys.settrace
+    def start(self) -> None:
+        self._old = sys.gettrace()
+        sys.settrace(self._global)
+
+    def stop(self) -> None:
+        sys.settrace(self._old)
+        for st in list(self._frames.values()):
+            self._finish(st)
+        self._frames.clear()
+
+    def _finish(self, st: dict) -> None:
+        pending = st.get("pending")
+        if pending is not None:
+            self.order.append(pending)
+            st["pending"] = None
+
+    def _global(self, frame: Any, event: str, _arg: Any) -> Any:
+        if frame.f_code.co_filename != self._filename:
+            return None
+        back = frame.f_back
+        if back is None or back.f_code.co_filename != self._filename:    # from the scan loop: a scan
+            now = self.clock()
+            if self.stop_at is not None and now > self.stop_at + 1e-9:
+                raise StopReplay(now)
+            if now < self.since - 1e-9:
+                return None
+            if not self.scan_times or self.scan_times[-1] != now:
+                self.scan_times.append(now)
+                if self.sample is not None:
+                    self.samples.append(self.sample())
+        if not self.lines or not self.scan_times:
+            return None
+        caller = self._frames.get(id(back)) if back is not None else None
+        self._calls += 1
+        st = {"call": self._calls, "parent": caller.get("pending") if caller else None, "headers": {},
+              "pending": None, "caller": caller, "self": frame.f_locals.get("self")}
+        self._frames[id(frame)] = st
+        return self._local
+
+    def _local(self, frame: Any, event: str, arg: Any) -> Any:
+        st = self._frames.get(id(frame))
+        if st is None:
+            return None
+        if event == "line":
+            self._finish(st)
+            shape = self.shapes.get(frame.f_lineno)
+            if shape is None:
+                return self._local
+            eid = self._next
+            self._next += 1
+            reads = [k for r, p in shape.reads if (k := self.key(frame, st, r, p, False)) is not None]
+            writes = []
+            for r, p in shape.writes:
+                k = self.key(frame, st, r, p, True)
+                if k is not None:
+                    writes.append((k, "[" not in (k[1] if len(k) == 2 else "")))
+            for r, p in shape.std_calls:
+                k = self.key(frame, st, r, p, False)
+                if k is not None and len(k) == 2 and k[1] == "":
+                    reads.append((k[0], WILD))
+                    writes.append(((k[0], WILD), False))
+            if shape.is_return:
+                writes.append((("R", st["call"]), True))
+            parent = st["headers"].get(shape.header) if shape.header is not None else st["parent"]
+            self.events[eid] = Event(frame.f_lineno, len(self.scan_times) - 1, reads, writes, parent, st["call"])
+            st["pending"] = eid
+            st["headers"][frame.f_lineno] = eid
+            if shape.is_return and st["caller"] is not None:
+                ce = st["caller"].get("pending")
+                if ce is not None:
+                    self.events[ce].reads.append(("R", st["call"]))
+        elif event == "return":
+            self._finish(st)
+            self._frames.pop(id(frame), None)
+        return self._local
+
+
+def matches(written: tuple, wanted: tuple) -> bool:
+    """Whether a write of key `written` may change the storage `wanted` names (one holds the
+    other: a whole struct and its field, any element and one element, an FB and its fields)."""
+    if written == wanted:
+        return True
+    if len(written) != 2 or len(wanted) != 2 or written[0] != wanted[0]:
+        return False
+    a, b = written[1], wanted[1]
+    if a == WILD or b == WILD or a == "" or b == "":
+        return True
+    a, b = a.replace("[]", ".[]"), b.replace("[]", ".[]")
+    return a.startswith(b + ".") or b.startswith(a + ".") or a == b
+
+
+# --------------------------------------------------------------------------- the program's state by name
+
+def _slots(cls: type) -> list[str]:
+    out: list[str] = []
+    for c in reversed(cls.__mro__):
+        for s in getattr(c, "__slots__", ()):
+            if s not in out:
+                out.append(s)
+    return out
+
+
+class StateReader:
+    """Every elementary value of the running program by its instance path (`MAIN.ROBOT.PAUSE.
+    DURATION`, `MAIN.CP.FRAMES[3].PAUSE`, globals as `G.SA1`), read as often as each scan: the
+    objects are walked once and again only when one of them was replaced (a restart, a whole
+    struct assigned), their leaves kept as (container, key, path). `paths`: each object's path
+    (id -> the first path that reaches a shared VAR_IN_OUT object). Two programs descended
+    from one starting program share the names of what they kept of it."""
+
+    def __init__(self, max_depth: int = 8) -> None:
+        self.max_depth = max_depth
+        self.leaves: list[tuple[Any, Any, str]] = []
+        self.edges: list[tuple[Any, Any, Any]] = []     # (container, key, the object it held)
+        self.paths: dict[int, str] = {}
+        self._plc: Any = None
+
+    def read(self, plc: Any) -> dict[str, Any]:
+        if plc is not self._plc or any(_get(c, k) is not o for c, k, o in self.edges):
+            self._plc = plc
+            self._walk(plc)
+        out = {path: _get(c, k) for c, k, path in self.leaves}
+        if any(not isinstance(v, _PRIMITIVE) for v in out.values()):    # a reference bound since
+            self._walk(plc)
+            out = {path: _get(c, k) for c, k, path in self.leaves}
+        return out
+
+    def _walk(self, plc: Any) -> None:
+        leaves: list[tuple[Any, Any, str]] = []
+        edges: list[tuple[Any, Any, Any]] = [(plc, "G", plc.G)]
+        paths: dict[int, str] = {}
+
+        def walk(obj: Any, path: str, depth: int, container: Any, key: Any) -> None:
+            if isinstance(obj, _PRIMITIVE):
+                leaves.append((container, key, path))
+                return
+            if container is not None:
+                edges.append((container, key, obj))
+            if id(obj) in paths or depth > self.max_depth:
+                return
+            if isinstance(obj, list):
+                paths[id(obj)] = path
+                for i, x in enumerate(obj):
+                    walk(x, f"{path}[{i}]", depth + 1, obj, i)
+                return
+            slots = _fields(obj)
+            if not slots:
+                return
+            paths[id(obj)] = path
+            for name in slots:
+                if name in ("EN", "ENO") or name.startswith("_"):
+                    continue
+                walk(getattr(obj, name, None), f"{path}.{name}", depth + 1, obj, name)
+
+        walk(plc.G, "G", 0, None, None)
+        for inst in plc.instances:
+            edges.append((inst, "obj", inst.obj))
+            walk(inst.obj, inst.name.upper(), 0, None, None)
+        self.leaves, self.edges, self.paths = leaves, edges, paths
+
+
+def _fields(obj: Any) -> list[str]:
+    """An object's variables: its slots, and what its __dict__ holds (a struct value)."""
+    names = [n for n in _slots(type(obj)) if n not in ("__dict__", "__weakref__")]
+    names += [k for k in getattr(obj, "__dict__", {}) if k not in names]
+    return [n for n in names if not n.startswith("_")]
+
+
+def _get(container: Any, key: Any) -> Any:
+    return container[key] if isinstance(key, int) else getattr(container, key, None)
