@@ -83,11 +83,12 @@ MP9C_CONSOLE = Console(mode="SA1", button="SB1", spare="I07", step="SA6", teach=
 
 
 def _mp9c_observe(plant: Any, _previous: Any) -> dict[str, Any]:
-    out: dict[str, Any] = {name: plant.links[name].spool for name in _MECH}
+    links = plant.links
+    out: dict[str, Any] = {name: links[name].spool for name in _MECH}
     out["HL1"] = plant.hl1
     # not compared: which mechanisms stand at an end of their travel (a frame's arrival, where
     # the next script aims its actions)
-    out["ends"] = tuple(plant.links[name].position in (0.0, 1.0) for name in _MECH)
+    out["ends"] = tuple([links[name].position in (0.0, 1.0) for name in _MECH])
     return out
 
 
