@@ -64,7 +64,7 @@ _LOW_BITS = tuple(tuple((v >> b) & 1 for b in range(8)) for v in range(256))
 _HIGH_BITS = tuple(tuple((v >> b) & 1 for b in range(7)) for v in range(128))
 
 
-@dataclass
+@dataclass(slots=True)
 class Drive:
     """One link with its drive: the state the ARS and the mechanics carry between steps."""
 
