@@ -4,7 +4,9 @@ Goals (issues 2, 3, 4): parse + check of a 5,000-line program under 0.5 s; a 10 
 program of about 300 statements at least 500 times faster than real time in virtual time;
 Modbus requests per second and latency for 1 and 10 clients, and scan jitter under that load;
 `plclab serve mp9c` flooded by 10 client processes: ticks missed (goal 0, issue #25).
-Also reported: each stand's memory (loaded, and trace growth per simulated hour), and the
+Also reported: each stand's closed loop as the grader runs it (issue 30: scans per second of
+one core, and what one scan's PLC scan, plant step, I/O exchange, observation and trace
+recording cost), each stand's memory (loaded, and trace growth per simulated hour), and the
 virtual lab's page update rate, lag and server CPU per page (plclab.lab.bench).
 """
 from __future__ import annotations
