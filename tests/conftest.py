@@ -21,6 +21,11 @@ pytest.register_assert_rewrite("st_helpers", "grader_helpers", "golden", "modbus
 import os  # noqa: E402
 
 from hypothesis import settings  # noqa: E402
+from hypothesis.configuration import set_hypothesis_home_dir  # noqa: E402
+
+# the examples database stays in the checkout's .hypothesis (a failure found is replayed on
+# the next run), though the tests run in a folder of their own (below)
+set_hypothesis_home_dir(TESTS.parent / ".hypothesis")
 
 settings.register_profile("ci", derandomize=True, print_blob=True)
 if os.environ.get("CI"):
