@@ -21,7 +21,25 @@ pytest.register_assert_rewrite("st_helpers", "grader_helpers", "golden", "modbus
 import os  # noqa: E402
 
 from hypothesis import settings  # noqa: E402
+from hypothesis.configuration import set_hypothesis_home_dir  # noqa: E402
+
+# the examples database stays in the checkout's .hypothesis (a failure found is replayed on
+# the next run), though the tests run in a folder of their own (below)
+set_hypothesis_home_dir(TESTS.parent / ".hypothesis")
 
 settings.register_profile("ci", derandomize=True, print_blob=True)
 if os.environ.get("CI"):
     settings.load_profile("ci")
+
+
+@pytest.fixture(autouse=True, scope="session")
+def _own_working_directory(tmp_path_factory):
+    """Every test process (each pytest-xdist worker, scripts/test) works in a folder of its
+    own: a command run without an output path writes where a user's would (out/grade,
+    out/retain/STAND-VARIANT-SCENARIO.json), and there two workers running the same command
+    at once would share, and delete, each other's files; nor does the suite litter the
+    checkout. Tests name the repository's files by absolute paths."""
+    here = os.getcwd()
+    os.chdir(tmp_path_factory.mktemp("cwd"))
+    yield
+    os.chdir(here)

@@ -34,3 +34,46 @@ def test_bench_memory_reports_the_trace_of_the_run_it_measures():
     changes = sum(sim.trace.change_count(n) for n in sim.trace.signals())
     assert m["stand"] == "tur10" and m["changes_per_hour"] == changes * 600
     assert 0 < m["loaded_mb"] <= LOADED_MB_CEILING and 0 < m["mb_per_hour"] <= MB_PER_HOUR_CEILING, m
+
+
+CLOSED_LOOP_FLOOR = 1000.0    # scans/s of one core; measured ~30000 (mp9c, machine loaded, 2026-12-03)
+
+
+def test_the_closed_loop_figures_split_the_scans_of_the_script_they_played():
+    from plclab.bench import LOOP_PARTS, bench_closed_loop
+
+    r = bench_closed_loop("mp9c", 8.0, runs=1)
+    assert r["stand"] == "mp9c" and r["workload"].endswith("operator script")
+    assert r["scans_per_s"] >= CLOSED_LOOP_FLOOR, r
+    assert set(r["us_per_scan"]) == set(LOOP_PARTS) and r["us_per_scan"]["scan"] > 0
+    assert sum(r["us_per_scan"].values()) < r["total_us_per_scan"] * 1.5, r   # parts of one whole
+    assert abs(r["scans_per_s"] * r["total_us_per_scan"] * 1e-6 - 1) < 1e-9
+
+
+def test_a_profiled_run_records_the_trace_of_a_plain_one():
+    """`plclab bench` times the parts of each scan (Simulation.profiling): the same steps in the
+    same order, so the same trace, scan for scan, also across a power cycle of the PLC."""
+    import random
+
+    from plclab.grader.explore import play
+    from plclab.stands.base import stand_spec
+    from plclab.stands.scripts import POWER, Event, Script
+
+    spec = stand_spec("tur10")
+    script = spec.explore.generate(random.Random(3), "task1", 12.0)
+    script = Script(tuple(sorted([*script.events, Event(5.0, POWER, "0.5")], key=lambda e: e.time)),
+                    script.duration)
+
+    def played(costs=None):
+        s = spec.session()
+        if costs is None:
+            play(s, script, spec.explore)
+        else:
+            with Simulation.profiling(costs):
+                play(s, script, spec.explore)
+        return {name: s.trace.changes(name) for name in s.trace.signals()}
+
+    costs: dict = {}
+    assert played(costs) == played()
+    off = sum(float(e.value) for e in script.events if e.name == POWER)      # no scans while the PLC is off
+    assert costs["scans"] == round((script.duration - off) / 0.01) and costs["observation"] > 0

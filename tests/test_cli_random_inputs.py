@@ -114,7 +114,7 @@ def test_serve_with_a_random_config(files, data):
     path = files / "openplc.conf"
     path.write_bytes(data)
     code, lines = run(["serve", "mp9c", "--config", str(path), "--program", str(files / "good.st"),
-                       "--port", "0", "--duration", "0"])
+                       "--port", "0", "--console", "127.0.0.1:0", "--duration", "0"])
     assert_clean(code, lines, named=path.name)
 
 
@@ -126,7 +126,7 @@ def test_serve_with_a_random_retain_file(files, data):
     conf = files / "openplc.conf"
     conf.write_text(f"[mp9c]\nretain_file = {retain.name}\n")
     code, lines = run(["serve", "mp9c", "--config", str(conf), "--program", str(files / "good.st"),
-                       "--port", "0", "--duration", "0"])
+                       "--port", "0", "--console", "127.0.0.1:0", "--duration", "0"])
     assert_clean(code, lines, named=retain.name)
     assert code == 0                         # a bad retain file is set aside; the PLC still runs
     for p in files.iterdir():

@@ -182,7 +182,8 @@ def test_serve_with_the_hmi_in_its_terminal(tmp_path):
     commands reach the running program, and `quit` stops the service cleanly."""
     conf = tmp_path / "openplc.conf"
     conf.write_text(f"[thermo]\nretain_file = {tmp_path / 'thermo.retain'}\n")
-    proc = subprocess.Popen(PLCLAB + ["serve", "thermo", "--config", str(conf), "--port", "0", "--hmi"],
+    proc = subprocess.Popen(PLCLAB + ["serve", "thermo", "--config", str(conf), "--port", "0", "--hmi",
+                                      "--console", "127.0.0.1:0"],
                             stdin=subprocess.PIPE, stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True,
                             cwd=tmp_path)
     try:

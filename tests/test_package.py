@@ -102,7 +102,7 @@ def test_installed_plclab_serves_a_stand_and_writes_a_psm_script(installed, tmp_
     _, bin_dir = installed
     plclab = str(bin_dir / "plclab")
     env = {k: v for k, v in os.environ.items() if k not in ("PYTHONPATH", "PYTHONHOME")}
-    proc = subprocess.Popen([plclab, "serve", "tur10", "--port", "0"], cwd=tmp_path, env=env, text=True,
+    proc = subprocess.Popen([plclab, "serve", "tur10", "--port", "0", "--console", "127.0.0.1:0"], cwd=tmp_path, env=env, text=True,
                             stdout=subprocess.PIPE, stderr=subprocess.PIPE)
     try:
         line = proc.stdout.readline()

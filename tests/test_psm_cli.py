@@ -4,7 +4,6 @@ holding register 50). The PSM script OpenPLC runs: tests/modbus/test_psm_script.
 from __future__ import annotations
 
 import re
-import socket
 import subprocess
 import sys
 import time
@@ -16,20 +15,16 @@ from plclab.runtime.image import ProcessImage
 PLCLAB = [sys.executable, "-m", "plclab.cli"]
 
 
-def free_port() -> int:
-    with socket.socket() as s:
-        s.bind(("127.0.0.1", 0))
-        return s.getsockname()[1]
-
-
 def start_plant(stand: str) -> tuple[subprocess.Popen, int]:
-    port = free_port()
-    proc = subprocess.Popen(PLCLAB + ["plant", stand, "--psm", f"127.0.0.1:{port}", "--console", "none"],
+    """`plclab plant STAND` on a port the OS picks (it prints which): no two tests ever ask
+    for the same one."""
+    proc = subprocess.Popen(PLCLAB + ["plant", stand, "--psm", "127.0.0.1:0", "--console", "none"],
                             stdout=subprocess.PIPE,
                             stderr=subprocess.PIPE, text=True)
     line = proc.stdout.readline()
-    assert re.search(rf"PSM I/O on 127\.0\.0\.1:{port}", line), (line, proc.stderr.read() if proc.poll() else "")
-    return proc, port
+    m = re.search(r"PSM I/O on 127\.0\.0\.1:(\d+)", line)
+    assert m, (line, proc.stderr.read() if proc.poll() else "")
+    return proc, int(m.group(1))
 
 
 def test_mp9c_plant_answers_a_psm_client_like_openplc_and_stops_on_127():

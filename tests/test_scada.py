@@ -138,7 +138,8 @@ def stand(tmp_path_factory):
     tmp = tmp_path_factory.mktemp("scada")
     conf = tmp / "openplc.conf"
     conf.write_text(f"[thermo]\nretain_file = {tmp / 'thermo.retain'}\n")
-    proc = subprocess.Popen(PLCLAB + ["serve", "thermo", "--config", str(conf), "--port", "0"],
+    proc = subprocess.Popen(PLCLAB + ["serve", "thermo", "--config", str(conf), "--port", "0",
+                                      "--console", "127.0.0.1:0"],
                             stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True, cwd=tmp)
     line = proc.stdout.readline()
     m = re.search(r"modbus on 127\.0\.0\.1:(\d+)", line)

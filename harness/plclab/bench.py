@@ -4,7 +4,9 @@ Goals (issues 2, 3, 4): parse + check of a 5,000-line program under 0.5 s; a 10 
 program of about 300 statements at least 500 times faster than real time in virtual time;
 Modbus requests per second and latency for 1 and 10 clients, and scan jitter under that load;
 `plclab serve mp9c` flooded by 10 client processes: ticks missed (goal 0, issue #25).
-Also reported: each stand's memory (loaded, and trace growth per simulated hour), and the
+Also reported: each stand's closed loop as the grader runs it (issue 30: scans per second of
+one core, and what one scan's PLC scan, plant step, I/O exchange, observation and trace
+recording cost), each stand's memory (loaded, and trace growth per simulated hour), and the
 virtual lab's page update rate, lag and server CPU per page (plclab.lab.bench).
 """
 from __future__ import annotations
@@ -179,6 +181,78 @@ def bench_serve_load(seconds: float = 10.0, clients: int = 10, batch: int = 20) 
             "fault": svc.plc.fault}
 
 
+LOOP_PARTS = ("scan", "plant", "exchange", "observation", "record")
+
+
+def bench_closed_loop(stand_name: str, seconds: float = 60.0, runs: int = 3, seed: int = 30) -> dict:
+    """The closed loop of one stand as the grader runs it: the richest shipped program with
+    its plant, played under a seeded random operator script of about `seconds` (the stand's
+    exploration generator, what the stand shows observed every scan), or the stand's default
+    scenario where the stand is not explored. Scans per second of one core (CPU time, best
+    of `runs`: the figure least disturbed by other load), and as many runs with each part of every scan timed (each
+    part's best): the PLC scan, the plant step, the I/O exchange (outputs out of the image,
+    inputs into it), the observation (the grader's probe) and the trace recording, in
+    microseconds per scan."""
+    import gc
+    import random
+
+    from plclab.grader.explore import play
+    from plclab.runtime.sim import Simulation
+    from plclab.scenario import compiled_once
+    from plclab.stands.base import stand_spec
+
+    spec = stand_spec(stand_name)
+    expl = spec.explore
+    checked = spec.session().checked
+    script = expl.generate(random.Random(seed), "task1", seconds) if expl is not None else None
+
+    def once() -> None:
+        with compiled_once(checked):
+            s = spec.session(checked=checked)
+            if script is not None:
+                play(s, script, expl)
+            else:
+                spec.scenario(None)(s)
+
+    best, costs = None, {}
+    gc.collect()
+    for _ in range(runs):
+        t0 = time.process_time()      # CPU seconds: the machine's other load does not count
+        once()
+        elapsed = time.process_time() - t0
+        best = elapsed if best is None or elapsed < best else best
+        run_costs: dict[str, float] = {}
+        with Simulation.profiling(run_costs):
+            once()
+        scans = int(run_costs.pop("scans"))
+        costs = {part: min(costs.get(part, run_costs[part]), run_costs[part]) for part in run_costs}
+    return {"stand": stand_name, "variant": spec.stand.richest_variant,
+            "workload": f"a {script.duration:.0f} s operator script" if script is not None
+            else f"scenario {spec.default_scenario}",
+            "scans": scans, "scans_per_s": scans / best,
+            "us_per_scan": {part: costs.get(part, 0.0) / scans * 1e6 for part in LOOP_PARTS},
+            "total_us_per_scan": best / scans * 1e6}
+
+
+def report_closed_loop(report: Callable[[str], None] = print, quick: bool = False) -> list[dict]:
+    """`plclab bench`'s closed-loop section (issue 30): per stand, scans per second of the
+    whole loop and what one scan costs, part by part."""
+    from plclab.stands import STANDS
+
+    out = []
+    for stand_name in STANDS:
+        try:
+            r = bench_closed_loop(stand_name, 20.0 if quick else 60.0, runs=1 if quick else 3)
+        except PlcLabError:
+            continue
+        out.append(r)
+        split = ", ".join(f"{part} {r['us_per_scan'][part]:.1f}" for part in LOOP_PARTS)
+        report(f"closed loop: {stand_name} {r['variant']} under {r['workload']}: {r['scans_per_s']:.0f} scans/s "
+               f"of one core ({r['total_us_per_scan']:.1f} us per scan, of which {split}; "
+               f"the rest: the script, the console, the session's trace)")
+    return out
+
+
 def run_bench(report: Callable[[str], None] = print, quick: bool = False,
               programs: Optional[list[Path]] = None) -> dict:
     results: dict = {}
@@ -210,6 +284,7 @@ def run_bench(report: Callable[[str], None] = print, quick: bool = False,
         report(f"scan: {r['program']}: {r['us_per_scan']:.1f} us/scan at {r['tick_ms']:g} ms tick, "
                f"{r['speedup']:.0f}x real time")
     results["native"] = report_native(report, quick=quick)
+    results["closed_loop"] = report_closed_loop(report, quick=quick)
     results["memory"] = []
     for stand_name in STANDS:
         try:

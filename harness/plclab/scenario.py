@@ -216,15 +216,22 @@ class Session:
                 if name not in self.trace:
                     self.trace.declare(name, "str", ABSENT, self._offset_ns)
             self._copied = {}
+            names = src.signals()
+            self._copy_names = [(name, self._trace_names.get(name, name)) for name in names]
+            self._seen_versions = [-1] * len(names)
         # only what was recorded since the last copy (a change at the same instant may have
-        # replaced the last entry, so that one is taken again)
-        offset, copied, renamed = self._offset_ns, self._copied, self._trace_names
-        for name in src.signals():
-            start = max(0, copied.get(name, 0) - 1)
-            out = renamed.get(name, name)
-            for t, v in src.changes_from(name, start):
-                self.trace.change(offset + t, out, v)
-            copied[name] = src.change_count(name)
+        # replaced the last entry, so that one is taken again), and only of the signals that
+        # were edited since (most scans change nothing: one list comparison)
+        versions = src.versions()
+        seen = self._seen_versions
+        if versions != seen:
+            offset, copied, copy = self._offset_ns, self._copied, self.trace.changes_into
+            for i, (name, out) in enumerate(self._copy_names):
+                if versions[i] == seen[i]:
+                    continue
+                copy(out, src.changes_from(name, max(0, copied.get(name, 0) - 1)), offset)
+                copied[name] = src.change_count(name)
+            self._seen_versions = versions
         self.trace.advance(self._offset_ns + self.plc.now_ns - self.plc.tick_ns)
 
     # ------------------------------------------------------------------ state

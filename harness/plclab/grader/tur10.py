@@ -69,22 +69,32 @@ class TracedTur10(Tur10):
         super().__init__(**params)
         self.trace: Optional[Trace] = None
         self.clock: Callable[[], float] = lambda: self.time
+        self._codes: tuple[int, ...] = ()          # the codes last recorded, AXES order
 
     def attach(self, trace: Trace, clock: Callable[[], float]) -> None:
         """Record into `trace`, stamped with `clock()` (the time of the scan the step precedes)."""
         self.trace, self.clock = trace, clock
         for k, name in zip(AXES, POS):
             trace.declare(name, "int", self.true_code(k), 0, width=16)
+        self._codes = self.true_codes()
 
     def true_code(self, k: int) -> int:
         return min(max(math.floor(self.drives[k].position), 0), 0x7FFF)
 
+    def true_codes(self) -> tuple[int, ...]:
+        """true_code of every link, AXES order."""
+        return tuple([min(max(math.floor(d.position), 0), 0x7FFF) for d in self.drives.values()])
+
     def step(self, outputs: dict[str, int], dt: float) -> dict[str, int]:
         inputs = super().step(outputs, dt)
         if self.trace is not None and outputs:      # no outputs: the PLC is off (a restart)
-            t_ns = round(self.clock() * 1e6) * 1000
-            for k, name in zip(AXES, POS):
-                self.trace.change(t_ns, name, self.true_code(k))
+            codes = self.true_codes()
+            if codes != self._codes:                # links at rest (most scans): nothing to record
+                t_ns = round(self.clock() * 1e6) * 1000
+                for name, code, last in zip(POS, codes, self._codes):
+                    if code != last:
+                        self.trace.change(t_ns, name, code)
+                self._codes = codes
         return inputs
 
 

@@ -34,6 +34,7 @@ FACE = ConsoleFace(
     lamps=(("HL1", HL1),),
     readouts=tuple((name, "thousandths of travel from the power-up end") for name in MECHANISMS))
 
+_COIL_ITEMS = tuple(COILS.items())
 _EPS = 1e-9     # float sums of dt never hit 1.0 exactly; closer than this is "at the stop"
 
 
@@ -54,7 +55,7 @@ class Link:
     def __init__(self, name: str, travel_time: float, start_switch: str, end_switch: str | None):
         self.name = name
         self.travel_time = travel_time
-        self.switches = (start_switch, end_switch)
+        self.switches = (start_switch, end_switch)   # ON at position 0.0, at 1.0 (MP9C._reeds)
         self.position = 0.0      # fraction of travel, 0 = power-up end
         self.spool = 0           # the end the valve drives the link to
 
@@ -69,14 +70,6 @@ class Link:
             self.position = max(0.0, self.position - delta)
             if self.position < _EPS:
                 self.position = 0.0
-
-    def switch_states(self) -> dict[str, int]:
-        """Reed switches: ON only at their own end stop."""
-        start, end = self.switches
-        states = {start: int(self.position == 0.0)}
-        if end is not None:
-            states[end] = int(self.position == 1.0)
-        return states
 
 
 class Cylinder(Link):
@@ -198,8 +191,9 @@ class Console:
 
     def advance(self, now: float) -> None:
         """Apply the bounce transitions due by plant time `now`."""
-        for name in CONSOLE:
-            self._settle(name, now)
+        for name, pending in self._pending.items():
+            if pending:                   # nothing pending (every tick but a bounce's few)
+                self._settle(name, now)
 
     def _settle(self, name: str, now: float) -> None:
         pending = self._pending[name]
@@ -243,6 +237,10 @@ class MP9C(PlantModel):
         self.links: dict[str, Cylinder | Gripper] = {
             link.name: link for link in (self.lift, self.rotation, self.extension, self.gripper)}
         self.console = Console(self)
+        # each reed switch, SENSORS order: (location, its link, the position where it is ON)
+        self._reeds = tuple((SENSORS[switch], link, float(end))
+                            for name in SENSORS for link in self.links.values()
+                            for end, switch in enumerate(link.switches) if switch == name)
         self.coils = {name: 0 for name in COILS}
         self.hl1 = 0
         self._bounce_rng = random.Random(0)
@@ -264,12 +262,18 @@ class MP9C(PlantModel):
         """Valves take the coil states at the start of the interval, links move for dt."""
         if dt < 0:
             raise PlantError(f"mp9c: dt must not be negative ({dt})")
-        self.coils = {name: int(bool(outputs.get(loc, 0))) for name, loc in COILS.items()}
-        self.hl1 = int(bool(outputs.get(HL1, 0)))
+        get = outputs.get
+        self.coils = {name: 1 if get(loc, 0) else 0 for name, loc in _COIL_ITEMS}
+        self.hl1 = 1 if get(HL1, 0) else 0
         if dt > 0:
-            dead = self.faults.get("dead_coil", {}).get("coil")
-            jammed = self.faults.get("jammed", {}).get("mechanism")
-            slowdown = self.faults.get("low_pressure", {}).get("factor", 1.0)
+            faults = self.faults
+            if faults:
+                dead = faults.get("dead_coil", {}).get("coil")
+                jammed = faults.get("jammed", {}).get("mechanism")
+                slowdown = faults.get("low_pressure", {}).get("factor", 1.0)
+            else:
+                dead = jammed = None
+                slowdown = 1.0
             for link in self.links.values():
                 if link.drive(self.coils, dead):
                     self.event("valve_conflict",
@@ -286,18 +290,21 @@ class MP9C(PlantModel):
 
     def switches(self) -> dict[str, int]:
         """SQ1..SQ7 as the reed switches report them (a stuck switch wins)."""
-        states: dict[str, int] = {}
-        for link in self.links.values():
-            states.update(link.switch_states())
+        return dict(zip(SENSORS, self._reed_states().values()))
+
+    def _reed_states(self) -> dict[str, int]:
+        """SQ1..SQ7 by location (a stuck switch wins): a switch is ON only at its own end stop."""
+        values = {loc: 1 if link.position == at else 0 for loc, link, at in self._reeds}
         stuck = self.faults.get("stuck_switch")
         if stuck:
-            states[stuck["switch"]] = stuck["state"]
-        return {name: states[name] for name in SENSORS}
+            values[SENSORS[stuck["switch"]]] = stuck["state"]
+        return values
 
     def read(self) -> dict[str, int]:
         """Every %IX input of the stand by location, as step() returns it."""
-        values = {SENSORS[name]: v for name, v in self.switches().items()}
-        values.update({CONSOLE[name]: v for name, v in self.console.reported.items()})
+        values = self._reed_states()
+        reported = self.console.reported
+        values.update(zip(map(CONSOLE.__getitem__, reported), reported.values()))
         return values
 
     def snapshot(self) -> dict[str, Any]:

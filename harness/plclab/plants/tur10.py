@@ -54,8 +54,17 @@ FACE = ConsoleFace(switches=tuple(CONSOLE), lamps=(("HL1", RESET_LAMP),),
                    readouts=tuple((f"link{k}", f"{LINKS[k]} position, codes 0..{FULL_SCALE}")
                                   for k in AXES))
 
+# Stepping runs every scan of every grading: its tables are made once here, so that a step
+# builds nothing but the inputs it returns.
+_ENABLES = tuple((k, ENABLE[k]) for k in AXES)
+_CONSOLE_NAMES = tuple(CONSOLE)
+_CONSOLE_LOCS = tuple(CONSOLE.values())
+# The bus bits of a code, low byte (I3.0..I3.7) and high seven bits (I2.0..I2.6) looked up
+_LOW_BITS = tuple(tuple((v >> b) & 1 for b in range(8)) for v in range(256))
+_HIGH_BITS = tuple(tuple((v >> b) & 1 for b in range(7)) for v in range(128))
 
-@dataclass
+
+@dataclass(slots=True)
 class Drive:
     """One link with its drive: the state the ARS and the mechanics carry between steps."""
 
@@ -101,6 +110,7 @@ class Tur10(PlantModel):
         self.selected: tuple[int, ...] = ()
         self.bus = FULL_SCALE
         self._contention: tuple[int, ...] = ()
+        self._lag: tuple[float, float, float] = (-1.0, -1.0, 0.0)   # (dt, tau, exp(-dt / tau)) last used
 
     # --- the plant contract -------------------------------------------------------------
 
@@ -113,17 +123,26 @@ class Tur10(PlantModel):
         """
         if dt < 0:
             raise PlantError(f"dt must not be negative (got {dt})")
-        self.reset_indicator = 1 if outputs.get(RESET_LAMP, 0) else 0
-        self.selected = tuple(k for k in AXES if not outputs.get(ENABLE[k], 0))
+        get = outputs.get
+        self.reset_indicator = 1 if get(RESET_LAMP, 0) else 0
+        self.selected = selected = tuple([k for k, loc in _ENABLES if not get(loc, 0)])
         if dt > 0:
-            for k, d in self.drives.items():
-                d.reference = signed16(outputs.get(DAC[k], 0))
-                self._check_overvoltage(k, d)
-            self._check_contention()
+            limit = self.dac_limit
+            drives = self.drives
+            for k, d in drives.items():
+                d.reference = reference = signed16(get(DAC[k], 0))
+                if (reference > limit or reference < -limit) and not d.tripped:
+                    self._check_overvoltage(k, d)
+            if len(selected) > 1 or self._contention:
+                self._check_contention()
             self.time += dt
-            for k, d in self.drives.items():
-                self._move(k, d, dt)
-        self.bus = self._bus_value(self.selected)
+            faults = self.faults
+            for k, d in drives.items():
+                # a link at rest and told to stay, without a fault, does not move (most
+                # links, most ticks): _move would return at once
+                if faults or d.speed != 0.0 or not (d.tripped or d.reference == 0):
+                    self._move(k, d, dt)
+        self.bus = self._bus_value(selected)
         return self._inputs()
 
     # --- console: the operator's side of the inputs -----------------------------------------
@@ -195,26 +214,37 @@ class Tur10(PlantModel):
 
     def _move(self, k: int, d: Drive, dt: float) -> None:
         """Exact solution of the first-order speed lag over dt (stable for any dt), then stops."""
-        if "stuck_drive" in self.faults and self.faults["stuck_drive"]["axis"] == k:
-            d.speed = 0.0
-            return
-        factor = self.faults["slow_drive"]["factor"] \
-            if "slow_drive" in self.faults and self.faults["slow_drive"]["axis"] == k else 1.0
+        faults = self.faults
+        if faults:
+            if "stuck_drive" in faults and faults["stuck_drive"]["axis"] == k:
+                d.speed = 0.0
+                return
+            factor = faults["slow_drive"]["factor"] \
+                if "slow_drive" in faults and faults["slow_drive"]["axis"] == k else 1.0
+        else:
+            factor = 1.0
         target = 0.0 if d.tripped else d.reference * self.gain * factor
         if target == 0.0 and d.speed == 0.0:
             return                      # at rest and told to stay: nothing moves (most links, most ticks)
         x0, v0, tau = d.position, d.speed, self.tau
-        decay = math.exp(-dt / tau)
+        if self._lag[0] == dt and self._lag[1] == tau:
+            decay = self._lag[2]        # the same tick as last time (every tick but the first)
+        else:
+            decay = math.exp(-dt / tau)
+            self._lag = (dt, tau, decay)
         x1 = x0 + target * dt + (v0 - target) * tau * (1.0 - decay)
         v1 = target + (v0 - target) * decay
-        extremes = [x0, x1]
-        if v0 * target < 0:             # speed reverses: the link turns where it reaches zero
+        low, high = self.stops
+        above = x0 > high or x1 > high  # where the link was over the step: both ends, and
+        below = x0 < low or x1 < low
+        if v0 * target < 0:             # where the speed reverses: the link turns where it reaches zero
             t_turn = tau * math.log((target - v0) / target)
             if t_turn < dt:
-                extremes.append(x0 + v0 * tau + target * t_turn)
-        low, high = self.stops
-        if max(extremes) > high or min(extremes) < low:
-            d.position = high if max(extremes) > high else low
+                turn = x0 + v0 * tau + target * t_turn
+                above = above or turn > high
+                below = below or turn < low
+        if above or below:
+            d.position = high if above else low
             d.speed = 0.0
             if not d.at_stop:
                 self.event("collision", f"link {k} ({LINKS[k]}) hit the mechanical stop "
@@ -245,9 +275,10 @@ class Tur10(PlantModel):
         return value
 
     def _inputs(self) -> dict[str, int]:
-        inputs = {loc: self.console_bits[name] for name, loc in CONSOLE.items()}
-        for bit, loc in enumerate(BUS_BITS):
-            inputs[loc] = (self.bus >> bit) & 1
+        """Every input: the console contacts, then the bus bits (bit n of the code on BUS_BITS[n])."""
+        inputs = dict(zip(_CONSOLE_LOCS, map(self.console_bits.__getitem__, _CONSOLE_NAMES)))
+        bus = self.bus
+        inputs.update(zip(BUS_BITS, _LOW_BITS[bus & 0xFF] + _HIGH_BITS[(bus >> 8) & 0x7F]))
         return inputs
 
 

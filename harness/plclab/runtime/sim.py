@@ -9,8 +9,9 @@ objects (plclab.runtime.plantio) that know nothing of ST.
 from __future__ import annotations
 
 import bisect
+import contextlib
 from dataclasses import dataclass
-from typing import Any, Callable, Iterable, Optional
+from typing import Any, Callable, Iterable, Iterator, Optional
 
 from plclab.errors import PlcLabError
 from plclab.iec import types as T
@@ -150,8 +151,33 @@ class Simulation:
     def tick(self) -> float:
         return self.plc.tick_ns / 1e9
 
+    # `plclab bench`'s cost split: while a dict is set here (Simulation.profiling), every
+    # simulation steps through step_profiled and adds its costs to it
+    _profile: Optional[dict[str, float]] = None
+    _clock_cost = 0.0              # seconds one reading of the CPU clock costs (calibrated)
+
+    @classmethod
+    @contextlib.contextmanager
+    def profiling(cls, costs: dict[str, float]) -> Iterator[dict[str, float]]:
+        """Inside the block, every simulation (also one a PLC restart makes) adds the CPU time
+        of each part of its closed loop to `costs` (see step_profiled). Not thread-safe: a
+        benchmark's."""
+        from time import process_time as clock
+        n = 20000
+        t0 = clock()
+        for _ in range(n):
+            clock()
+        cls._clock_cost = (clock() - t0) / n
+        cls._profile = costs
+        try:
+            yield costs
+        finally:
+            cls._profile = None
+
     def step(self, ticks: int = 1) -> None:
         """Run `ticks` scans: plant, scripted inputs, scan, record, advance."""
+        if self._profile is not None:
+            return self.step_profiled(ticks, self._profile)
         plc = self.plc
         dt = plc.tick_ns
         dt_s = dt / 1e9
@@ -170,6 +196,61 @@ class Simulation:
             record(now, sample())
             plc.advance()
         self.trace.advance(plc.now_ns - dt if plc.ticks else 0)
+
+    def step_profiled(self, ticks: int, costs: dict[str, float]) -> None:
+        """`step(ticks)` with the CPU time of each part of the closed loop added to `costs`
+        (seconds under 'plant', 'exchange', 'observation', 'scan', 'record'; 'scans' counts
+        the scans): what `plclab bench` splits a scan's cost into. A hook among the plants that
+        is not a plant binding (a grader's probe) is observation. Same order and results as
+        `step`. CPU time, so that other load on a shared machine does not count; each timed
+        interval less one reading of the clock (calibrated by `profiling`)."""
+        from time import process_time as clock
+        plc = self.plc
+        dt = plc.tick_ns
+        dt_s = dt / 1e9
+        events, times = self._events, self._event_times
+        sample = self._sample
+        record = self.recorder.record
+        plant_s = exchange_s = observe_s = scan_s = record_s = 0.0
+        n_plant = n_observe = 0
+        for _ in range(ticks):
+            now = plc.now_ns
+            step_dt = dt_s if plc.ticks else 0.0
+            for binding in self.plants:
+                if not isinstance(binding, PlantBinding):      # a hook (a grader's probe)
+                    t0 = clock()
+                    binding.step(step_dt)
+                    observe_s += clock() - t0
+                    n_observe += 1
+                    continue
+                t0 = clock()
+                outputs = binding.read_outputs()
+                t1 = clock()
+                inputs = binding.plant.step(outputs, step_dt)
+                t2 = clock()
+                binding.write_inputs(inputs)
+                t3 = clock()
+                plant_s += t2 - t1
+                exchange_s += (t1 - t0) + (t3 - t2)
+                n_plant += 1
+            while self._next_event < len(events) and times[self._next_event] <= now:
+                ev = events[self._next_event]
+                self.set(ev.name, ev.value)
+                self._next_event += 1
+            t0 = clock()
+            plc.scan()
+            t1 = clock()
+            record(now, sample())
+            plc.advance()
+            t2 = clock()
+            scan_s += t1 - t0
+            record_s += t2 - t1
+        self.trace.advance(plc.now_ns - dt if plc.ticks else 0)
+        c = self._clock_cost
+        for key, value in (("plant", plant_s - n_plant * c), ("exchange", exchange_s - 2 * n_plant * c),
+                           ("observation", observe_s - n_observe * c), ("scan", scan_s - ticks * c),
+                           ("record", record_s - ticks * c), ("scans", ticks)):
+            costs[key] = costs.get(key, 0.0) + value
 
     def run(self, seconds: float) -> None:
         """Advance by `seconds` of plant time (rounded up to whole ticks)."""

@@ -129,11 +129,12 @@ MP9C_CONSOLE = Console(mode="SA1", button="SB1", spare="I07", step="SA6", teach=
 
 
 def _mp9c_observe(plant: Any, _previous: Any) -> dict[str, Any]:
-    out: dict[str, Any] = {name: plant.links[name].spool for name in _MECH}
+    links = plant.links
+    out: dict[str, Any] = {name: links[name].spool for name in _MECH}
     out["HL1"] = plant.hl1
     # not compared: which mechanisms stand at an end of their travel (a frame's arrival, where
     # the next script aims its actions)
-    out["ends"] = tuple(plant.links[name].position in (0.0, 1.0) for name in _MECH)
+    out["ends"] = tuple([links[name].position in (0.0, 1.0) for name in _MECH])
     return out
 
 
@@ -232,16 +233,27 @@ def _level(reference: float, automatic: bool = False) -> int:
     return lvl if reference >= 0 else -lvl
 
 
+_LINK_NAMES = {k: f"link{k}" for k in (1, 2, 3, 4, 5)}
+_LEVELS: tuple[dict[int, int], dict[int, int]] = ({}, {})   # _level by reference: manual, automatic
+
+
 def _tur10_observe(plant: Any, previous: Any) -> dict[str, Any]:
+    # every scan of an exploration, twice: no names built, the previous value looked up once
     out: dict[str, Any] = {}
     automatic = bool(plant.console_bits.get("SA7"))
+    get = previous.get if previous else None
+    levels = _LEVELS[automatic]
     for k, d in plant.drives.items():
-        lvl = _level(d.reference, automatic)
-        prev = previous.get(f"link{k}") if previous else None
-        if lvl == 0 and prev is not None and prev[0] == 0:
-            out[f"link{k}"] = prev                 # at rest: where it stopped
-        else:
-            out[f"link{k}"] = (lvl, round(d.position) if lvl == 0 else 0)
+        name = _LINK_NAMES[k]
+        lvl = levels.get(d.reference)
+        if lvl is None:                            # a few hundred references: each worked out once
+            lvl = levels[d.reference] = _level(d.reference, automatic)
+        if lvl == 0 and get is not None:
+            prev = get(name)
+            if prev is not None and prev[0] == 0:
+                out[name] = prev                   # at rest: where it stopped
+                continue
+        out[name] = (lvl, round(d.position) if lvl == 0 else 0)
     out["HL1"] = plant.reset_indicator
     return out
 

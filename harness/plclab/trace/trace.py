@@ -73,6 +73,7 @@ class Trace:
         self._prefixes: Optional[frozenset[str]] = None
         self.aliases: dict[str, str] = {}
         self._dropped: list[int] = []        # entries `drop_before` removed, per signal
+        self._versions: list[int] = []       # edits per signal (any append, replace, drop)
         self.start_ns = 0                    # nothing before this instant is kept (drop_before)
 
     # ------------------------------------------------------------------ recording
@@ -96,6 +97,7 @@ class Trace:
         self._times.append([time_ns])
         self._values.append([conv(initial)])
         self._dropped.append(0)
+        self._versions.append(0)
         self._conv.append(conv)
         self._prefixes = None
         if time_ns > self._end_ns:
@@ -106,15 +108,25 @@ class Trace:
         """Record `value` for `name` at `time_ns` if it differs; True if the trace changed."""
         return self._record(self._resolve(name), time_ns, value)
 
+    def changes_into(self, name: str, changes: Iterable[tuple[int, Any]], offset_ns: int = 0) -> None:
+        """`change(offset_ns + t, name, v)` for each (t, v) of `changes`, the name looked up
+        once (a session copies its simulation's recording this way after every run)."""
+        i = self._resolve(name)
+        record = self._record
+        for t, v in changes:
+            record(i, offset_ns + t, v)
+
     def _record(self, i: int, time_ns: int, value: Any) -> bool:
         times = self._times[i]
         values = self._values[i]
         last_t = times[-1]
         if time_ns > last_t:
-            if same_value(values[-1], value):
+            last = values[-1]
+            if last == value or (last != last and value != value):     # same_value, inline
                 return False
             times.append(time_ns)
             values.append(self._conv[i](value))
+            self._versions[i] += 1
             if time_ns > self._end_ns:
                 self._end_ns = time_ns
             return True
@@ -123,6 +135,7 @@ class Trace:
                              f"before its last change at {format_seconds(last_t)} s")
         if same_value(values[-1], value):
             return False
+        self._versions[i] += 1
         if len(times) > 1 and same_value(values[-2], value):
             times.pop()          # back to the value before this instant: no event at all
             values.pop()
@@ -147,6 +160,8 @@ class Trace:
         total = 0
         for i, times in enumerate(self._times):
             k = bisect_right(times, time_ns) - 1
+            if k >= 0:
+                self._versions[i] += 1
             if k > 0:
                 del times[:k]
                 del self._values[i][:k]
@@ -191,6 +206,12 @@ class Trace:
         `changes(name)` has, plus what `drop_before` dropped."""
         i = self._resolve(name)
         return len(self._times[i]) + self._dropped[i]
+
+    def versions(self) -> list[int]:
+        """A count of the edits of each signal (declaration order): a signal whose count is the
+        same as at an earlier call has not changed since, so an incremental reader (a session
+        copying its simulation's trace after every scan) skips it without reading it."""
+        return self._versions[:]
 
     def changes_from(self, name: str, start: int) -> list[tuple[int, Any]]:
         """`changes(name)[start:]` without copying the rest (for incremental readers); `start`

@@ -1,0 +1,78 @@
+"""The plant <-> image exchange (plclab.runtime.plantio): whatever a plant returns from a step
+lands in the input image exactly as the plant contract says (raw values masked to the area's
+width, every name it returned, nothing else), however the names change from step to step:
+the generated writer that serves the usual case (the same names every step) must never
+write what the plain loop would not."""
+from __future__ import annotations
+
+from typing import Any
+
+from plclab.runtime.image import ProcessImage
+from plclab.runtime.plantio import MAX_WRITER_COMPILES, PlantBinding
+
+
+class ScriptedPlant:
+    """A plant that returns, step by step, the inputs it was given, and keeps the outputs it saw."""
+
+    outputs = ["QX0.1", "QW2"]
+    period = 0.01
+
+    def __init__(self, steps: list[dict[str, Any]]):
+        self.steps = list(steps)
+        self.seen: list[dict[str, int]] = []
+
+    def step(self, outputs: dict[str, int], dt: float) -> dict[str, Any]:
+        self.seen.append(outputs)
+        return self.steps.pop(0)
+
+
+def test_a_step_reads_the_outputs_and_writes_the_masked_inputs():
+    image = ProcessImage()
+    image.areas["QX"][1], image.areas["QW"][2] = 1, 1234
+    plant = ScriptedPlant([{"IX0.0": True, "IX1.7": 3, "IW4": 70000, "IW5": 2.9}])
+    PlantBinding(plant, image).step(0.01)
+    assert plant.seen == [{"QX0.1": 1, "QW2": 1234}]
+    ix, iw = image.areas["IX"], image.areas["IW"]
+    assert (ix[0], ix[15], iw[4], iw[5]) == (1, 1, 70000 & 0xFFFF, 2)
+    assert type(ix[0]) is int                        # a bool from the plant is stored as 0/1
+
+
+def test_outputs_are_a_new_dict_each_step_a_plant_may_keep():
+    image = ProcessImage()
+    plant = ScriptedPlant([{}, {}])
+    binding = PlantBinding(plant, image)
+    binding.step(0.01)
+    image.areas["QW"][2] = 7
+    binding.step(0.01)
+    assert plant.seen == [{"QX0.1": 0, "QW2": 0}, {"QX0.1": 0, "QW2": 7}]
+
+
+def test_names_that_change_between_steps_write_exactly_what_each_step_returned():
+    steps = [{"IX0.0": 1, "IW0": 5},
+             {"IX0.0": 0, "IW0": 6},                 # the same names: the generated writer
+             {"IX0.1": 1, "IW1": 9},                 # other names, as many
+             {"IX0.0": 1},                           # fewer
+             {"IX0.0": 0, "IW0": 8, "IW1": 10},      # more
+             {"IW0": 11, "I0.0": 1},                 # S7 spelling of IX0.0, another order
+             *({"IX0.2": n % 2, "IW2": n} for n in range(3 * MAX_WRITER_COMPILES))]
+    image, plain = ProcessImage(), ProcessImage()
+    binding = PlantBinding(ScriptedPlant(steps), image)
+    for inputs in steps:
+        binding.step(0.01)
+        for name, value in inputs.items():           # what the contract says, written plainly
+            area = "IX" if name.startswith(("IX", "I0")) else "IW"
+            index = int(name[2:]) if area == "IW" else int(name[-3]) * 8 + int(name[-1])
+            plain.areas[area][index] = int(value) & (1 if area == "IX" else 0xFFFF)
+        assert image.areas == plain.areas, inputs
+
+
+def test_two_names_of_one_cell_are_written_in_the_plants_order():
+    image = ProcessImage()
+    binding = PlantBinding(ScriptedPlant([{"IX0.0": 1, "I0.0": 0}, {"IX0.0": 1, "I0.0": 0},
+                                          {"I0.0": 0, "IX0.0": 1}]), image)
+    binding.step(0.01)
+    assert image.areas["IX"][0] == 0
+    binding.step(0.01)
+    assert image.areas["IX"][0] == 0                 # the last of the dict wins, every step
+    binding.step(0.01)
+    assert image.areas["IX"][0] == 1
