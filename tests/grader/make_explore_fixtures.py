@@ -199,7 +199,10 @@ TUR10 = (
             "pointer goes back to frame 1), so on the return to automatic mode the robot moves again "
             "without a press.",
             (("IF NOT Active THEN\n    Sequencer.State := STOPPED;\n    Sequencer.Ptr := 1;\n",
-              "IF NOT Active THEN\n    Sequencer.Ptr := 1;\n"),)),
+              "IF NOT Active THEN\n    Sequencer.Ptr := 1;\n"),),
+            # rare since Task 1's automatic mode is compared only up to the first press (the one
+            # rule set, issue 29): 4 of 50 scripts of another seed show it (miss chance 1.5 %)
+            rare=True),
     # ------------------------------------------------------------------ correct alternatives
     Fixture("tur10", "task1_alt_jog_case", "task1", True,
             "other structure: the jog reference from a CASE on the two buttons.",

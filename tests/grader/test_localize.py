@@ -9,13 +9,17 @@ from plclab.frontend import check_sources
 from plclab.grader.report import GradeReport, Row
 from plclab.grader.localize import (StateLog, backward_slice, changed_lines, ochiai, pou_lines, rank)
 from plclab.runtime.compiler import compile_unit
+from plclab.runtime.native import python_only
 from plclab.runtime.plc import PLC
 from plclab.runtime.sim import Simulation
 from plclab.runtime.tracing import Tracer
 
 
 def _sim(src: str, name: str = "t.st") -> Simulation:
-    return Simulation(PLC(compile_unit(check_sources([(name, src)]))), watch=[])
+    """A program on the Python path, whatever the native cache holds: the tracer follows the
+    generated Python (as the grader's replays do, plclab.runtime.native.python_only)."""
+    with python_only():
+        return Simulation(PLC(compile_unit(check_sources([(name, src)]))), watch=[])
 
 
 def _traced(sim: Simulation, scans: int, log: StateLog | None = None) -> Tracer:

@@ -778,6 +778,10 @@ def row_message(row: Row) -> str:
         parts.append(f"scenario '{row.scenario}'")
     if row.steps:                  # exploration: the shortest console history that shows it
         parts.append("console steps: " + " ".join(step.strip() for step in row.steps))
+    if row.lines:                  # the student's statements where the mistake most likely is
+        parts.append("where to look: " + " | ".join(f"{n}. {line}" for n, line in enumerate(row.lines, 1)))
+    if row.written:
+        parts.append(row.written)
     return "; ".join(parts)
 
 

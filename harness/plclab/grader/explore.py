@@ -1218,19 +1218,22 @@ def student_lines(ex: Explorer, script: Script, output: str, t: float, stand: Op
     `script` played again on the student's program (traced) and on the model answer, the
     dependence slice of `output` at plant time `t` ranked against `stand`'s starting program
     (a localize.Localized, None where nothing can be said)."""
+    from plclab.runtime.native import python_only
+
     from .localize import candidates
     tick = ex.expl.tick_s
-    with compiled_once(ex.model.checked, share=ex.model.cache):
-        m = ex.session(ex.model, "slice-model")
-    with compiled_once(ex.student.checked, share=ex.student.cache):
-        s = ex.session(ex.student, "slice")
+    with python_only():                     # the tracer follows the generated Python, restarts too
+        with compiled_once(ex.model.checked, share=ex.model.cache):
+            m = ex.session(ex.model, "slice-model")
+        with compiled_once(ex.student.checked, share=ex.student.cache):
+            s = ex.session(ex.student, "slice")
 
-    def replay(sess: Session, begin: Callable[[], None]) -> None:
-        p = ex.student if sess is s else ex.model
-        with compiled_once(p.checked, share=p.cache):
-            play(sess, script, None, until=t + tick / 2, split=(0.0, begin))
+        def replay(sess: Session, begin: Callable[[], None]) -> None:
+            p = ex.student if sess is s else ex.model
+            with compiled_once(p.checked, share=p.cache):
+                play(sess, script, None, until=t + tick / 2, split=(0.0, begin))
 
-    return candidates(s, m, replay, output, t, ex.student.sources, stand)
+        return candidates(s, m, replay, output, t, ex.student.sources, stand)
 
 
 # The requirement a divergence breaks, where one plainly matches (else it is E1's own): a

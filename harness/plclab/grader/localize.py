@@ -646,10 +646,12 @@ def scripted(req: Any, scenario: Any, sources: Sequence[tuple[str, str]], checke
     import tempfile
     from pathlib import Path
 
+    from plclab.runtime.native import python_only
     from plclab.scenario import ScenarioFailure, compiled_once
 
     from .registry import Checks
-    with tempfile.TemporaryDirectory(prefix="plclab-localize-") as tmp:
+    # the tracer follows the generated Python: every PLC of the replays (restarts too) on that path
+    with tempfile.TemporaryDirectory(prefix="plclab-localize-") as tmp, python_only():
         own: list = []                       # the student's program compiled once, restarts included
 
         def session(srcs: Any, chk: Any, name: str, share: list) -> Any:
