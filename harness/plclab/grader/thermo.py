@@ -406,7 +406,8 @@ def record_session(host: str = "127.0.0.1", port: int = 5020, duration_s: Option
         modbus = dataclasses.replace(conf.modbus, bind=host, port=port)
         opts = ServeOptions(sources(get_stand(STAND), "full"), stand_cfg, modbus, make_plant(STAND), "twido", twido_profile(STAND))
         service = Service(opts, report=lambda line: None)
-        recorder = TrafficRecorder(lambda: service.plc.now_ns / 1e9)
+        # stamped with the scan whose outputs the answer read (the replay answers after that scan)
+        recorder = TrafficRecorder(lambda: (service.runner.scanned_ns or 0) / 1e9)
         service.server.on_request = recorder
         service.start()
         try:

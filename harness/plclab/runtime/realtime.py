@@ -54,6 +54,8 @@ class RealTimeRunner:
         self.on_error: Optional[Callable[[str], None]] = None
         self.error: Optional[str] = None        # why the loop stopped by itself, if it did
         self.stats = RealTimeStats()
+        self.scanned_ns: Optional[int] = None   # PLC time of the last scan whose outputs are in the image
+        self.first_scan = threading.Event()     # set once a scan has run (or the loop has ended)
         self._clock, self._sleep = clock, sleep
         self._stop = threading.Event()
         self._thread: Optional[threading.Thread] = None
@@ -101,6 +103,8 @@ class RealTimeRunner:
             self._scan_loop(until)
         except Exception as exc:   # noqa: BLE001 - whatever it is, the PLC must show it
             self._fail(exc)
+        finally:
+            self.first_scan.set()  # nobody waits for a scan that will never come
 
     def _fail(self, exc: Exception) -> None:
         """The loop cannot go on: FAULT (outputs safe), reported once, then the loop ends."""
@@ -150,7 +154,10 @@ class RealTimeRunner:
             if self.before_scan is not None:
                 self.before_scan(plc)
             plc.scan()
+            self.scanned_ns = now_ns
             if self.on_scan is not None:
                 self.on_scan(plc)
             stats.ticks += 1
             k += 1
+            if not self.first_scan.is_set():
+                self.first_scan.set()
