@@ -30,7 +30,7 @@ from plclab.frontend import check_sources
 from plclab.runtime.compiler import CompiledProgram, compile_unit
 from plclab.runtime.image import image_slot
 from plclab.runtime.plc import PLC
-from plclab.runtime.retain import RetainStore
+from plclab.runtime.retain import MemoryRetainStore, RetainStore
 from plclab.runtime.sim import Simulation
 from plclab.trace import Trace
 
@@ -130,7 +130,7 @@ class Session:
     """One stand in virtual time: PLC program, plant model, trace and console."""
 
     def __init__(self, sources: Sequence[tuple[str, str]], plant: Any, labels: dict[str, str],
-                 watch: Iterable[str] = (), retain_path: Optional[Path] = None, tick_s: Optional[float] = None,
+                 watch: Iterable[str] = (), retain_path: Optional[Path | MemoryRetainStore] = None, tick_s: Optional[float] = None,
                  name: str = "stand", checked: Any = None, observables: Optional[dict[str, str]] = None,
                  strict_watch: bool = True):
         self.name = name
@@ -154,7 +154,10 @@ class Session:
 
     # ------------------------------------------------------------------ set-up
     def _start_plc(self) -> None:
-        store = RetainStore(self.retain_path) if self.retain_path else None
+        if isinstance(self.retain_path, MemoryRetainStore):
+            store = self.retain_path             # one memory across the session's restarts
+        else:
+            store = RetainStore(self.retain_path) if self.retain_path else None
         self.plc = PLC(_compiled(self.checked), tick_ns=self.tick_ns, retain=store)
         self.plc.now_ns = self.plc.ticks = 0
         paths = [self.observables.get(n, n) for n in self.watch]

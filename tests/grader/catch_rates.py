@@ -26,7 +26,6 @@ import dataclasses
 import json
 import re
 import sys
-import tempfile
 from concurrent.futures import ProcessPoolExecutor
 from pathlib import Path
 
@@ -68,21 +67,20 @@ def rate(job: tuple[str, str, str, bool, int, int]) -> dict:
     srcs = read_sources([path])
     student = Program(srcs, check_sources(srcs))
     hits, kinds = [], {}
-    with tempfile.TemporaryDirectory(prefix="plclab-rates-") as tmp:
-        ex = Explorer(expl, task, requirement_set(stand, task).make_session, student, model, Path(tmp))
-        for n, (script, _status, found) in enumerate(search(ex, f"rates{base}", scripts, coverage=coverage,
-                                                              stop=False)):
-            if found is not None:
-                played, div = found
-                hits.append(n)
-                kinds[div.signal.name] = kinds.get(div.signal.name, 0) + 1
-                if explain_first and len(hits) <= explain_first:
-                    from plclab.grader.explore import explain, shrink
-                    small, sdiv = shrink(ex, played, div)
-                    f = explain(ex, small, sdiv, stand)
-                    print(f"--- {path}: script {n}\n  " + "\n  ".join(f.steps) + f"\n  -> {f.first_difference}"
-                          + "".join(f"\n  {k}. {c.where()}" for k, c in enumerate(f.candidates, 1))
-                          + (f"\n  line {f.line}" if f.line else ""), flush=True)
+    ex = Explorer(expl, task, requirement_set(stand, task).make_session, student, model)
+    for n, (script, _status, found) in enumerate(search(ex, f"rates{base}", scripts, coverage=coverage,
+                                                          stop=False)):
+        if found is not None:
+            played, div = found
+            hits.append(n)
+            kinds[div.signal.name] = kinds.get(div.signal.name, 0) + 1
+            if explain_first and len(hits) <= explain_first:
+                from plclab.grader.explore import explain, shrink
+                small, sdiv = shrink(ex, played, div)
+                f = explain(ex, small, sdiv, stand)
+                print(f"--- {path}: script {n}\n  " + "\n  ".join(f.steps) + f"\n  -> {f.first_difference}"
+                      + "".join(f"\n  {k}. {c.where()}" for k, c in enumerate(f.candidates, 1))
+                      + (f"\n  line {f.line}" if f.line else ""), flush=True)
     p = len(hits) / scripts
     name = f"{stand}/{Path(path).stem}" if HERE in Path(path).resolve().parents else path
     return {"fixture": name, "task": task, "mistake": mistake, "scripts": scripts, "coverage": coverage,

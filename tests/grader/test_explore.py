@@ -101,7 +101,7 @@ def test_a_watchdog_that_times_the_whole_run_is_found_with_a_one_minimal_script(
     assert f.divergence.signal.name == "HL1"          # the fault's blinking: a stop the model answer has not
     assert Path(f.line[0]).name == path.name
     # shrunk to 1-minimal: without any one of its steps the script shows no difference
-    ex = Explorer(expl, "task2", requirement_set(stand, "task2").make_session, student, model, tmp_path)
+    ex = Explorer(expl, "task2", requirement_set(stand, "task2").make_session, student, model)
     assert ex.diverges(f.script) is not None
     for k in range(len(f.script.events)):
         assert ex.diverges(without(f.script, {k})) is None, f"step {k + 1} of {f.steps} is not needed"

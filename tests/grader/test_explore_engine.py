@@ -97,10 +97,10 @@ def test_the_scripts_depend_on_the_seed_and_the_model_answer_never_on_the_studen
     make = requirement_set("mp9c", "task2").make_session
     streams = []
     for name in ("mp9c/task2_alt_pause_if", "mp9c/task2_full_memory_wraps"):
-        ex = Explorer(expl, "task2", make, _program(_fixture(name)), model, tmp_path)
+        ex = Explorer(expl, "task2", make, _program(_fixture(name)), model)
         streams.append(list(script_stream(ex, 3, 16)))
     assert streams[0] == streams[1]
-    ex = Explorer(expl, "task2", make, _program(_fixture("mp9c/task2_alt_pause_if")), model, tmp_path)
+    ex = Explorer(expl, "task2", make, _program(_fixture("mp9c/task2_alt_pause_if")), model)
     plain = list(script_stream(ex, 3, 16, coverage=False))
     assert plain[:8] == streams[0][:8] and plain[8:] != streams[0][8:]
     states = states_of(ex, streams[0][0])

@@ -251,7 +251,7 @@ def test_task3s_enable_back_before_the_last_pause_is_free_to_read_as_a_level_or_
                      Event(4.4, "I15", "0"), Event(5.0, "I15", "1")), 16.0)
     expl = stand_spec("tur10").explore
     make = requirement_set("tur10", "task3").make_session
-    assert Explorer(expl, "task3", make, student, model, tmp_path).outcome(script).divergence is None
+    assert Explorer(expl, "task3", make, student, model).outcome(script).divergence is None
     strict = replace(expl, free_after=lambda task: ())
-    d = Explorer(strict, "task3", make, student, model, tmp_path).outcome(script).divergence
+    d = Explorer(strict, "task3", make, student, model).outcome(script).divergence
     assert d is not None and d.signal.name == "link1"

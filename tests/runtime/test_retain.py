@@ -195,3 +195,32 @@ def test_retained_fb_instance_is_restored_and_checked(tmp_path):
     edit_saved_file(HOLD, path, 0, lambda v: v["INST.H"]["fb"].__setitem__("N", "four"))
     plc, problems = load_reporting(HOLD, path)
     assert plc.read("inst.h.n") == 0 and len(problems) == 1 and "INST.H.N" in problems[0]
+
+
+def test_a_memory_store_keeps_what_a_file_would_across_restarts_and_no_file_is_written(tmp_path, monkeypatch):
+    """The grader's sessions keep retained values in memory: the same values after a restart as
+    the file store gives (saved at the same moments), another program's values refused, and
+    nothing written to disk."""
+    from plclab.runtime.retain import MemoryRetainStore
+    monkeypatch.chdir(tmp_path)
+    memory = MemoryRetainStore()
+    unit = compile_unit(check_sources([("retain.st", COUNTER)]))
+    plc = PLC(unit, retain=memory, retain_period_ns=100_000_000)
+    on_file = make_plc(COUNTER, tmp_path / "retain.json", retain_period_ns=100_000_000)
+    run_scans(plc, 35)
+    run_scans(on_file, 35)
+    plc.enter_fault("internal", "power cut: no flush at stop")        # only the periodic save is kept
+    on_file.enter_fault("internal", "power cut: no flush at stop")
+    again = PLC(unit, retain=memory)
+    from_file = make_plc(COUNTER, tmp_path / "retain.json")
+    assert again.read("inst.count") == from_file.read("inst.count") == 31
+    assert again.read("inst.frames") == from_file.read("inst.frames")
+    assert again.read("inst.scratch") == 0
+    run_scans(again, 4)
+    again.stop()                                                      # stop flushes
+    assert PLC(unit, retain=memory).read("inst.count") == 35
+    other = COUNTER.replace("count : DINT", "count : INT").replace("count := count + 1", "count := count + 2") \
+                   .replace("DINT_TO_INT(count MOD 1000)", "count MOD 1000")
+    refused = PLC(compile_unit(check_sources([("retain.st", other)])), retain=memory)
+    assert refused.read("inst.count") == 0 and "different program" in memory.last_problem
+    assert sorted(p.name for p in tmp_path.iterdir()) == ["retain.json"]   # the file store's own only

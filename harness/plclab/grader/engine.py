@@ -15,13 +15,13 @@ or a check (anything but ScenarioFailure) turns that scenario's unfinished requi
 from __future__ import annotations
 
 import dataclasses
-import tempfile
 from pathlib import Path
 from typing import Optional, Sequence
 
 from plclab.errors import CompileError, PlcLabError
 from plclab.fileio import check_output
 from plclab.frontend import check_sources, read_sources
+from plclab.runtime.retain import MemoryRetainStore
 from plclab.scenario import ScenarioFailure, Session, compiled_once
 from plclab.trace import write_csv, write_vcd
 
@@ -81,10 +81,10 @@ def grade_sources(stand: str, task: str, sources: Sequence[tuple[str, str]],
                          "(the bundle you were given, with its CONFIGURATION Config0)"]
         return report
     checks = Checks(req.requirements)
-    with tempfile.TemporaryDirectory(prefix="plclab-grade-") as tmp, compiled_once(checked):
+    with compiled_once(checked):
         for scenario in req.scenarios:
             checks.scenario = scenario.name
-            retain = Path(tmp) / f"{scenario.name}.retain.json" if scenario.needs_retain else None
+            retain = MemoryRetainStore() if scenario.needs_retain else None
             try:
                 s = req.make_session(sources, retain, checked)
             except PlcLabError as e:                 # compiles, but cannot be loaded as a program

@@ -42,6 +42,7 @@ from pathlib import Path
 from typing import Any, Callable, Iterator, Optional, Sequence
 
 from plclab.errors import PlcLabError
+from plclab.runtime.retain import MemoryRetainStore
 from plclab.scenario import Session, compiled_once
 from plclab.stands.operators import (BLINK_END_TOL, BLINK_HALF_MAX, BLINKING, START_S, Exploration, Observed,
                                      blink_spans)
@@ -617,9 +618,9 @@ class Explorer:
     plays as before issue 30 (both programs, full traces: what the tests compare against)."""
 
     def __init__(self, expl: Exploration, task: str, make_session: Callable, student: Program, model: Program,
-                 workdir: Path, model_plays: Optional[ModelPlays] = None, record: bool = False):
+                 model_plays: Optional[ModelPlays] = None, record: bool = False):
         self.expl, self.task, self.make_session = expl, task, make_session
-        self.student, self.model, self.workdir = student, model, workdir
+        self.student, self.model = student, model
         self.observed = expl.compared(task)
         self.plays = 0
         self.phases: list[float] = []
@@ -640,9 +641,7 @@ class Explorer:
         return out
 
     def session(self, p: Program, name: str) -> Session:
-        retain = self.workdir / f"{name}.retain.json"
-        if retain.exists():
-            retain.unlink()
+        retain = MemoryRetainStore()          # a fresh controller's memory, kept across its restarts
         with compiled_once(p.checked, share=p.cache):
             return self.make_session(p.sources, retain, p.checked)
 
@@ -910,8 +909,8 @@ class ExploreResult:
 
 
 def _fast_tmp() -> Optional[str]:
-    """A folder in memory for the retain files (/dev/shm where there is one): the PLC saves its
-    retained memory every few scans, and thousands of scripts must not wait for a disk."""
+    """A folder in memory (/dev/shm where there is one) for the model answer's plays the
+    bench shares between its runs: thousands of scripts must not wait for a disk."""
     shm = Path("/dev/shm")
     return str(shm) if shm.is_dir() and os.access(shm, os.W_OK) else None
 
@@ -1101,9 +1100,6 @@ def _worker_unit(job: tuple[Any, int, Script, int, bool, bool]) -> list[tuple[Sc
     (script, status, states reached) of each script, up to the first that diverges (`stop`)."""
     seed, k, base, n, coverage, stop = job
     ex: Explorer = _WORKER["ex"]
-    if "dir" not in _WORKER:                         # retain files of this process's own
-        _WORKER["dir"] = ex.workdir = ex.workdir / f"w{os.getpid()}"
-        ex.workdir.mkdir(exist_ok=True)
     out = []
     script = base
     for i in range(n):
@@ -1175,20 +1171,19 @@ def explore(expl: Exploration, stand: str, task: str, make_session: Callable, st
     before issue 30 (the same result, slower: for `plclab bench` and the tests)."""
     episodes = expl.episodes if episodes is None else episodes
     seed = seed_of(stand, task, student.sources) if seed is None else seed
-    with tempfile.TemporaryDirectory(prefix="plclab-explore-", dir=_fast_tmp()) as tmp:
-        plays = ModelPlays(_model_salt(f"{stand}\0{task}", model), model_plays)
-        ex = Explorer(expl, task, make_session, student, model, Path(tmp), plays, record=record)
-        result = ExploreResult(0, 0.0, 0, seed)
-        for script, status, detail in search(ex, seed, episodes, jobs, coverage):
-            result.episodes += 1
-            result.plant_seconds += script.duration
-            result.inconclusive += status == "ambiguous"          # still ambiguous after moving
-            if detail is not None:
-                played, div = detail
-                small, sdiv = shrink(ex, played, div, shrink_runs)
-                result.finding = explain(ex, small, sdiv, stand)
-        result.plays = ex.plays
-        result.model_plays = ex.model_plays.played
+    plays = ModelPlays(_model_salt(f"{stand}\0{task}", model), model_plays)
+    ex = Explorer(expl, task, make_session, student, model, plays, record=record)
+    result = ExploreResult(0, 0.0, 0, seed)
+    for script, status, detail in search(ex, seed, episodes, jobs, coverage):
+        result.episodes += 1
+        result.plant_seconds += script.duration
+        result.inconclusive += status == "ambiguous"          # still ambiguous after moving
+        if detail is not None:
+            played, div = detail
+            small, sdiv = shrink(ex, played, div, shrink_runs)
+            result.finding = explain(ex, small, sdiv, stand)
+    result.plays = ex.plays
+    result.model_plays = ex.model_plays.played
     return result
 
 
@@ -1408,8 +1403,8 @@ def exploration_rows(req: Any, sources: Sequence[tuple[str, str]], checked: Any,
         base.mkdir(parents=True, exist_ok=True)
         (base / script_name).write_text(f.script.csv_text(), encoding="utf-8")
         files.append(base / script_name)
-        with compiled_once(checked, share=student.cache), tempfile.TemporaryDirectory(dir=_fast_tmp()) as tmp:
-            ex = Explorer(expl, req.task, req.make_session, student, model, Path(tmp))
+        with compiled_once(checked, share=student.cache):
+            ex = Explorer(expl, req.task, req.make_session, student, model)
             s, _ = ex.run(student, "trace", f.script, expl=False)
         names = req.trace_names(s) if req.trace_names else None
         for suffix, write in ((".trace.csv", write_csv), (".trace.vcd", write_vcd)):
@@ -1461,9 +1456,8 @@ def replay(spec: Any, s: Session, inputs: str, against: Optional[str], reference
         raise PlcLabError(f"run: --against {against}: {why}")
     srcs = list(student_sources) if student_sources is not None else s.sources
     student = Program(srcs, checked if checked is not None else s.checked)
-    with tempfile.TemporaryDirectory(prefix="plclab-replay-", dir=_fast_tmp()) as tmp:
-        ex = Explorer(expl, against, req.make_session, student, model, Path(tmp))
-        out = ex.outcome(script)
+    ex = Explorer(expl, against, req.make_session, student, model)
+    out = ex.outcome(script)
     if out.divergence is None:
         return None
     return out.divergence.text(expl.tick_s)

@@ -29,6 +29,7 @@ import re
 from dataclasses import dataclass
 from typing import Any, Callable, Optional, Sequence
 
+from plclab.runtime.retain import MemoryRetainStore
 from plclab.runtime.tracing import WILD, StateReader, StopReplay, Tracer, matches
 
 MAX_CANDIDATES = 3
@@ -643,19 +644,16 @@ def scripted(req: Any, scenario: Any, sources: Sequence[tuple[str, str]], checke
     on the model answer (`model`: sources, checked, cache, as plclab.grader.explore.Program),
     each on a fresh stand, to the failure; the output followed is the one that differs then,
     one the row's `message` (its expected and observed texts) names first."""
-    import tempfile
-    from pathlib import Path
-
     from plclab.runtime.native import python_only
     from plclab.scenario import ScenarioFailure, compiled_once
 
     from .registry import Checks
     # the tracer follows the generated Python: every PLC of the replays (restarts too) on that path
-    with tempfile.TemporaryDirectory(prefix="plclab-localize-") as tmp, python_only():
+    with python_only():
         own: list = []                       # the student's program compiled once, restarts included
 
         def session(srcs: Any, chk: Any, name: str, share: list) -> Any:
-            retain = Path(tmp) / f"{name}.retain.json" if scenario.needs_retain else None
+            retain = MemoryRetainStore() if scenario.needs_retain else None
             with compiled_once(chk, share=share):
                 return req.make_session(list(srcs), retain, chk)
 

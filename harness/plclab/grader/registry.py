@@ -42,6 +42,7 @@ from pathlib import Path
 from typing import Any, Callable, Iterator, Optional, Sequence, Union
 
 from plclab.errors import PlcLabError
+from plclab.runtime.retain import MemoryRetainStore
 from plclab.scenario import Session
 
 EVERY = "*"           # Requirement.scenario: checked after every scenario (`RequirementSet.every`)
@@ -164,13 +165,14 @@ ST_PROGRAM = Submission("program", ".st", "the program does not compile:")
 class Scenario:
     name: str
     run: Callable[[Session, Checks], None]
-    needs_retain: bool = False     # the session gets a retain file (PLC restarts)
+    needs_retain: bool = False     # the session gets a retain memory (PLC restarts)
     repeats: str = ""              # a scenario whose requirements this one checks again (step mode)
 
 
-# (sources, retain_path, checked) -> Session: `checked` is the program as the front end checked
+# (sources, retain, checked) -> Session: `retain` is where the PLC keeps its retained variables
+# (a file, or the grader's in-memory store); `checked` is the program as the front end checked
 # it, once per grade (None: check the sources)
-SessionFactory = Callable[[list[tuple[str, str]], Optional[Path], Any], Session]
+SessionFactory = Callable[[list[tuple[str, str]], Optional[Path | MemoryRetainStore], Any], Session]
 
 
 @dataclass(frozen=True)
@@ -180,7 +182,7 @@ class RequirementSet:
     title: str
     requirements: tuple[Requirement, ...]
     scenarios: tuple[Scenario, ...]
-    make_session: SessionFactory                              # (sources, retain_path, checked) -> Session
+    make_session: SessionFactory                              # (sources, retain, checked) -> Session
     every: tuple[Callable[[Session, Checks], None], ...] = ()  # run after each scenario
     trace_names: Optional[Callable[[Session], list[str]]] = None   # signals for the trace files
     submission: Submission = ST_PROGRAM                       # what a student hands in

@@ -265,3 +265,35 @@ class RetainStore:
         self.last_problem = f"retain file {self.path}: {reason}; {where}, starting with initial values"
         self.report(self.last_problem)
 
+
+
+class MemoryRetainStore:
+    """The retain memory of a PLC in virtual time (a grader's or an exploration's session):
+    what a save writes is kept in memory and a restart of the same session loads it, through
+    the same snapshot and signature check as a file. A grading saves every second of plant
+    time, thousands of times per program; a file (written and fsynced each time) added
+    nothing there but wall time, as nobody reads it after the session."""
+
+    def __init__(self) -> None:
+        self.last_problem: Optional[str] = None
+        self.save_error: Optional[str] = None     # never set: memory does not fill up here
+        self.failed_saves = 0
+        self._saved: Optional[tuple[str, dict[str, Any]]] = None
+
+    def flush(self, sig: str, values: dict[str, Any]) -> bool:
+        self._saved = (sig, values)       # a fresh snapshot (to_json_value builds new objects)
+        return True
+
+    def load(self, sig: str) -> Optional[dict[str, Any]]:
+        if self._saved is None:
+            return None
+        saved_sig, values = self._saved
+        if saved_sig != sig:
+            self.reject("it was written by a different program (retained variables differ)")
+            return None
+        return values
+
+    def reject(self, reason: str) -> None:
+        """Values that cannot be used are dropped (the PLC starts with initial values)."""
+        self.last_problem = f"retained values not used: {reason}"
+        self._saved = None
