@@ -273,6 +273,48 @@ def test_header_words_paused_badge_plant_events_tooltips_and_a_forced_switch(lab
     expect(sa7).not_to_contain_text("forced")
 
 
+def test_a_forced_push_button_is_drawn_pressed_as_the_plc_reads_it_and_marked_forced(lab_page):
+    lp = lab_page("tur10", speed=1)
+    page, lab = lp.page, lp.lab
+    for label in ("SB1", "SA1 forward"):
+        button = page.get_by_role("button", name=label, exact=True)
+        expect(button).to_have_attribute("aria-pressed", "false")
+        address = lab.session.labels[lab.panel.control(label).signal]
+        lab.call(lambda: lab.force(address, "TRUE")).result(10)
+        expect(button).to_have_attribute("aria-pressed", "true", timeout=WAIT)     # the PLC reads it pressed
+        expect(button).to_contain_text("forced")
+        expect(button).to_have_attribute("title", f"{label} forced to pressed (watch and force table): "
+                                                  "the PLC reads this, not the button")
+        expect(button).to_have_attribute("data-forced", "true")                     # the orange frame, as a switch
+        lab.call(lambda: lab.unforce(None)).result(10)
+        expect(button).to_have_attribute("aria-pressed", "false", timeout=WAIT)
+        expect(button).not_to_contain_text("forced")
+    # a press of the pointer still shows while nothing is forced
+    sb1 = page.get_by_role("button", name="SB1", exact=True)
+    sb1.hover()
+    page.mouse.down()
+    expect(sb1).to_have_attribute("aria-pressed", "true")
+    page.mouse.up()
+    expect(sb1).to_have_attribute("aria-pressed", "false")
+
+
+def test_a_forced_emergency_stop_shows_pressed_when_its_normally_closed_contact_reads_open(tmp_path):
+    from plclab.lab.engine import Lab
+    lab = Lab("cnc", work_dir=tmp_path)
+    s = lab.session
+    s.run(s.tick)
+    address = s.labels[lab.panel.control("SB3").signal]
+    assert lab.snapshot()["io"]["SB3"] == 0                     # released: its contact closed, reads 1
+    lab.force(address, "FALSE")                                  # the PLC reads the contact open: pressed
+    s.run(s.tick)
+    snap = lab.snapshot()
+    assert snap["forced_labels"] == ["SB3"] and snap["io"]["SB3"] == 1
+    lab.force(address, "TRUE")
+    s.run(s.tick)
+    assert lab.snapshot()["io"]["SB3"] == 0
+    lab.stop()
+
+
 def test_cnc_interpolation_methods_are_explained(lab_page):
     page = lab_page("cnc", speed=5).page
     titles = page.locator("#part-method option").evaluate_all("os => os.map((o) => o.title)")

@@ -519,16 +519,8 @@ function render(s) {
     for (const node of document.querySelectorAll(`[aria-label="${CSS.escape(label)}"]`)) {
       if (node.dataset.knob !== undefined) {
         if (document.activeElement !== node && node.value !== String(v)) { node.value = String(v); node.oninput(); }
-      } else if (node.dataset.latch) {
-        node.setAttribute("aria-pressed", v ? "true" : "false");
-      } else if (node.getAttribute("role") === "switch") {
-        node.setAttribute("aria-checked", v ? "true" : "false");
-        const forced = (s.forced_labels || []).includes(label);     // the value the PLC reads, marked forced
-        const title = forced ? `${label} forced to ${v ? "on" : "off"} (watch and force table): the PLC reads this, not the switch` : "";
-        if (node.title !== title) node.title = title;
-        const tag = node.querySelector(".forced-tag");
-        if (forced && !tag) node.append(el("span", { class: "forced-tag", text: " forced" }));
-        else if (!forced && tag) tag.remove();
+      } else if (node.getAttribute("role") === "switch" || node.classList.contains("push")) {
+        showControl(node, label, v, (s.forced_labels || []).includes(label));
       }
       else if (node.dataset.state !== undefined) node.dataset.state = v ? "on" : "off";
     }
@@ -544,6 +536,23 @@ function render(s) {
   markFaultLine();
   markForced(s);
   drawTrends();
+}
+
+// A console control as the PLC sees it: a switch's position, a button pressed or not (a
+// mushroom button latched). Forced, it shows the value the PLC reads, marked forced (a held
+// push button otherwise shows the hold of the pointer or key on it, not the lab's echo).
+function showControl(node, label, v, forced) {
+  const isSwitch = node.getAttribute("role") === "switch";
+  const on = forced || isSwitch || node.dataset.latch ? !!v : node.classList.contains("held");
+  const attr = isSwitch ? "aria-checked" : "aria-pressed";
+  if (node.getAttribute(attr) !== String(on)) node.setAttribute(attr, String(on));
+  const what = isSwitch ? (on ? "on" : "off") : (on ? "pressed" : "released");
+  const title = forced ? `${label} forced to ${what} (watch and force table): the PLC reads this, ` +
+    `not the ${isSwitch ? "switch" : "button"}` : "";
+  if (node.title !== title) node.title = title;
+  const tag = node.querySelector(".forced-tag");
+  if (forced && !tag) node.append(el("span", { class: "forced-tag", text: " forced" }));
+  else if (!forced && tag) tag.remove();
 }
 
 function renderScript(sc) {
