@@ -543,7 +543,7 @@ class LabServer:
             return _refuse('grade: send {"task": "task1"}')
         assert self._grade_lock is not None
         if self._grade_lock.locked():
-            return _refuse("grade: a grade is already running; wait for its table")
+            return _refuse("grade: a grade (or a graded run's replay) is already running; wait for it")
         async with self._grade_lock:
             sources, program = await asyncio.wrap_future(self.lab.call(
                 lambda: (list(self.lab.session.sources), self.lab.program_name)))
