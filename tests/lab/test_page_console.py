@@ -288,7 +288,8 @@ def test_a_grade_rows_link_shows_the_graded_runs_values_at_the_rows_time_not_the
     let_time_pass(page, 0.5)
     expect(n).not_to_have_text(live, timeout=WAIT)
     # another program loaded since the grade: its run cannot be shown, and no live value stands in
-    load(page, "watched.st", WATCHED + "(* changed *)\n")
+    load(page, "watched.st", WATCHED.replace("n := n + 1;", "n := n + 1; (* changed *)"))
+    expect(source.locator('li[data-text="n := n + 1; (* changed *)"]')).to_have_count(1, timeout=WAIT)
     g1.get_by_role("button", name="open watched.st:5").click()
     expect(note).to_contain_text("Opened from grade row G1: the values of the graded run (manual) at "
                                  f"t = {t:.2f} s are not available (the lab runs another program than the one "
