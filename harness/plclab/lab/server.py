@@ -106,7 +106,7 @@ class LabServer:
         self._grade_runs = 0
         self.grade_files: dict[str, Path] = {}
         self.last_grade: Optional[dict] = None       # the last grade's table (a reloaded page shows it)
-        self.graded: dict[str, dict] = {}            # run -> what a row's replay needs (the last GRADED_KEPT)
+        self.graded_runs: dict[str, dict] = {}       # run -> what a row's replay needs (the last GRADED_KEPT)
         self.token = secrets.token_urlsafe(24)       # what a state-changing request must carry
         self.session_id = secrets.token_hex(6)       # a page that sees it change knows the lab restarted
 
@@ -127,7 +127,7 @@ class LabServer:
         app.router.add_post("/api/reload", self.reload)
         app.router.add_post("/api/script", self.script)
         app.router.add_post("/api/grade", self.grade)
-        app.router.add_post("/api/graded", self.graded_values)
+        app.router.add_post("/api/graded", self.graded_moment)
         app.router.add_get("/grade/{run}/{file}", self.grade_file)
         app.router.add_get("/trace.csv", self.trace_csv)
         app.router.add_get("/trace.vcd", self.trace_vcd)
@@ -570,27 +570,29 @@ class LabServer:
                    if not report.errors else "the program does not compile: FAIL")
         result = {"ok": True, "title": report.title, "task": task, "passed": report.passed,
                   "errors": report.errors, "rows": rows, "summary": summary, "program": program, "run": run}
-        self.graded[run] = {"task": task, "sources": sources, "replays": {},
+        self.graded_runs[run] = {"task": task, "sources": sources, "replays": {},
                             "rows": {r.id: (r.scenario, r.time) for r in report.rows
                                      if not r.passed and r.time is not None and r.scenario}}
-        for old in list(self.graded)[:-GRADED_KEPT]:
-            del self.graded[old]
+        for old in list(self.graded_runs)[:-GRADED_KEPT]:
+            del self.graded_runs[old]
         self.last_grade = result                 # a reloaded page shows it again
         return web.json_response(result)
 
-    async def graded_values(self, request: web.Request) -> web.Response:
+    async def graded_moment(self, request: web.Request) -> web.Response:
         """The program's values in a graded run at a row's time, for Program online: the
         row's scenario played again on the graded program to that time (plclab.grader.
         replayed), every POU instance read as the live view reads it (monitor.every_value).
         Refused, in one line, where they cannot be had: the page then says so and shows none."""
         from plclab.grader import replayed
         from plclab.lab.monitor import every_value
+        if request.content_type != "application/json":
+            return _refuse('graded: send {"run": "1-task1", "row": "G1"} as application/json', status=415)
         try:
             body = await request.json()
             run, rid = str(body["run"]), str(body["row"])
         except (ValueError, KeyError, TypeError):
             return _refuse('graded: send {"run": "1-task1", "row": "G1"}')
-        graded = self.graded.get(run)
+        graded = self.graded_runs.get(run)
         if graded is None:
             return _refuse("the lab no longer keeps that grade's program: grade again")
         where = graded["rows"].get(rid)
