@@ -729,7 +729,8 @@ function showGraded() {
   const g = lab.graded, pou = lab.shownPou;
   if (!g || !pou) return;
   const entry = g.values && (g.values[pou.name] || {})[$("#instance").value || ""];
-  const title = g.values ? `value in the ${g.label}` : `not available: ${g.missing || "replaying the graded run"}`;
+  const title = entry ? `value in the ${g.label}` : g.values ? `not read in the ${g.label}`
+    : `not available: ${g.missing || "replaying the graded run"}`;
   for (const span of document.querySelectorAll("#source .val")) {
     const v = entry ? entry.values[span.dataset.chain] : undefined;
     span.textContent = entry ? (v === undefined || v === null ? "" : String(v)) : "?";
@@ -738,7 +739,10 @@ function showGraded() {
   }
   if (pou.ladder) {
     if (entry && entry.power) renderPower(entry.power);
-    else for (const node of document.querySelectorAll("#ladder [data-value]")) node.textContent = "?";
+    else {                                           // no power shown rather than the live one
+      for (const node of document.querySelectorAll("#ladder [data-from]")) node.dataset.state = "unknown";
+      for (const node of document.querySelectorAll("#ladder [data-value]")) node.textContent = "?";
+    }
   }
 }
 
