@@ -150,6 +150,7 @@ class Session:
         self.trace = Trace()
         self._offset_ns = 0                       # PLC restarts keep one continuous trace time
         self.plc_off: list[tuple[float, float]] = []   # (from, to) plant seconds the PLC was off
+        self.probes: list[Any] = []               # stepped after the plant every tick, restarts too
         self._start_plc()
 
     # ------------------------------------------------------------------ set-up
@@ -169,6 +170,7 @@ class Session:
         # student may drop an unused global, the trace still shows the console
         self.sim = Simulation(self.plc, plants=[self.plant], watch=paths,
                               extra_addresses=list(self.labels.values()))
+        self.sim.plants.extend(self.probes)
         self._merge_pending = True
 
     @property

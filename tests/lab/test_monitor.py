@@ -67,3 +67,25 @@ def test_indexed_uses_show_the_element_their_live_indexes_name_and_nothing_out_o
     plc.write("Main.n", 2)
     assert lab.monitor.values(plc, False) == {"i": 1, "n": 2, "Valves[i]": 10, "Frames[n].Data[2]": 0,
                                               "M[n,i]": 4}   # changes only, as for plain names
+
+
+def test_every_instance_at_once_reads_as_the_live_view_of_each_ladder_power_included(tmp_path):
+    """A graded run's moment (monitor.every_value) shows what the live view would, instance by
+    instance: the same values, an LD POU's same power flow."""
+    from test_ladder import ladder_program
+
+    from plclab.frontend import read_sources
+    from plclab.lab.monitor import every_value
+    lab = Lab("mp9c", sources=read_sources([str(p) for p in ladder_program(tmp_path)]), speed=1.0)
+    lab.press("SB1", True)
+    lab.advance(0.5)
+    every = every_value(lab.session.plc, lab.session.sources)
+    for pou in lab.listing():
+        for instance in pou["instances"] or [None]:
+            lab.select_monitor(pou["name"], instance)
+            shown = every[pou["name"]][instance or ""]
+            assert shown["values"] == _values(lab), (pou["name"], instance)
+            assert shown.get("power") == lab._power_flow(), (pou["name"], instance)
+    button = every["FB_Sb1Button"]
+    assert any(e["power"] and any(v is True for v in e["power"].values()) for e in button.values())   # SB1 held: power flows
+    lab.stop()

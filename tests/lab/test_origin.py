@@ -95,9 +95,14 @@ def test_a_cross_site_upload_or_grade_changes_nothing(lab):
                 await _status(http, "POST", url + "api/grade", data='{"task": "task1"}',
                               headers={"Content-Type": "text/plain", "X-PLCLab-Token": token}),
                 await _status(http, "POST", url + "api/reload", headers={"Origin": EVIL}),
+                await _status(http, "POST", url + "api/graded", data='{"run": "1-task1", "row": "G1"}',
+                              headers={"Content-Type": "text/plain", "Origin": EVIL}),
+                await _status(http, "POST", url + "api/graded", data='{"run": "1-task1", "row": "G1"}',
+                              headers={"Content-Type": "text/plain", "X-PLCLab-Token": token}),
             ]
     answers = asyncio.run(go())
-    assert [status for status, _ in answers] == [403, 403, 403, 403, 403, 403, 415, 403], answers
+    assert [status for status, _ in answers] == [403, 403, 403, 403, 403, 403, 415, 403, 403, 415], answers
+    assert answers[9][1] == 'graded: send {"run": "1-task1", "row": "G1"} as application/json'
     assert answers[0][1].startswith("refused: a request from another site's page (http://evil.example)")
     assert answers[2][1].startswith("refused: a request from another site's page")
     assert answers[3][1].startswith("refused: the lab's session token is missing or stale")

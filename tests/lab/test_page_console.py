@@ -10,7 +10,7 @@ from __future__ import annotations
 import re
 
 from playwright.sync_api import expect
-from test_page import WAIT, flip, lamp, on, plant_time, switch, tap_sb1
+from test_page import WAIT, flip, lamp, let_time_pass, on, plant_time, switch, tap_sb1
 from test_script import replay
 
 SHORT_SCRIPT = ("time_s,name,value\n"
@@ -221,14 +221,83 @@ def test_a_fault_line_leads_to_its_statement_and_says_what_next_and_a_grade_surv
     expect(g1).to_contain_text(re.compile(r"the graded run \(\w+\) at t = 0\.20 s: SA1=0 .*SB1=0 .*L1=0"))
     g1.get_by_role("button", name="open faulty.st:4").click()
     note = page.get_by_role("status", name="graded run")
-    expect(note).to_contain_text("Opened from grade row G1: the values beside the source are the lab's, live now, "
-                                 "not the graded run's. The graded run (", timeout=WAIT)
+    expect(note).to_contain_text(re.compile(r"Opened from grade row G1: the values beside the source are the graded "
+                                            r"run \(\w+\) at t = 0\.20 s, not the lab's live ones\. The graded run \("),
+                                 timeout=WAIT)
     rows = table.locator("tbody tr").count()
     page.reload()                                                            # the lab keeps the last grade
     page.wait_for_selector("#plc-state[data-state='FAULT']")
     table = page.get_by_role("table", name="grade task1")
     expect(table.locator("tbody tr")).to_have_count(rows, timeout=WAIT)
     expect(page.locator("#grade-message")).to_contain_text("requirements passed: FAIL (program: faulty.st)")
+
+
+# counts its 10-ms scans and divides by zero once SA5 is on: the graded run faults when its
+# scenario first sets SA5; the lab, where SA5 stays off, runs on
+WATCHED = """PROGRAM Watched
+VAR sa5 AT %IX1.4 : BOOL; END_VAR
+VAR n : INT; d : INT; k : INT; END_VAR
+n := n + 1;
+IF sa5 THEN k := n / d; END_IF;
+END_PROGRAM
+CONFIGURATION Config0
+    RESOURCE Res0 ON PLC
+        TASK t (INTERVAL := T#10ms, PRIORITY := 0);
+        PROGRAM Main WITH t : Watched;
+    END_RESOURCE
+END_CONFIGURATION
+"""
+
+
+def load(page, name: str, text: str) -> None:
+    page.get_by_label("Load ST files").set_input_files(files=[{"name": name, "mimeType": "text/plain",
+                                                                "buffer": text.encode()}])
+    expect(page.locator("#program-message")).to_have_text(f"program loaded: {name}", timeout=WAIT)
+
+
+def test_a_grade_rows_link_shows_the_graded_runs_values_at_the_rows_time_not_the_live_ones(lab_page):
+    lp = lab_page("mp9c", speed=2)
+    page = lp.page
+    load(page, "watched.st", WATCHED)
+    page.get_by_role("button", name="Grade task1").click()
+    table = page.get_by_role("table", name="grade task1")
+    expect(table).to_be_visible(timeout=120_000)
+    g1 = table.locator("tbody tr").filter(has=page.get_by_role("cell", name="G1", exact=True))
+    expect(g1).to_contain_text("watched.st:5: PLC FAULT (division_by_zero) in Watched")
+    t = float(re.search(r"at t = ([\d.]+) s", g1.inner_text()).group(1))
+    g1.get_by_role("button", name="open watched.st:5").click()
+    note = page.get_by_role("status", name="graded run")
+    expect(note).to_contain_text(f"Opened from grade row G1: the values beside the source are the graded run "
+                                 f"(manual) at t = {t:.2f} s, not the lab's live ones.", timeout=WAIT)
+    source = page.get_by_label("program source")
+    expect(source).to_have_attribute("data-graded", "true")
+    sa5 = source.locator('li[data-text^="IF sa5"]').get_by_label("value of sa5")
+    n = source.locator('li[data-text^="n := n + 1;"]').get_by_label("value of n").first
+    expect(sa5).to_have_text("TRUE")                  # the graded run's SA5, on when it faulted (the lab's is off)
+    expect(sa5).to_have_attribute("title", f"value in the graded run (manual) at t = {t:.2f} s")
+    counted = int(n.inner_text())
+    assert abs(counted - (round(t / 0.01) + 1)) <= 1, (counted, t)     # its scans up to t, within one scan
+    let_time_pass(page, 1.0)                          # the lab runs on; the graded run's moment does not
+    expect(n).to_have_text(str(counted))
+    expect(sa5).to_have_text("TRUE")
+    # back to the lab: live values, moving
+    note.get_by_role("button", name="Show live values").click()
+    expect(note).to_be_hidden()
+    expect(sa5).to_have_text("FALSE", timeout=WAIT)
+    live = n.inner_text()
+    let_time_pass(page, 0.5)
+    expect(n).not_to_have_text(live, timeout=WAIT)
+    # another program loaded since the grade: its run cannot be shown, and no live value stands in
+    load(page, "watched.st", WATCHED.replace("n := n + 1;", "n := n + 1; (* changed *)"))
+    expect(source.locator('li[data-text="n := n + 1; (* changed *)"]')).to_have_count(1, timeout=WAIT)
+    g1.get_by_role("button", name="open watched.st:5").click()
+    expect(note).to_contain_text("Opened from grade row G1: the values of the graded run (manual) at "
+                                 f"t = {t:.2f} s are not available (the lab runs another program than the one "
+                                 "graded: grade again to see its run); none are shown beside the source.",
+                                 timeout=WAIT)
+    expect(sa5).to_have_text("?")
+    let_time_pass(page, 0.5)
+    expect(n).to_have_text("?")
 
 
 def test_header_words_paused_badge_plant_events_tooltips_and_a_forced_switch(lab_page):
@@ -271,6 +340,48 @@ def test_header_words_paused_badge_plant_events_tooltips_and_a_forced_switch(lab
     lab.call(lambda: lab.unforce(None)).result(10)
     expect(sa7).to_have_attribute("aria-checked", "false", timeout=WAIT)
     expect(sa7).not_to_contain_text("forced")
+
+
+def test_a_forced_push_button_is_drawn_pressed_as_the_plc_reads_it_and_marked_forced(lab_page):
+    lp = lab_page("tur10", speed=1)
+    page, lab = lp.page, lp.lab
+    for label in ("SB1", "SA1 forward"):
+        button = page.get_by_role("button", name=label, exact=True)
+        expect(button).to_have_attribute("aria-pressed", "false")
+        address = lab.session.labels[lab.panel.control(label).signal]
+        lab.call(lambda: lab.force(address, "TRUE")).result(10)
+        expect(button).to_have_attribute("aria-pressed", "true", timeout=WAIT)     # the PLC reads it pressed
+        expect(button).to_contain_text("forced")
+        expect(button).to_have_attribute("title", f"{label} forced to pressed (watch and force table): "
+                                                  "the PLC reads this, not the button")
+        expect(button).to_have_attribute("data-forced", "true")                     # the orange frame, as a switch
+        lab.call(lambda: lab.unforce(None)).result(10)
+        expect(button).to_have_attribute("aria-pressed", "false", timeout=WAIT)
+        expect(button).not_to_contain_text("forced")
+    # a press of the pointer still shows while nothing is forced
+    sb1 = page.get_by_role("button", name="SB1", exact=True)
+    sb1.hover()
+    page.mouse.down()
+    expect(sb1).to_have_attribute("aria-pressed", "true")
+    page.mouse.up()
+    expect(sb1).to_have_attribute("aria-pressed", "false")
+
+
+def test_a_forced_emergency_stop_shows_pressed_when_its_normally_closed_contact_reads_open(tmp_path):
+    from plclab.lab.engine import Lab
+    lab = Lab("cnc", work_dir=tmp_path)
+    s = lab.session
+    s.run(s.tick)
+    address = s.labels[lab.panel.control("SB3").signal]
+    assert lab.snapshot()["io"]["SB3"] == 0                     # released: its contact closed, reads 1
+    lab.force(address, "FALSE")                                  # the PLC reads the contact open: pressed
+    s.run(s.tick)
+    snap = lab.snapshot()
+    assert snap["forced_labels"] == ["SB3"] and snap["io"]["SB3"] == 1
+    lab.force(address, "TRUE")
+    s.run(s.tick)
+    assert lab.snapshot()["io"]["SB3"] == 0
+    lab.stop()
 
 
 def test_cnc_interpolation_methods_are_explained(lab_page):

@@ -418,3 +418,26 @@ def test_two_snapshots_a_slow_page_has_not_received_merge_without_losing_what_is
     assert out["mimic"] == {"x": 2.0, "path": [[0.0, 0.0], [1.0, 0.0], [2.0, 0.0]]}
     other = _merge(old, dict(new, monitor={"pou": "Q", "instance": None, "values": {"x": 5}}))
     assert other["monitor"] == {"pou": "Q", "instance": None, "values": {"x": 5}}   # another POU: its own
+
+
+def test_a_graded_moment_asked_wrongly_is_one_line(running):
+    server, url = running("mp9c")
+
+    async def go():
+        async with aiohttp.ClientSession() as http:
+            token = await _token(http, url)
+            headers = {"X-PLCLab-Token": token}
+            async with http.post(url + "api/grade", json={"task": "task1"}, headers=headers) as r:
+                graded = await r.json()
+            out = []
+            for body in ({"run": "7-task1", "row": "G1"}, {"run": graded["run"], "row": "NOPE"}, ["G1"],
+                         {"run": graded["run"]}):
+                async with http.post(url + "api/graded", json=body, headers=headers) as r:
+                    out.append((r.status, (await r.json())["message"]))
+            return graded, out
+    graded, answers = asyncio.run(go())
+    assert graded["ok"] and graded["run"] == "1-task1"
+    assert answers == [(200, "the lab no longer keeps that grade's program: grade again"),
+                       (200, "row NOPE names no moment of a graded run"),
+                       (200, 'graded: send {"run": "1-task1", "row": "G1"}'),
+                       (200, 'graded: send {"run": "1-task1", "row": "G1"}')]

@@ -10,13 +10,13 @@ requirement (once: id, sentence built from the thresholds it quotes, scenario) a
 `plclab.grader.registry`. Exit codes: 0 every requirement passed, 1 the program failed one,
 2 the grader itself failed (ERROR rows: never charged to the student).
 """
-from .engine import grade, grade_sources, requirement_table, task_title
+from .engine import grade, grade_sources, replayed, requirement_table, task_title
 from .registry import (EVERY, Checks, Requirement, RequirementSet, Scenario, register, registered,
                        requirement_set, tasks)
 from .report import GradeReport, Row, requirements_text
 
 __all__ = [
     "EVERY", "Checks", "GradeReport", "Requirement", "RequirementSet", "Row", "Scenario", "grade",
-    "grade_sources", "register", "registered", "requirement_set", "requirement_table", "requirements_text",
+    "grade_sources", "register", "replayed", "registered", "requirement_set", "requirement_table", "requirements_text",
     "task_title", "tasks",
 ]

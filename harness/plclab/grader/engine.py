@@ -16,7 +16,7 @@ from __future__ import annotations
 
 import dataclasses
 from pathlib import Path
-from typing import Optional, Sequence
+from typing import Callable, Optional, Sequence, TypeVar
 
 from plclab.errors import CompileError, PlcLabError
 from plclab.fileio import check_output
@@ -28,6 +28,8 @@ from plclab.trace import write_csv, write_vcd
 from .explore import ExploreOptions, exploration_rows
 from .registry import EVERY, Checks, Requirement, RequirementSet, requirement_set
 from .report import GradeReport, Row
+
+T = TypeVar("T")
 
 
 def grade(stand: str, task: str, files: Sequence[str], out_dir: Optional[str] = None,
@@ -119,6 +121,56 @@ def grade_sources(stand: str, task: str, sources: Sequence[tuple[str, str]],
     report.notes += notes
     report.traces.update(files)
     return report
+
+
+class _StopAfter:
+    """A probe (Session.probes) that ends a replay as the first scan after plant time `t` is
+    about to run: the program's state is then the one its last scan at or before `t` left."""
+
+    def __init__(self, s: Session, t: float) -> None:
+        self.s, self.t = s, t
+        self.stopped = False
+
+    def step(self, dt: float) -> None:
+        if self.s.now > self.t + 1e-9:
+            from plclab.runtime.tracing import StopReplay
+            self.stopped = True
+            raise StopReplay(self.s.now)
+
+
+def replayed(stand: str, task: str, sources: Sequence[tuple[str, str]], scenario: str, t: float,
+             read: Callable[[Session], T]) -> T:
+    """`read(session)` at plant time `t` of scenario `scenario` of `task`, played again on the
+    program `sources`: the graded run's state at the moment a row names (a grade keeps only
+    the I/O in its traces; the scenarios run in virtual time, so the replay is that run).
+    Raises PlcLabError (one line) when the state at `t` cannot be had: no such scenario, a
+    program that does not run, a replay that ended before `t` or failed in the grader."""
+    from plclab.runtime.tracing import StopReplay
+    req = requirement_set(stand, task)
+    sc = next((x for x in req.scenarios if x.name == scenario), None)
+    if sc is None:
+        raise PlcLabError(f"{stand} {task} has no scenario '{scenario}'")
+    sources = list(sources)
+    try:
+        checked = check_sources(sources) if req.submission.read is None else req.submission.read(sources)
+    except CompileError as e:
+        raise PlcLabError(str(e.diagnostics[0]) if e.diagnostics else "the program does not compile") from None
+    with tempfile.TemporaryDirectory(prefix="plclab-replay-") as tmp, compiled_once(checked):
+        retain = Path(tmp) / f"{scenario}.retain.json" if sc.needs_retain else None
+        s = req.make_session(sources, retain, checked)
+        stop = _StopAfter(s, t)
+        s.probes.append(stop)
+        s.sim.plants.append(stop)
+        try:
+            sc.run(s, Checks(req.requirements))
+        except (StopReplay, ScenarioFailure):
+            pass
+        except Exception as e:                       # noqa: BLE001 - the grader's bug, said as such
+            raise PlcLabError(f"the replay of scenario {scenario} failed in the grader ({type(e).__name__})") from None
+        last = s.now - s.tick
+        if not stop.stopped and last < t - s.tick - 1e-9:
+            raise PlcLabError(f"the replay of scenario {scenario} ended at t = {last:.2f} s, before t = {t:.2f} s")
+        return read(s)
 
 
 MAX_LOCALIZED = 2      # failing scripted moments (scenario, time) given their lines per grade: each costs two replays
@@ -241,4 +293,4 @@ def task_title(stand: str, task: str) -> str:
     return requirement_set(stand, task).title
 
 
-__all__ = ["grade", "grade_sources", "requirement_table", "task_title"]
+__all__ = ["grade", "grade_sources", "replayed", "requirement_table", "task_title"]

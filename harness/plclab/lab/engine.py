@@ -871,16 +871,19 @@ class Lab:
     def _io(self, forced: Sequence[str] = ()) -> dict[str, int]:
         s = self.session
         io = {}
+        closed = getattr(s.plant, "NORMALLY_CLOSED", frozenset())
         for c in self.panel.controls:        # the console as the operator set it (seen while paused too)
             if c.kind == "button":           # a button's level: pressed (1) or not, whatever its contact
                 io[c.label] = self.console_levels.setdefault(c.label, 0)
-                continue
-            io[c.label] = self.console_levels.setdefault(c.label, int(bool(s.value(c.signal))))
-            if c.label in forced:            # forced: what the PLC reads, not where the switch is
+            else:
+                io[c.label] = self.console_levels.setdefault(c.label, int(bool(s.value(c.signal))))
+            if c.label in forced:            # forced: what the PLC reads, not where the control is
                 try:
-                    io[c.label] = int(bool(s.plc.read(c.signal)))
+                    level = int(bool(s.plc.read(c.signal)))
                 except PlcLabError:
-                    pass
+                    continue
+                # a button is pressed when its contact reads closed (a normally closed one: open)
+                io[c.label] = level ^ int(c.kind == "button" and c.input in closed)
         for k in self.panel.knobs:
             io[k.label] = self.console_levels.setdefault(k.label, k.initial)
         for lamp in self.panel.lamps:

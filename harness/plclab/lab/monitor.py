@@ -263,3 +263,33 @@ def _show(value: Any, is_time: bool) -> Any:
     if isinstance(value, float):
         return round(value, 4)
     return value
+
+
+MAX_INSTANCES = 64        # POU instances read by `every_value` (a program with more: the first ones)
+
+
+def every_value(plc: Any, sources: list[tuple[str, str]]) -> dict[str, dict[str, dict]]:
+    """What the page would show beside every POU of the program, for each of its instances,
+    now: {POU: {instance ('' where it has none): {"values": {chain: value}, "power": ...}}}
+    (`power`: an LD POU's power flow). The values of a moment that is gone, such as the
+    graded run's at a row's time (plclab.grader.replayed), read as the live ones are: one
+    Monitor per instance, the same PowerFlow."""
+    from plclab.lab.ladder import PowerFlow, pou_elements, time_aware
+    out: dict[str, dict[str, dict]] = {}
+    read = 0
+    for pou in listing(plc, sources):
+        shown: dict[str, dict] = {}
+        for instance in pou["instances"] or [None]:
+            if read >= MAX_INSTANCES:
+                break
+            read += 1
+            m = Monitor()
+            m.select(plc, pou, instance)
+            entry: dict[str, Any] = {"values": m.values(plc, True) or {}}
+            if "ladder" in pou:
+                elements = pou_elements(sources, pou["name"])
+                if elements is not None:
+                    entry["power"] = PowerFlow(elements, instance, time_aware(plc)).state()
+            shown[instance or ""] = entry
+        out[pou["name"]] = shown
+    return out

@@ -106,6 +106,7 @@ class LabServer:
         self._grade_runs = 0
         self.grade_files: dict[str, Path] = {}
         self.last_grade: Optional[dict] = None       # the last grade's table (a reloaded page shows it)
+        self.graded_runs: dict[str, dict] = {}       # run -> what a row's replay needs (the last GRADED_KEPT)
         self.token = secrets.token_urlsafe(24)       # what a state-changing request must carry
         self.session_id = secrets.token_hex(6)       # a page that sees it change knows the lab restarted
 
@@ -126,6 +127,7 @@ class LabServer:
         app.router.add_post("/api/reload", self.reload)
         app.router.add_post("/api/script", self.script)
         app.router.add_post("/api/grade", self.grade)
+        app.router.add_post("/api/graded", self.graded_moment)
         app.router.add_get("/grade/{run}/{file}", self.grade_file)
         app.router.add_get("/trace.csv", self.trace_csv)
         app.router.add_get("/trace.vcd", self.trace_vcd)
@@ -541,7 +543,7 @@ class LabServer:
             return _refuse('grade: send {"task": "task1"}')
         assert self._grade_lock is not None
         if self._grade_lock.locked():
-            return _refuse("grade: a grade is already running; wait for its table")
+            return _refuse("grade: a grade (or a graded run's replay) is already running; wait for it")
         async with self._grade_lock:
             sources, program = await asyncio.wrap_future(self.lab.call(
                 lambda: (list(self.lab.session.sources), self.lab.program_name)))
@@ -567,9 +569,52 @@ class LabServer:
         summary = (f"{n_pass} of {len(report.rows)} requirements passed: {'PASS' if report.passed else 'FAIL'}"
                    if not report.errors else "the program does not compile: FAIL")
         result = {"ok": True, "title": report.title, "task": task, "passed": report.passed,
-                  "errors": report.errors, "rows": rows, "summary": summary, "program": program}
+                  "errors": report.errors, "rows": rows, "summary": summary, "program": program, "run": run}
+        self.graded_runs[run] = {"task": task, "sources": sources, "replays": {},
+                            "rows": {r.id: (r.scenario, r.time) for r in report.rows
+                                     if not r.passed and r.time is not None and r.scenario}}
+        for old in list(self.graded_runs)[:-GRADED_KEPT]:
+            del self.graded_runs[old]
         self.last_grade = result                 # a reloaded page shows it again
         return web.json_response(result)
+
+    async def graded_moment(self, request: web.Request) -> web.Response:
+        """The program's values in a graded run at a row's time, for Program online: the
+        row's scenario played again on the graded program to that time (plclab.grader.
+        replayed), every POU instance read as the live view reads it (monitor.every_value).
+        Refused, in one line, where they cannot be had: the page then says so and shows none."""
+        from plclab.grader import replayed
+        from plclab.lab.monitor import every_value
+        if request.content_type != "application/json":
+            return _refuse('graded: send {"run": "1-task1", "row": "G1"} as application/json', status=415)
+        try:
+            body = await request.json()
+            run, rid = str(body["run"]), str(body["row"])
+        except (ValueError, KeyError, TypeError):
+            return _refuse('graded: send {"run": "1-task1", "row": "G1"}')
+        graded = self.graded_runs.get(run)
+        if graded is None:
+            return _refuse("the lab no longer keeps that grade's program: grade again")
+        where = graded["rows"].get(rid)
+        if where is None:
+            return _refuse(f"row {rid[:20]} names no moment of a graded run")
+        running = await asyncio.wrap_future(self.lab.call(lambda: list(self.lab.session.sources)))
+        if running != graded["sources"]:
+            return _refuse("the lab runs another program than the one graded: grade again to see its run")
+        scenario, t = where
+        assert self._grade_lock is not None
+        async with self._grade_lock:              # one replay or grade at a time (2 s each, or so)
+            if where not in graded["replays"]:
+                loop = asyncio.get_running_loop()
+                try:
+                    values = await loop.run_in_executor(None, replayed, self.lab.stand, graded["task"], graded["sources"],
+                                                        scenario, t, lambda s: every_value(s.plc, s.sources))
+                    graded["replays"][where] = {"ok": True, "values": values}
+                except PlcLabError as e:
+                    graded["replays"][where] = {"ok": False, "message": str(e)}
+        answer = graded["replays"][where]
+        return web.json_response({**answer, "message": answer.get("message", ""), "errors": [],
+                                  "row": rid, "scenario": scenario, "time": t})
 
     def _graded_values(self, report: Any) -> dict[str, str]:
         """For each row that did not pass at a known time: the console and the outputs as the
@@ -631,6 +676,8 @@ class LabServer:
         text, window = await asyncio.wrap_future(self.lab.call(vcd))
         return _attachment(text, self._trace_name(window, "vcd"), "text/plain")
 
+
+GRADED_KEPT = 4         # grades whose program the lab keeps for their rows' replays
 
 ALL_OPS = ("set", "press", "release", "speed", "pause", "run", "scan", "restart", "inject", "clear", "trends",
            "tree", "watch", "force", "unforce", "source", "monitor", "unscript", "register", "knob", "part", "contour")

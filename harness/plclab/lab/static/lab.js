@@ -434,7 +434,7 @@ function renderGrade(r) {
     if (row.graded && row.result !== "PASS") whyCell.append(el("div", { class: "graded", text: row.graded }));
     if (where) {
       whyCell.append(" ", el("button", { type: "button", class: "link", text: `open ${where[1].split("/").pop()}:${where[2]}`,
-        onclick: () => openSource(where[1].trim(), Number(where[2]), row) }));
+        onclick: () => openSource(where[1].trim(), Number(where[2]), { ...row, run: r.run }) }));
     }
     body.append(el("tr", {}, el("td", { text: row.id }), el("td", { text: row.text }),
       el("td", { class: row.result, text: row.result }), whyCell, links));
@@ -519,16 +519,8 @@ function render(s) {
     for (const node of document.querySelectorAll(`[aria-label="${CSS.escape(label)}"]`)) {
       if (node.dataset.knob !== undefined) {
         if (document.activeElement !== node && node.value !== String(v)) { node.value = String(v); node.oninput(); }
-      } else if (node.dataset.latch) {
-        node.setAttribute("aria-pressed", v ? "true" : "false");
-      } else if (node.getAttribute("role") === "switch") {
-        node.setAttribute("aria-checked", v ? "true" : "false");
-        const forced = (s.forced_labels || []).includes(label);     // the value the PLC reads, marked forced
-        const title = forced ? `${label} forced to ${v ? "on" : "off"} (watch and force table): the PLC reads this, not the switch` : "";
-        if (node.title !== title) node.title = title;
-        const tag = node.querySelector(".forced-tag");
-        if (forced && !tag) node.append(el("span", { class: "forced-tag", text: " forced" }));
-        else if (!forced && tag) tag.remove();
+      } else if (node.getAttribute("role") === "switch" || node.classList.contains("push")) {
+        showControl(node, label, v, (s.forced_labels || []).includes(label));
       }
       else if (node.dataset.state !== undefined) node.dataset.state = v ? "on" : "off";
     }
@@ -544,6 +536,23 @@ function render(s) {
   markFaultLine();
   markForced(s);
   drawTrends();
+}
+
+// A console control as the PLC sees it: a switch's position, a button pressed or not (a
+// mushroom button latched). Forced, it shows the value the PLC reads, marked forced (a held
+// push button otherwise shows the hold of the pointer or key on it, not the lab's echo).
+function showControl(node, label, v, forced) {
+  const isSwitch = node.getAttribute("role") === "switch";
+  const on = forced || isSwitch || node.dataset.latch ? !!v : node.classList.contains("held");
+  const attr = isSwitch ? "aria-checked" : "aria-pressed";
+  if (node.getAttribute(attr) !== String(on)) node.setAttribute(attr, String(on));
+  const what = isSwitch ? (on ? "on" : "off") : (on ? "pressed" : "released");
+  const title = forced ? `${label} forced to ${what} (watch and force table): the PLC reads this, ` +
+    `not the ${isSwitch ? "switch" : "button"}` : "";
+  if (node.title !== title) node.title = title;
+  const tag = node.querySelector(".forced-tag");
+  if (forced && !tag) node.append(el("span", { class: "forced-tag", text: " forced" }));
+  else if (!forced && tag) tag.remove();
 }
 
 function renderScript(sc) {
@@ -582,6 +591,7 @@ function renderActions() {
 // row naming file:line) opens the source there.
 function buildOnline() {
   lab.pous = null;
+  leaveGraded();
   $("#source").replaceChildren();
   $("#pou").replaceChildren(); $("#instance").replaceChildren();
   $("#pou").disabled = $("#instance").disabled = true;
@@ -640,17 +650,16 @@ async function showPou(name, instance) {
     return li;
   }));
   markFaultLine();
+  if (lab.graded) showGraded();
   await send("monitor", { pou: name, instance }).catch((e) => notice(e.message));
 }
 
-// `row`: opened from a grade row; the values beside the source are the lab's live ones, so the
-// graded run's are shown above it (its console and outputs at the row's time)
+// `row`: opened from a grade row. The values beside the source are then the graded run's at
+// the row's time, not the lab's live ones: the lab plays the row's scenario again on the graded
+// program to that time (/api/graded) and the page shows what it read there, marked as such;
+// where they cannot be had it says why and shows none (never a live value in their place).
 function openSource(file, line, row) {
-  const note = $("#graded-note");
-  note.hidden = !row;
-  note.textContent = row ? `Opened from grade row ${row.id}: the values beside the source are the lab's, live now, ` +
-    `not the graded run's. ` + (row.graded ? `${row.graded[0].toUpperCase()}${row.graded.slice(1)}.` : "") +
-    (row.traces && row.traces.length ? " Its trace: the row's links." : "") : "";
+  if (row) enterGraded(row); else leaveGraded();
   loadSource().then((pous) => {
     const pou = pous.find((p) => p.file === file && line >= p.line && line < p.line + p.lines.length)
       || pous.find((p) => p.display === file.split("/").pop() && line >= p.line && line < p.line + p.lines.length);
@@ -663,6 +672,78 @@ function openSource(file, line, row) {
       li.scrollIntoView({ block: "center" });
     });
   }).catch((e) => notice(e.message));
+}
+
+function enterGraded(row) {
+  const t = row.time === null || row.time === undefined ? "" : `t = ${row.time.toFixed(2)} s`;
+  const g = lab.graded = { row, label: `graded run (${row.scenario})` + (t ? ` at ${t}` : ""), values: null, missing: null };
+  $("#source").dataset.graded = "true";
+  $("#source").setAttribute("aria-label", `program source, values of the ${g.label}`);
+  if (!t || !row.run) {
+    g.missing = "the row names no moment of it";
+    noteGraded();
+    showGraded();
+    return;
+  }
+  noteGraded(`replaying the graded run (${row.scenario}) to ${t} to show its values...`);
+  post("/api/graded", { run: row.run, row: row.id }, true)
+    .then((resp) => resp.json())
+    .catch((e) => ({ ok: false, message: `the lab did not answer (${e.message})` }))
+    .then((r) => {
+      if (lab.graded !== g) return;                   // left, or another row opened, meanwhile
+      if (r.ok) g.values = r.values; else g.missing = r.message;
+      noteGraded();
+      showGraded();
+    });
+  showGraded();
+}
+
+// the line above the source: whose values they are (or why there are none), and the way back
+function noteGraded(pending) {
+  const g = lab.graded, row = g.row;
+  const note = $("#graded-note");
+  const what = pending ? `Opened from grade row ${row.id}: ${pending}`
+    : g.values ? `Opened from grade row ${row.id}: the values beside the source are the ${g.label}, ` +
+      `not the lab's live ones.`
+    : `Opened from grade row ${row.id}: the values of the ${g.label} are not available (${g.missing}); ` +
+      `none are shown beside the source.`;
+  const graded = row.graded ? ` ${row.graded[0].toUpperCase()}${row.graded.slice(1)}.` : "";
+  note.replaceChildren(what + graded + (row.traces && row.traces.length ? " Its trace: the row's links. " : " "),
+    el("button", { type: "button", class: "link", text: "Show live values", onclick: () => {
+      leaveGraded();
+      if (lab.shownPou) showPou(lab.shownPou.name, $("#instance").value || null);
+    } }));
+  note.hidden = false;
+}
+
+function leaveGraded() {
+  lab.graded = null;
+  $("#graded-note").hidden = true;
+  $("#graded-note").replaceChildren();
+  delete $("#source").dataset.graded;
+  $("#source").setAttribute("aria-label", "program source");
+}
+
+// the shown POU instance's values in the graded run ("?": not available; "": none, as live)
+function showGraded() {
+  const g = lab.graded, pou = lab.shownPou;
+  if (!g || !pou) return;
+  const entry = g.values && (g.values[pou.name] || {})[$("#instance").value || ""];
+  const title = entry ? `value in the ${g.label}` : g.values ? `not read in the ${g.label}`
+    : `not available: ${g.missing || "replaying the graded run"}`;
+  for (const span of document.querySelectorAll("#source .val")) {
+    const v = entry ? entry.values[span.dataset.chain] : undefined;
+    span.textContent = entry ? (v === undefined || v === null ? "" : String(v)) : "?";
+    span.title = title;
+    delete span.dataset.forced;                      // a force of the lab's, not of the graded run
+  }
+  if (pou.ladder) {
+    if (entry && entry.power) renderPower(entry.power);
+    else {                                           // no power shown rather than the live one
+      for (const node of document.querySelectorAll("#ladder [data-from]")) node.dataset.state = "unknown";
+      for (const node of document.querySelectorAll("#ladder [data-value]")) node.textContent = "?";
+    }
+  }
 }
 
 // An LD POU: its elements where the Editor's file puts them, wires along the stored points;
@@ -740,7 +821,7 @@ function renderPower(power) {
 }
 
 function renderMonitor(m) {
-  if (!lab.shownPou || m.pou !== lab.shownPou.name) return;
+  if (!lab.shownPou || m.pou !== lab.shownPou.name || lab.graded) return;    // a graded run's moment is shown
   if (m.power && lab.shownPou.ladder) renderPower(m.power);
   for (const [chain, value] of Object.entries(m.values)) {
     for (const span of document.querySelectorAll(`#source .val[data-chain="${CSS.escape(chain)}"]`)) span.textContent = String(value);
@@ -875,7 +956,7 @@ function markForced(s) {
     const forced = forcedNames.has(name.title.toUpperCase()) || labels.has(name.title);
     name.classList.toggle("forced", forced);
   }
-  for (const v of document.querySelectorAll("#source .val[data-path]")) {       // the program online too
+  for (const v of lab.graded ? [] : document.querySelectorAll("#source .val[data-path]")) {   // the program online too
     const forced = forcedNames.has(v.dataset.path.toUpperCase());
     if (forced !== (v.dataset.forced === "true")) { if (forced) v.dataset.forced = "true"; else delete v.dataset.forced; }
   }
