@@ -155,8 +155,8 @@ def replayed(stand: str, task: str, sources: Sequence[tuple[str, str]], scenario
         checked = check_sources(sources) if req.submission.read is None else req.submission.read(sources)
     except CompileError as e:
         raise PlcLabError(str(e.diagnostics[0]) if e.diagnostics else "the program does not compile") from None
-    with tempfile.TemporaryDirectory(prefix="plclab-replay-") as tmp, compiled_once(checked):
-        retain = Path(tmp) / f"{scenario}.retain.json" if sc.needs_retain else None
+    with compiled_once(checked):
+        retain = MemoryRetainStore() if sc.needs_retain else None
         s = req.make_session(sources, retain, checked)
         stop = _StopAfter(s, t)
         s.probes.append(stop)
