@@ -333,3 +333,44 @@ def test_snapshot_shows_positions_spools_and_io(plant):
     assert snap["rotation"] == 0.0 and snap["rotation.spool"] == 0
     assert snap["SQ1"] == 0 and snap["SQ2"] == 0 and snap["SQ4"] == 1
     assert snap["SB1"] == 1 and snap["L3"] == 1 and snap["HL1"] == 1 and snap["faults"] == []
+
+
+@pytest.mark.parametrize("seed", range(12))
+def test_the_rest_shortcut_changes_nothing_a_full_step_would_not(seed):
+    """A step at rest under unchanged outputs returns what it returned before (the closed
+    loop's fast path): over random coil patterns held for random spans, console changes with
+    and without bounce, faults injected and cleared and zero-length steps, the plant with the
+    shortcut reports every input, event and snapshot as the plant computing every step."""
+    import random
+    rng = random.Random(seed)
+    fast, full = MP9C(), MP9C()
+    full.REST_SHORTCUT = False
+    names = list(COILS)
+    faults = [("jammed", {"mechanism": "rotation"}), ("stuck_switch", {"switch": "SQ2", "state": 1}),
+              ("low_pressure", {"factor": 2.0}), ("dead_coil", {"coil": "L3"}), ("bounce", {"duration": 0.02})]
+    outputs = out()
+    shortcuts = 0
+    for _ in range(400):
+        r = rng.random()
+        if r < 0.25:
+            outputs = out(*rng.sample(names, rng.randint(0, 3)), hl1=rng.randint(0, 1))
+        elif r < 0.35:
+            name, value = rng.choice(list(CONSOLE)), rng.randint(0, 1)
+            for p in (fast, full):
+                p.set_input(name, value)
+        elif r < 0.40:
+            fault, params = rng.choice(faults)
+            for p in (fast, full):
+                p.inject(fault, **params)
+        elif r < 0.45:
+            for p in (fast, full):
+                p.clear()
+        for _ in range(rng.choice((0, 1, 5, 40, 150))):
+            dt = rng.choice((0.01, 0.01, 0.01, 0.0))
+            before = fast.time
+            a, b = fast.step(outputs, dt), full.step(outputs, dt)
+            shortcuts += fast._rest is not None and dt > 0 and fast.time > before and a == fast._rest[2]
+            assert a == b
+            assert fast.snapshot() == full.snapshot()
+            assert fast.events == full.events
+    assert shortcuts > 1000          # the shortcut was taken, and often: at rest is most of the time
