@@ -49,8 +49,10 @@ def fixtures(all_: bool) -> list[tuple[str, str, Path, bool]]:
     return out
 
 
-def rate(job: tuple[str, str, str, bool, int, int]) -> dict:
-    """Play `scripts` scripts (seeds base..) on one fixture; which of them show a difference."""
+def rate(job: tuple[str, str, str, bool, int, int], stop_at: int | None = None) -> dict:
+    """Play `scripts` scripts (seeds base..) on one fixture; which of them show a difference.
+    `stop_at`: stop once that many have (a verdict "at least that many" cannot change after:
+    the tests ask no more); `played` says how many were played."""
     from plclab.frontend import check_sources, read_sources
     from plclab.grader.explore import Explorer, Program, model_answer, search
     from plclab.grader.registry import requirement_set
@@ -67,9 +69,11 @@ def rate(job: tuple[str, str, str, bool, int, int]) -> dict:
     srcs = read_sources([path])
     student = Program(srcs, check_sources(srcs))
     hits, kinds = [], {}
+    n_played = 0
     ex = Explorer(expl, task, requirement_set(stand, task).make_session, student, model)
     for n, (script, _status, found) in enumerate(search(ex, f"rates{base}", scripts, coverage=coverage,
                                                           stop=False)):
+        n_played = n + 1
         if found is not None:
             played, div = found
             hits.append(n)
@@ -81,9 +85,11 @@ def rate(job: tuple[str, str, str, bool, int, int]) -> dict:
                 print(f"--- {path}: script {n}\n  " + "\n  ".join(f.steps) + f"\n  -> {f.first_difference}"
                       + "".join(f"\n  {k}. {c.where()}" for k, c in enumerate(f.candidates, 1))
                       + (f"\n  line {f.line}" if f.line else ""), flush=True)
+            if stop_at is not None and len(hits) >= stop_at:
+                break
     p = len(hits) / scripts
     name = f"{stand}/{Path(path).stem}" if HERE in Path(path).resolve().parents else path
-    return {"fixture": name, "task": task, "mistake": mistake, "scripts": scripts, "coverage": coverage,
+    return {"fixture": name, "task": task, "mistake": mistake, "scripts": scripts, "played": n_played, "coverage": coverage,
             "hits": len(hits), "rate": p, "miss": (1 - p) ** expl.episodes, "budget": expl.episodes,
             "signals": kinds, "first": hits[:5]}
 
