@@ -131,3 +131,17 @@ def test_serve_with_a_random_retain_file(files, data):
     assert code == 0                         # a bad retain file is set aside; the PLC still runs
     for p in files.iterdir():
         p.unlink() if p.name.startswith("kept.retain") else None
+
+
+@pytest.mark.parametrize("argv", [["run", "mp9c", "--scenario", "step"], ["run", "mp9c", "--scenario", "step", "--csv", "-"]])
+def test_output_piped_into_a_reader_that_stops_early_ends_quietly(argv):
+    """`plclab run ... | head -1`: the reader closes the pipe; plclab stops without an internal
+    error or a traceback and says so by its exit status, as a Unix tool ended by SIGPIPE (141)."""
+    import subprocess
+    import sys
+    proc = subprocess.Popen([sys.executable, "-c", "import sys; from plclab.cli import main; sys.exit(main())", *argv],
+                            stdout=subprocess.PIPE, stderr=subprocess.PIPE)
+    proc.stdout.close()                               # the reader has gone before the first line
+    err = proc.stderr.read().decode()
+    assert proc.wait(timeout=120) == 141, err
+    assert err == ""

@@ -635,17 +635,46 @@ def main(argv: Optional[Sequence[str]] = None) -> int:
     except KeyboardInterrupt:
         print("plclab: interrupted", file=sys.stderr)
         return 130
+    except BrokenPipeError as e:
+        if _stdout_reader_gone():         # `plclab ... | head`: the reader has what it wanted
+            return 141                    # as a Unix tool ended by SIGPIPE reports it
+        return _internal_error(e)
     except MemoryError:               # past plclab.limits' process limit: the run's own failure
         from plclab.limits import out_of_memory_message
         print(out_of_memory_message("plclab grade: FAIL" if args.command == "grade" else f"plclab {args.command}"),
               file=sys.stderr)
         return 1
     except Exception as e:  # a bug of ours: one line for the user, the traceback on request
-        if os.environ.get("PLCLAB_DEBUG"):
-            raise
-        print(f"plclab: internal error ({type(e).__name__}: {e}); please report it with the input "
-              f"that caused it (PLCLAB_DEBUG=1 shows the traceback)", file=sys.stderr)
-        return 70
+        return _internal_error(e)
+
+
+def _internal_error(e: Exception) -> int:
+    """A bug of ours: one line for the user, the traceback on request (PLCLAB_DEBUG=1)."""
+    if os.environ.get("PLCLAB_DEBUG"):
+        raise e
+    print(f"plclab: internal error ({type(e).__name__}: {e}); please report it with the input "
+          f"that caused it (PLCLAB_DEBUG=1 shows the traceback)", file=sys.stderr)
+    return 70
+
+
+def _stdout_reader_gone() -> bool:
+    """Whether standard output is a pipe whose reader has closed it (poll says POLLERR on its
+    write end); if so, what is still buffered goes nowhere (else Python's own flush at exit
+    would print a traceback)."""
+    import select
+    try:
+        fd = sys.stdout.fileno()
+        poller = select.poll()
+        poller.register(fd, select.POLLOUT)
+        gone = any(events & select.POLLERR for _fd, events in poller.poll(0))
+    except (AttributeError, OSError, ValueError):
+        return False
+    if gone:
+        try:
+            os.dup2(os.open(os.devnull, os.O_WRONLY), fd)
+        except OSError:
+            pass
+    return gone
 
 
 if __name__ == "__main__":  # pragma: no cover
