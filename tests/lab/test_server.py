@@ -441,3 +441,18 @@ def test_a_graded_moment_asked_wrongly_is_one_line(running):
                        (200, "row NOPE names no moment of a graded run"),
                        (200, 'graded: send {"run": "1-task1", "row": "G1"}'),
                        (200, 'graded: send {"run": "1-task1", "row": "G1"}')]
+
+
+def test_a_setting_that_restarts_the_program_keeps_the_forces():
+    """FINE_MS downloads PRG_CncStand again (a cold start): a force set before it is still in
+    effect after it, as after any program download that still has the variable."""
+    lab = Lab("cnc", speed=1.0).start()
+    try:
+        lab.call(lambda: lab.force("SB3", False)).result(10)            # emergency stop held, by force
+        lab.call(lambda: lab.set_knob("FINE_MS", 5)).result(10)
+        lab.call(lambda: lab.advance(0.05)).result(10)
+        assert lab.call(lambda: lab.session.plc.read("SB3")).result(10) is False     # what the program reads
+        assert lab.call(lambda: dict(lab.forces.values)).result(10) == {"SB3": False}
+        assert lab.call(lambda: lab.session.tick).result(10) == 0.005     # the restart did happen
+    finally:
+        lab.stop()

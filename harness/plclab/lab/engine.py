@@ -277,10 +277,14 @@ class Lab:
                            f"(one of {', '.join(k.label for k in self.panel.knobs)})") from None
         if not knob.lo <= value <= knob.hi:
             raise LabError(f"{label}: {value} is outside {knob.lo}..{knob.hi} {knob.unit}")
+        plc = self.session.plc
         try:
             knob.apply(self.session, value)
         except PlantError as e:
             raise LabError(str(e)) from None
+        if self.session.plc is not plc:         # the knob downloaded the program again (FINE_MS)
+            for path in self.forces.attach(self.session.plc):   # forces on what it still has stay
+                self.session.log(f"force released: {path} (not in the program loaded)")
         self.console_levels[label] = value
 
     def load_part(self, text: str, name: str, method: str) -> str:
