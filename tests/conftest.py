@@ -43,22 +43,3 @@ def _own_working_directory(tmp_path_factory):
     os.chdir(tmp_path_factory.mktemp("cwd"))
     yield
     os.chdir(here)
-
-
-# The files that take minutes (the grader's figures over many fixtures), in the order they are
-# started: each file runs whole on one worker (scripts/test: --dist loadfile, in collection
-# order), so the longest go first, one per core, and the short ones fill in around them; left
-# to the end, one of them ran alone for ten minutes while the other core idled.
-LONGEST_FIRST = ("grader/test_localize.py", "grader/test_explore.py", "grader/test_classroom.py",
-                 "grader/test_explore_engine.py", "lab/test_page_console.py", "runtime/test_native.py",
-                 "cnc/test_cnc_fine_cycle.py", "grader/test_rules.py", "lab/test_page.py")
-
-
-def pytest_collection_modifyitems(config, items):
-    def rank(item) -> int:
-        try:
-            name = Path(str(item.fspath)).resolve().relative_to(TESTS).as_posix()
-        except ValueError:
-            return len(LONGEST_FIRST)
-        return LONGEST_FIRST.index(name) if name in LONGEST_FIRST else len(LONGEST_FIRST)
-    items.sort(key=rank)             # stable: the rest keep their order

@@ -97,8 +97,9 @@ def test_ladder_online_shows_power_flow_as_sb1_is_held_and_released(lab_page, tm
     expect(held).to_have_attribute("data-state", "off")
     expect(_element(page, "coil LongGiven")).to_have_attribute("data-state", "off")
     sb1 = page.get_by_role("button", name="SB1", exact=True)
-    sb1.hover()
-    page.mouse.down()                                   # SB1 held: power through Pressed to the timer
+    sb1.focus()                                         # held from the keyboard: the full-page capture
+    page.keyboard.down(" ")                             # below moves nothing a pointer could leave
+                                                        # SB1 held: power through Pressed to the timer
     expect(pressed).to_have_attribute("data-state", "on", timeout=WAIT)
     expect(held).to_have_attribute("data-state", "on", timeout=WAIT)          # after the 50 ms debounce
     expect(was_held).to_have_attribute("data-state", "on", timeout=WAIT)
@@ -107,13 +108,13 @@ def test_ladder_online_shows_power_flow_as_sb1_is_held_and_released(lab_page, tm
     long_given = page.get_by_label("ladder diagram").locator('g[aria-label="coil LongGiven"] >> nth=0')
     expect(page.locator(f'#ladder [data-value="{long_given.get_attribute("data-id")}.var"]')).to_have_text(
         "TRUE", timeout=10_000)
-    box = page.locator("#online").bounding_box()            # a full-page capture: nothing scrolls away
-    scroll = page.evaluate("({x: scrollX, y: scrollY})")     # from under the pointer holding SB1
+    box = page.locator("#online").bounding_box()            # a full-page capture of the online view
+    scroll = page.evaluate("({x: scrollX, y: scrollY})")
     page.screenshot(path=str(shots / "lab-ladder-online.png"), full_page=True,
                     clip={"x": box["x"] + scroll["x"], "y": box["y"] + scroll["y"],
                           "width": box["width"], "height": box["height"]})
     expect(pressed).to_have_attribute("data-state", "on")   # still held when the picture was taken
-    page.mouse.up()                                     # released: nothing conducts on rung 1
+    page.keyboard.up(" ")                               # released: nothing conducts on rung 1
     expect(pressed).to_have_attribute("data-state", "off", timeout=WAIT)
     expect(held).to_have_attribute("data-state", "off", timeout=WAIT)
     expect(was_held).to_have_attribute("data-state", "off", timeout=WAIT)

@@ -7,7 +7,7 @@ holds (a 150 ms click), which is what these tests are about."""
 from __future__ import annotations
 
 from playwright.sync_api import expect
-from test_page import WAIT, flip, lamp, let_time_pass, off, on, rising, tap_sb1, trace_rows
+from test_page import WAIT, flip, lamp, let_time_pass, off, on, press_seen, rising, tap_sb1, trace_rows
 
 
 def button(page, label: str):
@@ -116,8 +116,10 @@ def test_sb1_at_x50_a_click_records_and_only_a_3s_hold_resets(lab_page):
     flip(page, "SA5", True)
     on(lamp(page, "SQ2"))
     sb1 = button(page, "SB1")
+    presses = len(rising(trace_rows(page), "%IX1.6"))
     sb1.hover()
     page.mouse.down()
+    press_seen(page, "%IX1.6", presses)                     # the stand has it (a loaded machine is late)
     page.wait_for_timeout(150)                              # a student's click: 150 ms of wall time
     page.mouse.up()
     expect(sb1).to_have_attribute("aria-pressed", "false")
