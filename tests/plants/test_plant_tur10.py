@@ -151,6 +151,21 @@ def test_position_is_the_exact_integral_of_the_lagged_speed():
     assert bus(plant.step(outputs(CODES[3]), 0.0)) == math.floor(expected)
 
 
+def test_a_stopped_link_comes_to_rest_where_its_lag_tends_and_its_code_stays():
+    """Told to stop from full speed, a link coasts speed x tau further and is then at rest:
+    speed exactly 0 within a second, its code fixed (the exact lag only tends to zero, and a
+    code that creeps by 1e-9 codes for half a minute is no sensor's)."""
+    plant = create()
+    run(plant, 0.5, dt=0.01, refs={1: 1500})
+    x0, v0 = plant.snapshot()["pos1"], plant.snapshot()["speed1"]
+    run(plant, 1.0, dt=0.01, refs={1: 0})
+    snap = plant.snapshot()
+    assert snap["speed1"] == 0.0
+    assert snap["pos1"] == pytest.approx(x0 + v0 * TAU, abs=1e-3)
+    run(plant, 5.0, dt=0.01, refs={1: 0})
+    assert plant.snapshot()["pos1"] == snap["pos1"] and plant.snapshot()["code1"] == snap["code1"]
+
+
 def test_large_dt_does_not_overshoot_or_oscillate():
     plant = create()
     speeds = []

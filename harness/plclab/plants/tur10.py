@@ -57,6 +57,12 @@ FACE = ConsoleFace(switches=tuple(CONSOLE), lamps=(("HL1", RESET_LAMP),),
 # Stepping runs every scan of every grading: its tables are made once here, so that a step
 # builds nothing but the inputs it returns.
 _ENABLES = tuple((k, ENABLE[k]) for k in AXES)
+_DAC_LOCS = tuple(DAC[k] for k in AXES)
+# Below this speed (codes/s) a link told to stop is at rest: what is left of its coasting
+# (speed x tau, 5e-5 codes) is added to its position at once. The exact lag only tends to zero
+# (a float takes some 35 s to get there), and a link that keeps "moving" by 1e-300 codes costs
+# its step every scan of every grading.
+REST_SPEED = 1e-3
 _CONSOLE_NAMES = tuple(CONSOLE)
 _CONSOLE_LOCS = tuple(CONSOLE.values())
 # The bus bits of a code, low byte (I3.0..I3.7) and high seven bits (I2.0..I2.6) looked up
@@ -69,6 +75,7 @@ class Drive:
     """One link with its drive: the state the ARS and the mechanics carry between steps."""
 
     position: float            # codes
+    axis: int = 0              # 1..5 (Table 1)
     speed: float = 0.0         # codes/s
     reference: int = 0         # DAC code as the PLC wrote it (signed)
     tripped: bool = False      # overvoltage protection: ignores the reference until reset
@@ -104,13 +111,15 @@ class Tur10(PlantModel):
             raise PlantError("start: one position (or five) between the stops")
         self.gain, self.tau, self.period = float(gain), float(tau), float(period)
         self.working, self.stops, self.dac_limit = tuple(working), tuple(stops), int(dac_limit)
-        self.drives = {k: Drive(float(s), in_range=working[0] <= s <= working[1])
+        self.drives = {k: Drive(float(s), k, in_range=working[0] <= s <= working[1])
                        for k, s in zip(AXES, starts)}
         self.reset_indicator = 0
         self.selected: tuple[int, ...] = ()
         self.bus = FULL_SCALE
         self._contention: tuple[int, ...] = ()
         self._lag: tuple[float, float, float] = (-1.0, -1.0, 0.0)   # (dt, tau, exp(-dt / tau)) last used
+        self._console_seen: dict[str, int] = {}        # console_bits when _console_inputs was made
+        self._console_inputs: dict[str, int] = {}
 
     # --- the plant contract -------------------------------------------------------------
 
@@ -128,22 +137,22 @@ class Tur10(PlantModel):
         self.selected = selected = tuple([k for k, loc in _ENABLES if not get(loc, 0)])
         if dt > 0:
             limit = self.dac_limit
-            drives = self.drives
-            for k, d in drives.items():
-                d.reference = reference = signed16(get(DAC[k], 0))
+            faults = self.faults
+            for d, loc in zip(self.drives.values(), _DAC_LOCS):
+                raw = get(loc, 0) & 0xFFFF                 # the signed INT the PLC wrote
+                d.reference = reference = raw - 0x10000 if raw & 0x8000 else raw
                 if (reference > limit or reference < -limit) and not d.tripped:
-                    self._check_overvoltage(k, d)
+                    self._check_overvoltage(d.axis, d)
             if len(selected) > 1 or self._contention:
                 self._check_contention()
             self.time += dt
-            faults = self.faults
-            for k, d in drives.items():
+            for d in self.drives.values():
                 # a link at rest and told to stay, without a fault, does not move (most
                 # links, most ticks): _move would return at once
                 if faults or d.speed != 0.0 or not (d.tripped or d.reference == 0):
-                    self._move(k, d, dt)
-        self.bus = self._bus_value(selected)
-        return self._inputs()
+                    self._move(d.axis, d, dt)
+        self.bus = bus = self._bus_value(selected)
+        return self._inputs(bus)
 
     # --- console: the operator's side of the inputs -----------------------------------------
 
@@ -251,6 +260,8 @@ class Tur10(PlantModel):
                                         f"at {d.position:g}")
             d.at_stop = True
         else:
+            if target == 0.0 and -REST_SPEED < v1 < REST_SPEED:
+                x1, v1 = x1 + v1 * tau, 0.0     # where the coasting ends (the lag's limit)
             d.position, d.speed = x1, v1
             d.at_stop = d.at_stop and x1 in (low, high)
         in_range = self.working[0] <= d.position <= self.working[1]
@@ -270,14 +281,23 @@ class Tur10(PlantModel):
     def _bus_value(self, selected: tuple[int, ...]) -> int:
         """Pulled up to all ones; every enabled sensor pulls its zero bits down (wired AND)."""
         value = FULL_SCALE
-        for k in selected:
-            value &= self._code(k)
+        if self.faults:
+            for k in selected:
+                value &= self._code(k)
+            return value
+        drives = self.drives
+        for k in selected:                       # _code without a dead sensor, inline
+            value &= min(max(math.floor(drives[k].position), 0), FULL_SCALE)
         return value
 
-    def _inputs(self) -> dict[str, int]:
-        """Every input: the console contacts, then the bus bits (bit n of the code on BUS_BITS[n])."""
-        inputs = dict(zip(_CONSOLE_LOCS, map(self.console_bits.__getitem__, _CONSOLE_NAMES)))
-        bus = self.bus
+    def _inputs(self, bus: int) -> dict[str, int]:
+        """Every input: the console contacts, then the bus bits (bit n of the code on BUS_BITS[n]).
+        The console's part is made again only when a contact changed."""
+        console = self.console_bits
+        if console != self._console_seen:
+            self._console_seen = dict(console)
+            self._console_inputs = dict(zip(_CONSOLE_LOCS, map(console.__getitem__, _CONSOLE_NAMES)))
+        inputs = self._console_inputs.copy()
         inputs.update(zip(BUS_BITS, _LOW_BITS[bus & 0xFF] + _HIGH_BITS[(bus >> 8) & 0x7F]))
         return inputs
 
