@@ -603,6 +603,9 @@ class ModelPlays:
                 os.replace(tmp, self.folder / f"{k}.play")
 
 
+_UNJUDGED = object()
+
+
 def _model_salt(stand_task: str, model: "Program") -> str:
     h = hashlib.sha256(stand_task.encode())
     for name, text in model.sources:
@@ -626,6 +629,7 @@ class Explorer:
         self.phases: list[float] = []
         self.record = record
         self.model_plays = model_plays if model_plays is not None else ModelPlays(_model_salt(task, model))
+        self._judged: dict[Script, Optional[Divergence]] = {}     # diverges(), by script
 
     def model_side(self, script: Script) -> ModelPlay:
         """The model answer's play of `script`: played once, then reused."""
@@ -693,11 +697,16 @@ class Explorer:
 
     def diverges(self, script: Script) -> Optional[Divergence]:
         """The divergence of `script`, if no action is ambiguous and it does not hang on the scan
-        the actions fall in (robust)."""
+        the actions fall in (robust). Each script is judged once: the shrinker comes back to a
+        candidate it has tried (its last pass over single steps, when nothing else gained), and
+        the answer cannot differ (virtual time), so it costs no play of its budget again."""
+        known = self._judged.get(script, _UNJUDGED)
+        if known is not _UNJUDGED:
+            return known
         out = self.outcome(script)
-        if out.divergence is None or out.suspect or not self.robust(script):
-            return None
-        return out.divergence
+        found = None if out.divergence is None or out.suspect or not self.robust(script) else out.divergence
+        self._judged[script] = found
+        return found
 
     def robust(self, script: Script) -> bool:
         """The stands still differ with the actions a few scans off (every other one JITTER s
