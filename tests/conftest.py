@@ -43,3 +43,15 @@ def _own_working_directory(tmp_path_factory):
     os.chdir(tmp_path_factory.mktemp("cwd"))
     yield
     os.chdir(here)
+
+
+@pytest.fixture(autouse=True, scope="session")
+def _shared_explorations(tmp_path_factory):
+    """The folder where this session's workers share the explorations several test files
+    make of one fixture (tests/grader/explored.py): pytest's base temporary folder of the
+    session, which a pytest-xdist worker's own is a folder of."""
+    base = tmp_path_factory.getbasetemp()
+    if os.environ.get("PYTEST_XDIST_WORKER"):
+        base = base.parent
+    os.environ["PLCLAB_TESTS_SHARED_DIR"] = str(base / "shared-explorations")
+    yield

@@ -23,6 +23,7 @@ sys.path.insert(0, str(HERE))
 
 import make_explore_fixtures as mef  # noqa: E402
 import make_fixtures as mf  # noqa: E402
+from explored import explored  # noqa: E402
 
 from plclab.grader import engine  # noqa: E402
 from plclab.stands import bundle, get_stand  # noqa: E402
@@ -80,27 +81,27 @@ def statement_span(lines: list[str], first: int) -> range:
     return range(first, n + 1)
 
 
-def named_lines(report) -> tuple[list[int], int]:
-    """The lines the failing rows' candidates name, and how many failing rows have candidates."""
-    named, rows = [], 0
-    for r in report.failed():
-        if r.lines:
-            rows += 1
-        named.extend(int(m.group(1)) for line in r.lines for m in [_NAMED.search(line)] if m)
-    return named, rows
-
-
 def measure(case: Case) -> tuple[bool, bool, str]:
-    """(failed, named the changed line, what the report said)."""
+    """(failed, named the changed line, what the report said).
+
+    An exploration fixture's report is `plclab grade`'s: its scenarios' rows (with their
+    candidates) and the exploration's row, whose candidates are its finding's. The exploration
+    is the one the other test files make of the fixture (explored.py: once per test session)."""
     text = case.path.read_text(encoding="utf-8")
-    report = engine.grade(case.stand, case.task, [str(case.path)], explore=None if case.explore else 0, lines=True)
-    if report.passed or not report.failed():
+    report = engine.grade(case.stand, case.task, [str(case.path)], explore=0, lines=True)
+    said_rows = [(r.id, r.lines) for r in report.failed()]
+    if case.explore:
+        finding = explored(case.stand, case.task, case.path).finding
+        if finding is not None:
+            sources = [(str(case.path), text)]
+            said_rows.append(("E1", tuple(c.where(sources) for c in finding.candidates)))
+    if not said_rows:
         return False, False, "passed"
     changed = changed_lines(text, case.base_text)
     lines = text.splitlines()
-    named, _rows = named_lines(report)
+    named = [int(m.group(1)) for _id, found in said_rows for line in found for m in [_NAMED.search(line)] if m]
     hit = any(set(statement_span(lines, n)) & changed for n in named)
-    said = "; ".join(f"{r.id}: " + " | ".join(r.lines) for r in report.failed() if r.lines) or "no candidates"
+    said = "; ".join(f"{rid}: " + " | ".join(found) for rid, found in said_rows if found) or "no candidates"
     return True, hit, said
 
 

@@ -22,6 +22,7 @@ from plclab.stands.base import stand_spec
 HERE = Path(__file__).resolve().parent
 sys.path.insert(0, str(HERE))
 import make_explore_fixtures as mf  # noqa: E402
+from explored import explored  # noqa: E402
 
 FIXTURES = HERE / "fixtures"
 MISTAKES = [f for f in mf.ALL if not f.passes]
@@ -38,6 +39,8 @@ def _program(path: Path) -> Program:
 
 
 def _explore(stand: str, task: str, path: Path, episodes=None):
+    if episodes is None:                 # the grader's own exploration: once per test session
+        return explored(stand, task, path)
     model, why = model_answer(stand, task, None)
     assert model is not None, why
     return explore(stand_spec(stand).explore, stand, task, requirement_set(stand, task).make_session,
