@@ -145,6 +145,75 @@ END_PROGRAM
     assert {_line(src, "go := TRUE"), _line(src, "t(IN := go"), _line(src, "out := t.Q")} <= got
 
 
+IN_OUT = """TYPE Pair :
+STRUCT
+    a : INT;
+    b : INT;
+END_STRUCT;
+END_TYPE
+
+FUNCTION_BLOCK FB_Bump
+VAR_IN_OUT
+    P : Pair;
+    K : INT;
+END_VAR
+VAR_INPUT
+    Amount : INT;
+END_VAR
+VAR
+    calls : INT;
+END_VAR
+calls := calls + 1;
+P.a := P.a + Amount;
+K := K + P.a;
+END_FUNCTION_BLOCK
+
+PROGRAM main
+VAR
+    x : Pair;
+    y : Pair;
+    kx : INT;
+    ky : INT;
+    bump : FB_Bump;
+    n : INT;
+    out : INT;
+END_VAR
+n := n + 1;
+IF n MOD 2 = 0 THEN
+    bump(P := x, K := kx, Amount := 1);
+ELSE
+    bump(P := y, K := ky, Amount := 2);
+END_IF;
+out := x.a + ky;
+END_PROGRAM
+"""
+
+
+@pytest.mark.parametrize("src", [CHAIN, CALLS, IN_OUT], ids=["chain", "calls", "in_out"])
+def test_a_lines_storage_worked_out_once_is_what_working_it_out_each_time_gives(src, monkeypatch):
+    """The tracer reuses a line's storage keys for the same instance (IEC storage is fixed), but
+    never across a VAR_IN_OUT, which each call binds to another variable (`bump` works on x,
+    then on y): every event is the same as the tracer working each one out anew gives."""
+    def named(tr: Tracer) -> list:
+        """The events with each object's id replaced by its class (two runs have two sets of
+        objects, and a call's reference cells come and go); which object is which shows in
+        the slice, compared too."""
+        def key(k: tuple) -> tuple:
+            return (tr.types[k[0]].__name__, *k[1:]) if isinstance(k[0], int) else k
+        return [(e.line, e.scan, [key(k) for k in e.reads], [(key(k), strong) for k, strong in e.writes], e.parent,
+                 e.call) for e in (tr.events[i] for i in tr.order)]
+
+    runs = []
+    for cache in (False, True):
+        monkeypatch.setattr(Tracer, "CACHE_LINES", cache)
+        sim = _sim(src)
+        tr = _traced(sim, 6)
+        runs.append((named(tr), _sliced_lines(sim, tr, "main.out")))
+    assert runs[0] == runs[1]
+    if src is IN_OUT:      # the slice of out reaches the call on x, and not the one on y
+        assert _line(src, "bump(P := x") in runs[1][1] and _line(src, "P.a := P.a + Amount") in runs[1][1]
+
+
 START = """FUNCTION_BLOCK FB_Pulse
 VAR_INPUT
     Go : BOOL;

@@ -23,6 +23,7 @@ session and when, and which output (a label of the I/O image) to follow.
 from __future__ import annotations
 
 import ast
+import bisect
 import difflib
 import math
 import re
@@ -245,27 +246,39 @@ class StateLog:
     def __init__(self) -> None:
         self.changes: dict[str, list[tuple[float, Any]]] = {}
         self.paths: dict[int, str] = {}
-        self._last: dict[str, Any] = {}
         self._norm: Optional[dict[str, list[str]]] = None
         self._reader = StateReader()
+        self._walks = -1                 # the reader's walk the names and values below are of
+        self._names: list[str] = []
+        self._values: list[Any] = []
 
     def record(self, t: float, plc: Any) -> None:
-        values = self._reader.read(plc)
-        self.paths.update(self._reader.paths)
-        last = self._last
-        for k, v in values.items():
-            if k not in last or last[k] != v or type(last[k]) is not type(v):
-                self.changes.setdefault(k, []).append((t, v))
-        self._last = values
-        self._norm = None
+        reader = self._reader
+        values = reader.values(plc)
+        if reader.walks != self._walks:       # other objects (a restart...): compared by path
+            self._walks = reader.walks
+            self.paths.update(reader.paths)
+            last = dict(zip(self._names, self._values))
+            self._names = [path for _c, _k, path in reader.leaves]
+            for k, v in zip(self._names, values):
+                if k not in last or last[k] != v or type(last[k]) is not type(v):
+                    self.changes.setdefault(k, []).append((t, v))
+            self._norm = None
+        elif values != self._values:          # most scans change a few values of hundreds
+            for k, a, v in zip(self._names, self._values, values):
+                if a != v or type(a) is not type(v):
+                    self.changes.setdefault(k, []).append((t, v))
+        self._values = values
 
     def value_at(self, path: str, t: float) -> Any:
-        v = _MISSING
-        for ct, cv in self.changes.get(path, ()):
-            if ct > t + 1e-9:
-                break
-            v = cv
-        return v
+        """The value `path` held at `t` (the last change at or before it; _MISSING before any).
+        A change list is in time order, so the lookup bisects it (a ranking asks thousands of
+        times, of lists as long as the scans of the window)."""
+        changes = self.changes.get(path)
+        if not changes:
+            return _MISSING
+        n = bisect.bisect_right(changes, t + 1e-9, key=_time_of)
+        return changes[n - 1][1] if n else _MISSING
 
     def matching(self, pattern: str) -> list[str]:
         """The paths `pattern` names: itself, any element for '[]', and what lies under it."""
@@ -281,6 +294,10 @@ class StateLog:
 
 
 _MISSING = object()
+
+
+def _time_of(change: tuple[float, Any]) -> float:
+    return change[0]
 
 
 def first_divergence(student: StateLog, model: StateLog, paths: Sequence[str], initial: bool = False) -> Optional[float]:
@@ -341,7 +358,6 @@ def rank(tracer: Tracer, sl: Slice, failing_scans: set[int], sources: Sequence[t
     earlier ranks first (the first departure is the cause, the later ones its effects).
     `inputs`: storage keys the I/O image writes (a located input's declaration is never a
     candidate: what it reads is the stand's doing)."""
-    import bisect
     compiled = tracer.compiled
     texts = {name: text.splitlines() for name, text in sources}
     first_lines: dict[str, list[int]] = {}
@@ -584,22 +600,41 @@ def differing_outputs(student: Any, model: Any, labels: Sequence[str], t: float,
     return [k for _t, k in sorted(now)] + [k for _t, k in sorted(before)]
 
 
+class _TraceFrom:
+    """A probe (Session.probes) that installs `tracer` as the first scan at or after its
+    `since` is about to run. A tracer installed costs every Python call of the process (the
+    plant's, the scenario's) from then on, and the scans before `since` are not recorded anyway."""
+
+    def __init__(self, session: Any, tracer: Tracer) -> None:
+        self.session, self.tracer = session, tracer
+        self.started = False
+
+    def step(self, _dt: float) -> None:
+        if not self.started and self.session.now >= self.tracer.since - 1e-9:
+            self.started = True
+            self.tracer.start()
+
+
 def _traced(session: Any, tracer: Tracer, replay: Replay) -> None:
-    started = False
+    hook = _TraceFrom(session, tracer)
 
     def begin() -> None:
-        nonlocal started
-        if not started:
-            started = True
-            tracer.start()
+        if hook not in session.probes:
+            session.probes.append(hook)
+            session.sim.plants.append(hook)
+            hook.step(0.0)          # from the start of the replay when its window begins there
 
     try:
         replay(session, begin)
     except StopReplay:
         pass
     finally:
-        if started:
+        if hook.started:
             tracer.stop()
+        if hook in session.probes:
+            session.probes.remove(hook)
+        if hook in session.sim.plants:
+            session.sim.plants.remove(hook)
     session.run(0)          # no scan: the session's trace takes what its stand recorded up to the stop
 
 

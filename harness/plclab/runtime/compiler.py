@@ -313,6 +313,9 @@ class Compiler:
         out.emit(0, f"class {name}:")
         out.emit(1, f"__slots__ = {tuple(attrs)!r}")
         out.emit(1, f"_ST_NAME = {pou.name!r}")
+        in_out = tuple(d.key for d in decls if d.section == "VAR_IN_OUT")
+        if in_out:       # bound anew by each call (what the line tracer must not take as fixed)
+            out.emit(1, f"_IN_OUT = {in_out!r}")
         out.emit(1, "def __init__(self):", pou)
         for d in decls:
             if d.section == "VAR_EXTERNAL":

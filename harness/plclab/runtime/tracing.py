@@ -24,6 +24,7 @@ from typing import Any, Callable, Optional
 
 _PRIMITIVE = (bool, int, float, str, bytes, type(None))
 WILD = "*"
+STABLE, PER_CALL = 1, 2       # how long a storage key holds (Tracer._resolve)
 
 
 @dataclass(frozen=True)
@@ -212,6 +213,9 @@ class Tracer:
         self._frames: dict[int, dict] = {}             # id(frame) -> per-call state
         self._old: Any = None
         self._slotsets: dict[type, frozenset] = {}
+        # (line, id(self)) -> (self, G, reads, writes, any per call) of a line whose keys are
+        # all stable (Tracer._resolve)
+        self._line_keys: dict[tuple[int, int], tuple[Any, Any, tuple, tuple, bool]] = {}
 
     # ---------------------------------------------------------------- storage keys
     def _obj_key(self, obj: Any, path: str) -> tuple:
@@ -228,30 +232,40 @@ class Tracer:
         """The storage key of `root.path` in `frame` (None: a constant, a function, a module's
         own name). A POU's `v_X` mirrors `self.X` (an object: the same one), so `self` is
         enough to name it and the frame's locals are read only in a function (FC)."""
+        return self._resolve(frame, st, root, path, write)[0]
+
+    def _resolve(self, frame: Any, st: dict, root: str, path: str, write: bool) -> tuple[Optional[tuple], int]:
+        """`key` and how long it holds: STABLE (the same for every execution of the line by the
+        same `self` under the same globals: IEC storage is fixed, so only a VAR_IN_OUT, which
+        each call binds anew, can put another object on the way), PER_CALL (a temporary of the
+        call: the same but for the call's number) or 0 (worked out again each time)."""
         me = st["self"]
         if root == "self":
-            obj = me
+            obj, fixed = me, True
         elif root.startswith("v_") and me is not None and root[2:] in self._slotset(type(me)):
             obj = getattr(me, root[2:], None)
             if not path and (write or isinstance(obj, _PRIMITIVE)):
-                return self._obj_key(me, root[2:])
+                return self._obj_key(me, root[2:]), STABLE if write or obj is not None else 0
+            fixed = root[2:] not in getattr(type(me), "_IN_OUT", ())
         elif root.startswith("_") and not path:
-            return ("L", st["call"], root)
+            return ("L", st["call"], root), PER_CALL
         elif root == "G" or (not root.startswith("v_") and root in frame.f_globals):
             obj = frame.f_globals.get(root)
             if not path or obj is None or isinstance(obj, _PRIMITIVE) or callable(obj) and not hasattr(obj, "__dict__"):
-                return None
+                return None, 0
+            fixed = root == "G"
         else:
             loc = frame.f_locals
             if root not in loc:
-                return ("L", st["call"], root) if write or root.startswith(("_", "v_")) else None
+                return (("L", st["call"], root) if write or root.startswith(("_", "v_")) else None), 0
             obj = loc[root]
             if not path and (write or isinstance(obj, _PRIMITIVE)):
-                return ("L", st["call"], root)
+                return ("L", st["call"], root), 0
+            fixed = False
         if obj is None:
-            return ("L", st["call"], root)
+            return ("L", st["call"], root), 0
         if not path:
-            return self._obj_key(obj, "")
+            return self._obj_key(obj, ""), STABLE if fixed else 0
         # walk plain attributes down to the last object
         rest = path
         while rest and not rest.startswith("["):
@@ -259,12 +273,17 @@ class Tracer:
             if "[" in head:
                 break
             nxt = getattr(obj, head, None)
-            if nxt is None or isinstance(nxt, _PRIMITIVE) or not tail and write:
+            if nxt is None:
+                fixed = False             # nothing bound there now: something may be later
                 break
+            if isinstance(nxt, _PRIMITIVE) or not tail and write:
+                break
+            fixed = fixed and head not in getattr(type(obj), "_IN_OUT", ())
             obj, rest = nxt, tail
+        stable = STABLE if fixed else 0
         if not rest:
-            return self._obj_key(obj, "")
-        return self._obj_key(obj, rest)
+            return self._obj_key(obj, ""), stable
+        return self._obj_key(obj, rest), stable
 
     # ---------------------------------------------------------------- sys.settrace
     def start(self) -> None:
@@ -306,6 +325,35 @@ class Tracer:
         self._frames[id(frame)] = st
         return self._local
 
+    CACHE_LINES = True     # False: every line's keys worked out anew (the tests compare both)
+
+    def _line_keys_of(self, frame: Any, st: dict, shape: LineShape) -> tuple[list, list, bool, bool]:
+        """A line's read keys and (write key, strong) pairs, whether all of them are stable (or
+        per call) so that the next execution by the same `self` may reuse them, and whether
+        one is per call."""
+        stable, per_call = True, False
+        reads = []
+        for r, p in shape.reads:
+            k, how = self._resolve(frame, st, r, p, False)
+            stable = stable and how != 0
+            per_call = per_call or how == PER_CALL
+            if k is not None:
+                reads.append(k)
+        writes = []
+        for r, p in shape.writes:
+            k, how = self._resolve(frame, st, r, p, True)
+            stable = stable and how != 0
+            per_call = per_call or how == PER_CALL
+            if k is not None:
+                writes.append((k, "[" not in (k[1] if len(k) == 2 else "")))
+        for r, p in shape.std_calls:
+            k, how = self._resolve(frame, st, r, p, False)
+            stable = stable and how != 0
+            if k is not None and len(k) == 2 and k[1] == "":
+                reads.append((k[0], WILD))
+                writes.append(((k[0], WILD), False))
+        return reads, writes, stable, per_call
+
     def _local(self, frame: Any, event: str, arg: Any) -> Any:
         st = self._frames.get(id(frame))
         if st is None:
@@ -317,17 +365,19 @@ class Tracer:
                 return self._local
             eid = self._next
             self._next += 1
-            reads = [k for r, p in shape.reads if (k := self.key(frame, st, r, p, False)) is not None]
-            writes = []
-            for r, p in shape.writes:
-                k = self.key(frame, st, r, p, True)
-                if k is not None:
-                    writes.append((k, "[" not in (k[1] if len(k) == 2 else "")))
-            for r, p in shape.std_calls:
-                k = self.key(frame, st, r, p, False)
-                if k is not None and len(k) == 2 and k[1] == "":
-                    reads.append((k[0], WILD))
-                    writes.append(((k[0], WILD), False))
+            me = st["self"]
+            lineno = frame.f_lineno
+            known = self._line_keys.get((lineno, id(me))) if self.CACHE_LINES else None
+            g = frame.f_globals.get("G")
+            if known is not None and known[0] is me and known[1] is g:
+                call = st["call"]
+                reads = [("L", call, k[2]) if k[0] == "L" else k for k in known[2]] if known[4] else list(known[2])
+                writes = [(("L", call, k[0][2]), w) if k[0][0] == "L" else k for k in known[3] for w in [k[1]]] \
+                    if known[4] else list(known[3])
+            else:
+                reads, writes, stable, per_call = self._line_keys_of(frame, st, shape)
+                if stable and self.CACHE_LINES:
+                    self._line_keys[(lineno, id(me))] = (me, g, tuple(reads), tuple(writes), per_call)
             if shape.is_return:
                 writes.append((("R", st["call"]), True))
             parent = st["headers"].get(shape.header) if shape.header is not None else st["parent"]
@@ -382,16 +432,22 @@ class StateReader:
         self.leaves: list[tuple[Any, Any, str]] = []
         self.edges: list[tuple[Any, Any, Any]] = []     # (container, key, the object it held)
         self.paths: dict[int, str] = {}
+        self.walks = 0                  # how many times the objects were walked (the leaves made)
         self._plc: Any = None
 
     def read(self, plc: Any) -> dict[str, Any]:
+        values = self.values(plc)
+        return {path: v for (_c, _k, path), v in zip(self.leaves, values)}
+
+    def values(self, plc: Any) -> list[Any]:
+        """The values of `leaves`, in their order (walked again first where needed)."""
         if plc is not self._plc or any(_get(c, k) is not o for c, k, o in self.edges):
             self._plc = plc
             self._walk(plc)
-        out = {path: _get(c, k) for c, k, path in self.leaves}
-        if any(not isinstance(v, _PRIMITIVE) for v in out.values()):    # a reference bound since
+        out = [_get(c, k) for c, k, _path in self.leaves]
+        if any(not isinstance(v, _PRIMITIVE) for v in out):    # a reference bound since
             self._walk(plc)
-            out = {path: _get(c, k) for c, k, path in self.leaves}
+            out = [_get(c, k) for c, k, _path in self.leaves]
         return out
 
     def _walk(self, plc: Any) -> None:
@@ -426,6 +482,7 @@ class StateReader:
             edges.append((inst, "obj", inst.obj))
             walk(inst.obj, inst.name.upper(), 0, None, None)
         self.leaves, self.edges, self.paths = leaves, edges, paths
+        self.walks += 1
 
 
 def _fields(obj: Any) -> list[str]:
