@@ -331,28 +331,24 @@ class Tracer:
         """A line's read keys and (write key, strong) pairs, whether all of them are stable (or
         per call) so that the next execution by the same `self` may reuse them, and whether
         one is per call."""
-        stable, per_call = True, False
-        reads = []
-        for r, p in shape.reads:
-            k, how = self._resolve(frame, st, r, p, False)
-            stable = stable and how != 0
-            per_call = per_call or how == PER_CALL
-            if k is not None:
-                reads.append(k)
-        writes = []
-        for r, p in shape.writes:
-            k, how = self._resolve(frame, st, r, p, True)
-            stable = stable and how != 0
-            per_call = per_call or how == PER_CALL
-            if k is not None:
-                writes.append((k, "[" not in (k[1] if len(k) == 2 else "")))
-        for r, p in shape.std_calls:
-            k, how = self._resolve(frame, st, r, p, False)
-            stable = stable and how != 0
-            if k is not None and len(k) == 2 and k[1] == "":
+        hows: list[int] = []
+
+        def keys(items: tuple, write: bool) -> list:
+            out = []
+            for r, p in items:
+                k, how = self._resolve(frame, st, r, p, write)
+                hows.append(how)
+                if k is not None:
+                    out.append(k)
+            return out
+
+        reads = keys(shape.reads, False)
+        writes = [(k, "[" not in (k[1] if len(k) == 2 else "")) for k in keys(shape.writes, True)]
+        for k in keys(shape.std_calls, False):
+            if len(k) == 2 and k[1] == "":
                 reads.append((k[0], WILD))
                 writes.append(((k[0], WILD), False))
-        return reads, writes, stable, per_call
+        return reads, writes, all(hows), PER_CALL in hows
 
     def _local(self, frame: Any, event: str, arg: Any) -> Any:
         st = self._frames.get(id(frame))
