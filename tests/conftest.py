@@ -55,3 +55,4 @@ def _shared_explorations(tmp_path_factory):
         base = base.parent
     os.environ["PLCLAB_TESTS_SHARED_DIR"] = str(base / "shared-explorations")
     yield
+    os.environ.pop("PLCLAB_TESTS_SHARED_DIR", None)

@@ -11,8 +11,7 @@ and leaves the result (pickled) in the session's folder, the others wait for it 
 
 The folder belongs to one test session (pytest's base temporary folder for it, named in
 PLCLAB_TESTS_SHARED_DIR by tests/conftest.py), so a result never outlives the code that
-computed it. Without a folder (a script run by hand) the result
-is kept in this process only.
+computed it. Without a folder (a script run by hand) the result is kept in this process only.
 """
 from __future__ import annotations
 
