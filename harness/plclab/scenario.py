@@ -173,6 +173,18 @@ class Session:
         self.sim.plants.extend(self.probes)
         self._merge_pending = True
 
+    def add_probe(self, probe: Any) -> None:
+        """Step `probe` (an object with step(dt)) after the plant every tick from now on, also
+        after PLC restarts (which build the simulation anew)."""
+        self.probes.append(probe)
+        self.sim.plants.append(probe)
+
+    def remove_probe(self, probe: Any) -> None:
+        if probe in self.probes:
+            self.probes.remove(probe)
+        if probe in self.sim.plants:
+            self.sim.plants.remove(probe)
+
     @property
     def tick(self) -> float:
         return self.plc.tick_ns / 1e9

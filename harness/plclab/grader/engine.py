@@ -159,8 +159,7 @@ def replayed(stand: str, task: str, sources: Sequence[tuple[str, str]], scenario
         retain = MemoryRetainStore() if sc.needs_retain else None
         s = req.make_session(sources, retain, checked)
         stop = _StopAfter(s, t)
-        s.probes.append(stop)
-        s.sim.plants.append(stop)
+        s.add_probe(stop)
         try:
             sc.run(s, Checks(req.requirements))
         except (StopReplay, ScenarioFailure):

@@ -603,9 +603,6 @@ class ModelPlays:
                 os.replace(tmp, self.folder / f"{k}.play")
 
 
-_UNJUDGED = object()
-
-
 def _model_salt(stand_task: str, model: "Program") -> str:
     h = hashlib.sha256(stand_task.encode())
     for name, text in model.sources:
@@ -700,9 +697,8 @@ class Explorer:
         the actions fall in (robust). Each script is judged once: the shrinker comes back to a
         candidate it has tried (its last pass over single steps, when nothing else gained), and
         the answer cannot differ (virtual time), so it costs no play of its budget again."""
-        known = self._judged.get(script, _UNJUDGED)
-        if known is not _UNJUDGED:
-            return known
+        if script in self._judged:
+            return self._judged[script]
         out = self.outcome(script)
         found = None if out.divergence is None or out.suspect or not self.robust(script) else out.divergence
         self._judged[script] = found

@@ -620,8 +620,7 @@ def _traced(session: Any, tracer: Tracer, replay: Replay) -> None:
 
     def begin() -> None:
         if hook not in session.probes:
-            session.probes.append(hook)
-            session.sim.plants.append(hook)
+            session.add_probe(hook)
             hook.step(0.0)          # from the start of the replay when its window begins there
 
     try:
@@ -631,10 +630,7 @@ def _traced(session: Any, tracer: Tracer, replay: Replay) -> None:
     finally:
         if hook.started:
             tracer.stop()
-        if hook in session.probes:
-            session.probes.remove(hook)
-        if hook in session.sim.plants:
-            session.sim.plants.remove(hook)
+        session.remove_probe(hook)
     session.run(0)          # no scan: the session's trace takes what its stand recorded up to the stop
 
 

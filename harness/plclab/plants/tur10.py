@@ -75,7 +75,6 @@ class Drive:
     """One link with its drive: the state the ARS and the mechanics carry between steps."""
 
     position: float            # codes
-    axis: int = 0              # 1..5 (Table 1)
     speed: float = 0.0         # codes/s
     reference: int = 0         # DAC code as the PLC wrote it (signed)
     tripped: bool = False      # overvoltage protection: ignores the reference until reset
@@ -111,7 +110,7 @@ class Tur10(PlantModel):
             raise PlantError("start: one position (or five) between the stops")
         self.gain, self.tau, self.period = float(gain), float(tau), float(period)
         self.working, self.stops, self.dac_limit = tuple(working), tuple(stops), int(dac_limit)
-        self.drives = {k: Drive(float(s), k, in_range=working[0] <= s <= working[1])
+        self.drives = {k: Drive(float(s), in_range=working[0] <= s <= working[1])
                        for k, s in zip(AXES, starts)}
         self.reset_indicator = 0
         self.selected: tuple[int, ...] = ()
@@ -138,21 +137,21 @@ class Tur10(PlantModel):
         if dt > 0:
             limit = self.dac_limit
             faults = self.faults
-            for d, loc in zip(self.drives.values(), _DAC_LOCS):
+            for (k, d), loc in zip(self.drives.items(), _DAC_LOCS):
                 raw = get(loc, 0) & 0xFFFF                 # the signed INT the PLC wrote
                 d.reference = reference = raw - 0x10000 if raw & 0x8000 else raw
                 if (reference > limit or reference < -limit) and not d.tripped:
-                    self._check_overvoltage(d.axis, d)
+                    self._check_overvoltage(k, d)
             if len(selected) > 1 or self._contention:
                 self._check_contention()
             self.time += dt
-            for d in self.drives.values():
+            for k, d in self.drives.items():
                 # a link at rest and told to stay, without a fault, does not move (most
                 # links, most ticks): _move would return at once
                 if faults or d.speed != 0.0 or not (d.tripped or d.reference == 0):
-                    self._move(d.axis, d, dt)
-        self.bus = bus = self._bus_value(selected)
-        return self._inputs(bus)
+                    self._move(k, d, dt)
+        self.bus = self._bus_value(selected)
+        return self._inputs()
 
     # --- console: the operator's side of the inputs -----------------------------------------
 
@@ -281,16 +280,11 @@ class Tur10(PlantModel):
     def _bus_value(self, selected: tuple[int, ...]) -> int:
         """Pulled up to all ones; every enabled sensor pulls its zero bits down (wired AND)."""
         value = FULL_SCALE
-        if self.faults:
-            for k in selected:
-                value &= self._code(k)
-            return value
-        drives = self.drives
-        for k in selected:                       # _code without a dead sensor, inline
-            value &= min(max(math.floor(drives[k].position), 0), FULL_SCALE)
+        for k in selected:
+            value &= self._code(k)
         return value
 
-    def _inputs(self, bus: int) -> dict[str, int]:
+    def _inputs(self) -> dict[str, int]:
         """Every input: the console contacts, then the bus bits (bit n of the code on BUS_BITS[n]).
         The console's part is made again only when a contact changed."""
         console = self.console_bits
@@ -298,6 +292,7 @@ class Tur10(PlantModel):
             self._console_seen = dict(console)
             self._console_inputs = dict(zip(_CONSOLE_LOCS, map(console.__getitem__, _CONSOLE_NAMES)))
         inputs = self._console_inputs.copy()
+        bus = self.bus
         inputs.update(zip(BUS_BITS, _LOW_BITS[bus & 0xFF] + _HIGH_BITS[(bus >> 8) & 0x7F]))
         return inputs
 

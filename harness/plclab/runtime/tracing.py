@@ -187,6 +187,28 @@ class StopReplay(BaseException):
     seen has been (a BaseException, so that a scenario's own `except Exception` lets it by)."""
 
 
+@dataclass(frozen=True)
+class _LineKeys:
+    """A line's storage keys as the same `me` (under the same globals `g`) always has them;
+    a call's temporaries ('L' keys) are renumbered for the call that runs the line."""
+
+    me: Any
+    g: Any
+    reads: tuple
+    writes: tuple                     # (key, strong)
+    per_call: bool                    # some key is a call's temporary
+
+    def in_call(self, call: int) -> tuple[list, list]:
+        if not self.per_call:
+            return list(self.reads), list(self.writes)
+        return ([_in_call(k, call) for k in self.reads],
+                [(_in_call(k, call), strong) for k, strong in self.writes])
+
+
+def _in_call(key: tuple, call: int) -> tuple:
+    return ("L", call, key[2]) if key[0] == "L" else key
+
+
 @dataclass
 class Tracer:
     """Records dependence events of the compiled program `compiled` while installed
@@ -213,9 +235,8 @@ class Tracer:
         self._frames: dict[int, dict] = {}             # id(frame) -> per-call state
         self._old: Any = None
         self._slotsets: dict[type, frozenset] = {}
-        # (line, id(self)) -> (self, G, reads, writes, any per call) of a line whose keys are
-        # all stable (Tracer._resolve)
-        self._line_keys: dict[tuple[int, int], tuple[Any, Any, tuple, tuple, bool]] = {}
+        # (line, id(self)) -> the keys of a line whose keys are all stable (Tracer._resolve)
+        self._line_keys: dict[tuple[int, int], _LineKeys] = {}
 
     # ---------------------------------------------------------------- storage keys
     def _obj_key(self, obj: Any, path: str) -> tuple:
@@ -365,15 +386,12 @@ class Tracer:
             lineno = frame.f_lineno
             known = self._line_keys.get((lineno, id(me))) if self.CACHE_LINES else None
             g = frame.f_globals.get("G")
-            if known is not None and known[0] is me and known[1] is g:
-                call = st["call"]
-                reads = [("L", call, k[2]) if k[0] == "L" else k for k in known[2]] if known[4] else list(known[2])
-                writes = [(("L", call, k[0][2]), w) if k[0][0] == "L" else k for k in known[3] for w in [k[1]]] \
-                    if known[4] else list(known[3])
+            if known is not None and known.me is me and known.g is g:
+                reads, writes = known.in_call(st["call"])
             else:
                 reads, writes, stable, per_call = self._line_keys_of(frame, st, shape)
                 if stable and self.CACHE_LINES:
-                    self._line_keys[(lineno, id(me))] = (me, g, tuple(reads), tuple(writes), per_call)
+                    self._line_keys[(lineno, id(me))] = _LineKeys(me, g, tuple(reads), tuple(writes), per_call)
             if shape.is_return:
                 writes.append((("R", st["call"]), True))
             parent = st["headers"].get(shape.header) if shape.header is not None else st["parent"]
@@ -430,10 +448,6 @@ class StateReader:
         self.paths: dict[int, str] = {}
         self.walks = 0                  # how many times the objects were walked (the leaves made)
         self._plc: Any = None
-
-    def read(self, plc: Any) -> dict[str, Any]:
-        values = self.values(plc)
-        return {path: v for (_c, _k, path), v in zip(self.leaves, values)}
 
     def values(self, plc: Any) -> list[Any]:
         """The values of `leaves`, in their order (walked again first where needed)."""
