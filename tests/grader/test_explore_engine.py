@@ -120,3 +120,44 @@ def test_coverage_guided_exploration_finds_a_rare_mistake_within_the_default_bud
     result = explored("mp9c", "task2", path)       # as `plclab grade` explores (once per session)
     assert result.finding is not None, f"{name}: no difference in {result.episodes} scripts"
     assert result.episodes <= expl.episodes
+
+
+@pytest.mark.parametrize("stand", ["mp9c", "tur10"])
+def test_a_play_through_idle_scans_shows_what_stepping_every_scan_shows(stand, monkeypatch):
+    """Where a robot stands idle under unchanged outputs, the closed loop does not step it, write
+    its inputs again or look at it (issue 30). Over generated scripts with faults and power
+    cycles, each played with those shortcuts and with every scan stepped in full: the same
+    recorded trace, the same changes the probe saw and the model answer's states, the same
+    plant and the same plant events at the end; and the shortcut was taken."""
+    import random
+
+    from plclab.grader.explore import play
+    from plclab.runtime.plantio import PlantBinding
+    from plclab.runtime.retain import MemoryRetainStore
+    expl = stand_spec(stand).explore
+    model, _why = model_answer(stand, "task3", None)
+    req = requirement_set(stand, "task3")
+    idle_scans = 0
+    for seed in range(3):
+        script = expl.generate(random.Random(seed), "task3", expl.episode_s)
+        seen = []
+        for shortcut in (True, False):
+            s = req.make_session(list(model.sources), MemoryRetainStore(), model.checked)
+            if not shortcut:                 # every step in full, the plant's own shortcut too
+                monkeypatch.setattr(PlantBinding, "step_idle", lambda self, dt: False)
+                monkeypatch.setattr(type(s.plant), "idle", lambda self, outputs, dt: False)
+            else:
+                original = PlantBinding.step_idle
+
+                def counting(self, dt):
+                    nonlocal idle_scans
+                    idle = original(self, dt)
+                    idle_scans += idle
+                    return idle
+                monkeypatch.setattr(PlantBinding, "step_idle", counting)
+            probe = play(s, script, expl, record=True, inner=expl.state_paths)
+            monkeypatch.undo()
+            seen.append(({n: s.trace.changes(n) for n in s.trace.signals()}, probe.changes, probe.states,
+                         s.plant.snapshot(), list(s.plant.events)))
+        assert seen[0] == seen[1]
+    assert idle_scans > 1000

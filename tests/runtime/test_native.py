@@ -23,6 +23,7 @@ from plclab.frontend import check_sources
 from plclab.runtime import native
 from plclab.runtime.compiler import Ref, compile_unit
 from plclab.runtime.plc import FAULT, PLC
+from plclab.runtime.retain import MemoryRetainStore
 from plclab.stands import stand_module
 from plclab.stands.base import stand_spec
 
@@ -341,3 +342,66 @@ def test_check_emit_c_prints_the_c_or_says_what_it_does_not_cover(tmp_path):
     assert r.stderr.strip().splitlines() == [
         "plclab: error: the native scan path does not cover STRING variables: this program runs on the "
         "Python path (docs/runtime.md)"]
+
+
+class CountingMemory(MemoryRetainStore):
+    """A grading's retain memory that counts its writes."""
+
+    flushes = 0
+
+    def flush(self, sig, values):
+        self.flushes += 1
+        return super().flush(sig, values)
+
+
+def test_a_gradings_retain_memory_is_written_when_a_retained_value_changed_and_holds_each_periods_values():
+    """A grading saves the retained variables every second of plant time, thousands of times;
+    on the native path a save of what the memory already holds is skipped (the C memory
+    compared). Skipped or not, a power cut that loses the stop's flush restores exactly the
+    values of the last periodic save, as on the Python path, which writes every time; a
+    change anywhere in a retained FB (a field, a nested array element) is written."""
+    src = """
+    FUNCTION_BLOCK FB_Store
+    VAR_INPUT put : BOOL; slot : INT; value : INT; END_VAR
+    VAR frames : ARRAY[1..8] OF INT; count : INT; END_VAR
+    IF put THEN frames[slot] := value; count := count + 1; END_IF;
+    END_FUNCTION_BLOCK
+    PROGRAM main
+    VAR RETAIN store : FB_Store; END_VAR
+    VAR put : BOOL; slot : INT := 1; value : INT; END_VAR
+    store(put := put, slot := slot, value := value);
+    put := FALSE;
+    END_PROGRAM
+    CONFIGURATION Config0 RESOURCE Res0 ON PLC
+    TASK t (INTERVAL := T#10ms, PRIORITY := 0);
+    PROGRAM inst WITH t : main;
+    END_RESOURCE END_CONFIGURATION
+    """
+    unit = compile_unit(check_sources([("t.st", textwrap.dedent(src))]))
+    stores = {"native": CountingMemory(), "python": CountingMemory()}
+    plcs = {how: PLC(unit, native=how == "native", retain=stores[how], retain_period_ns=100_000_000)
+            for how in stores}
+    assert plcs["native"].native is not None and plcs["python"].native is None
+    puts = {12: (3, 7), 47: (8, -2), 48: (3, 9)}          # scan -> (slot, value)
+    for tick in range(100):                                 # 1 s of PLC time: saves at 0.1 .. 0.9 s
+        for plc in plcs.values():
+            if tick in puts:
+                plc.write("inst.put", True)
+                plc.write("inst.slot", puts[tick][0])
+                plc.write("inst.value", puts[tick][1])
+            plc.scan()
+            plc.advance()
+    assert stores["python"].flushes == 9
+    # written at the first save (nothing held yet) and at the first save after each change
+    assert stores["native"].flushes == 3
+    for plc in plcs.values():
+        plc.scan()                                          # t = 1 s: a save
+        plc.advance()
+        plc.write("inst.put", True)
+        plc.write("inst.value", 100)
+        plc.scan()                                          # changed after the last save
+        plc.enter_fault("internal", "power cut: no flush at stop")
+    back = {how: PLC(unit, native=how == "native", retain=stores[how]) for how in stores}
+    for plc in back.values():
+        assert plc.read("inst.store.frames") == [0, 0, 9, 0, 0, 0, 0, -2]
+        assert plc.read("inst.store.count") == 3

@@ -7,6 +7,8 @@ from __future__ import annotations
 
 from typing import Any
 
+import pytest
+
 from plclab.runtime.image import ProcessImage
 from plclab.runtime.plantio import MAX_WRITER_COMPILES, PlantBinding
 
@@ -76,3 +78,50 @@ def test_two_names_of_one_cell_are_written_in_the_plants_order():
     assert image.areas["IX"][0] == 0                 # the last of the dict wins, every step
     binding.step(0.01)
     assert image.areas["IX"][0] == 1
+
+
+class IdlePlant:
+    """A plant that is idle whenever asked under the outputs of its last full step."""
+
+    outputs = ["QX0.1", "QW2"]
+    period = 0.01
+
+    def __init__(self):
+        self.time, self.full_steps, self.last = 0.0, 0, None
+
+    def step(self, outputs: dict[str, int], dt: float) -> dict[str, Any]:
+        self.time += dt
+        self.full_steps += 1
+        self.last = (outputs["QX0.1"], outputs["QW2"])
+        return {"IX0.0": 1, "IW0": 40 + self.full_steps}
+
+    def idle(self, outputs: tuple[int, ...], dt: float) -> bool:
+        if outputs != self.last:
+            return False
+        self.time += dt
+        return True
+
+
+def test_an_idle_plant_only_moves_its_time_until_an_output_or_one_of_its_input_cells_changes():
+    """The closed loop's shortcut (a robot at rest): under the outputs of the last step the
+    plant is asked whether it is idle, and then neither stepped nor its inputs written; an
+    output that changes, or a cell of its inputs that something else wrote (a scenario's
+    set, a force), steps it in full and its inputs are written again."""
+    image = ProcessImage()
+    plant = IdlePlant()
+    binding = PlantBinding(plant, image)
+    for _ in range(5):
+        binding.step(0.01)
+    # the first step writes by the plain loop, the second generates the writer: idle from then
+    assert (plant.full_steps, binding.idle, image.areas["IW"][0]) == (2, True, 42)
+    assert plant.time == pytest.approx(0.05)
+    image.areas["QW"][2] = 9                          # an output changes
+    binding.step(0.01)
+    assert (plant.full_steps, binding.idle, image.areas["IW"][0]) == (3, False, 43)
+    binding.step(0.01)
+    assert (plant.full_steps, binding.idle) == (3, True)
+    image.areas["IX"][0] = 0                          # someone else wrote an input cell
+    binding.step(0.01)
+    assert (plant.full_steps, binding.idle, image.areas["IX"][0]) == (4, False, 1)
+    binding.step(0.01)
+    assert (plant.full_steps, binding.idle, plant.time) == (4, True, pytest.approx(0.09))

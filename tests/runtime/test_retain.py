@@ -11,6 +11,8 @@ import textwrap
 import time
 from pathlib import Path
 
+import pytest
+
 
 from plclab.frontend import check_sources
 from plclab.runtime.compiler import compile_unit
@@ -195,6 +197,50 @@ def test_retained_fb_instance_is_restored_and_checked(tmp_path):
     edit_saved_file(HOLD, path, 0, lambda v: v["INST.H"]["fb"].__setitem__("N", "four"))
     plc, problems = load_reporting(HOLD, path)
     assert plc.read("inst.h.n") == 0 and len(problems) == 1 and "INST.H.N" in problems[0]
+
+
+RECORDER = """
+TYPE ST_Frame : STRUCT x : INT; y : INT; END_STRUCT; END_TYPE
+FUNCTION_BLOCK FB_Recorder
+VAR_INPUT put : BOOL; END_VAR
+VAR frames : ARRAY[1..4] OF ST_Frame; last : ST_Frame; count : INT; END_VAR
+IF put AND count < 4 THEN
+    count := count + 1;
+    frames[count].x := count * 10; frames[count].y := -count;
+    last := frames[count];
+END_IF;
+END_FUNCTION_BLOCK
+PROGRAM main
+VAR RETAIN rec : FB_Recorder; END_VAR
+rec(put := TRUE);
+END_PROGRAM
+CONFIGURATION Config0 RESOURCE Res0 ON PLC
+TASK t (INTERVAL := T#10ms, PRIORITY := 0);
+PROGRAM inst WITH t : main;
+END_RESOURCE END_CONFIGURATION
+"""
+
+
+@pytest.mark.parametrize("native", [False, True], ids=["python", "native"])
+def test_a_retained_blocks_arrays_and_structures_survive_a_restart_whole(tmp_path, native):
+    """A student who declares the block that records the taught frames RETAIN finds them after
+    a power cycle: every variable of the block, its arrays of structures and its structures
+    too, not only its elementary variables (and a bad element names its variable)."""
+    unit = compile_unit(check_sources([("retain.st", RECORDER)]))
+    path = tmp_path / "retain.json"
+    plc = PLC(unit, retain=RetainStore(path), native=native)
+    assert (plc.native is not None) == native
+    run_scans(plc, 3)
+    plc.stop()
+    back = PLC(unit, retain=RetainStore(path), native=native)
+    assert back.read("inst.rec.count") == 3
+    assert [(f.X, f.Y) for f in back.read("inst.rec.frames")] == [(10, -1), (20, -2), (30, -3), (0, 0)]
+    assert (back.read("inst.rec.last").X, back.read("inst.rec.last").Y) == (30, -3)
+    run_scans(back, 1)
+    assert back.read("inst.rec.frames[4].x") == 40
+    edit_saved_file(RECORDER, path, 2, lambda v: v["INST.REC"]["fb"]["FRAMES"][1].__setitem__("Y", 1 << 20))
+    plc, problems = load_reporting(RECORDER, path)
+    assert plc.read("inst.rec.count") == 0 and len(problems) == 1 and "INST.REC.FRAMES" in problems[0]
 
 
 def test_a_memory_store_keeps_what_a_file_would_across_restarts_and_no_file_is_written(tmp_path, monkeypatch):

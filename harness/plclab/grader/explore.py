@@ -71,22 +71,27 @@ class _Probe:
         # the program's inner state (the model answer's, for coverage): [(t, state)] at each change
         self.inner, self.states = inner, []
         self._inner_last: Any = None
+        # the plant's binding in the closed loop (set by play): where it stood idle this scan,
+        # the plant is as it was at the last scan and so is what it shows
+        self.binding: Any = None
 
     def step(self, _dt: float) -> None:
-        now = round(self.clock(), 6)         # the session's time of the scan about to run
-        v = self.observe(self.plant, self.last)
         last = self.last
-        if last is None:
-            self.changes = {k: [(now, x)] for k, x in v.items()}
-        elif v != last:                      # most scans change nothing: one C-level comparison
-            for k, x in v.items():
-                if x != last[k]:
-                    self.changes[k].append((now, x))
-        self.last = v
+        binding = self.binding
+        if last is None or binding is None or not binding.idle:
+            now = round(self.clock(), 6)     # the session's time of the scan about to run
+            v = self.observe(self.plant, last)
+            if last is None:
+                self.changes = {k: [(now, x)] for k, x in v.items()}
+            elif v != last:                  # most scans change nothing: one C-level comparison
+                for k, x in v.items():
+                    if x != last[k]:
+                        self.changes[k].append((now, x))
+            self.last = v
         if self.inner is not None:
             state = self.inner()
             if state != self._inner_last:
-                self.states.append((now, state))
+                self.states.append((round(self.clock(), 6), state))
                 self._inner_last = state
 
 
@@ -110,17 +115,29 @@ def actions(script: Script) -> list[tuple[float, int, str, str, str]]:
 def _inner_reader(s: Session, paths: Sequence[str]) -> Callable[[], tuple]:
     """A function reading the running program's variables `paths` (those it has; PLC restarts
     make new objects, so they are looked up again after one)."""
-    cache: dict[str, Any] = {"plc": None, "get": None}
+    plc: Any = None
+    get: Callable[[], tuple] = tuple
 
     def read() -> tuple:
-        if cache["plc"] is not s.plc:
-            cache["plc"] = s.plc
-            found = [s.plc.resolve(p) for p in paths if s.has(p)]
-            getters = [(lambda o=o, k=k: o[k]) if isinstance(o, list) else (lambda o=o, k=k: getattr(o, k))
-                       for o, k in found]
-            cache["get"] = getters
-        return tuple(g() for g in cache["get"])
+        nonlocal plc, get
+        if plc is not s.plc:
+            plc = s.plc
+            get = _getter([s.plc.resolve(p) for p in paths if s.has(p)])
+        return get()
     return read
+
+
+def _getter(found: Sequence[tuple[Any, Any]]) -> Callable[[], tuple]:
+    """One generated function reading (container, key) pairs as resolve gives them (an
+    array element or an attribute) into a tuple: every scan of the model answer's plays."""
+    ns: dict[str, Any] = {}
+    parts = []
+    for n, (o, k) in enumerate(found):
+        ns[f"o{n}"], ns[f"k{n}"] = o, k
+        parts.append(f"o{n}[k{n}]" if isinstance(o, list) else f"getattr(o{n}, k{n})")
+    exec(compile("def get():\n    return (" + "".join(p + ", " for p in parts) + ")\n",
+                 "<inner-state>", "exec"), ns)
+    return ns["get"]
 
 
 def unrecorded(s: Session) -> None:
@@ -153,6 +170,8 @@ def play(s: Session, script: Script, expl: Optional[Exploration] = None, until: 
             unrecorded(s)
         if probe is not None and probe not in s.sim.plants:
             s.sim.plants.append(probe)
+        if probe is not None:
+            probe.binding = next((b for b in s.sim.plants if getattr(b, "plant", None) is s.plant), None)
 
     def run_to(t: float) -> None:
         nonlocal split

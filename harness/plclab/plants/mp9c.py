@@ -280,15 +280,29 @@ class MP9C(PlantModel):
         if dt < 0:
             raise PlantError(f"mp9c: dt must not be negative ({dt})")
         seen = tuple(map(outputs.get, _OUTPUT_LOCS))
-        rest = self._rest
-        if (rest is not None and dt > 0 and rest[0] == seen and rest[1] == self.console.changes
-                and not self.faults and self.REST_SHORTCUT and self._at_rest() and not self.console.pending()):
-            self.time += dt
-            return dict(rest[2])
+        if self.idle(seen, dt):
+            return dict(self._rest[2])           # type: ignore[index]
         inputs = self._step(outputs, dt)
-        # a zero-length step drives no valve: only a step of time says what the outputs did
-        self._rest = None if self.faults or dt == 0 else (seen, self.console.changes, dict(inputs))
+        # a zero-length step drives no valve: only a step of time says what the outputs did;
+        # links and bounces move only in a step, so "at rest" holds until the next one (or a
+        # console change, which the count says)
+        quiet = not self.faults and dt > 0 and self._at_rest() and not self.console.pending()
+        self._rest = (seen, self.console.changes, dict(inputs)) if quiet else None
         return inputs
+
+    def idle(self, outputs: tuple[int, ...], dt: float) -> bool:
+        """The plant contract's optional shortcut (plclab.runtime.plantio): would a step of dt
+        under `outputs` (the values of self.outputs, in order) change nothing but the time?
+        Then the time has moved on by dt and the answer is True: the inputs, switches, spools
+        and lamp are those of the last step. The closed loop then neither builds the outputs
+        nor writes the inputs again, and a grader's probe need not look (most scans of a
+        robot: a pause, a wait for the operator)."""
+        rest = self._rest              # set only where the last step ended at rest (see step)
+        if (rest is not None and dt > 0 and rest[0] == outputs and rest[1] == self.console.changes
+                and not self.faults and self.REST_SHORTCUT):
+            self.time += dt
+            return True
+        return False
 
     def _at_rest(self) -> bool:
         """Every link at the end its spool drives it to: the same coils move nothing."""

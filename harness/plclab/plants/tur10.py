@@ -58,6 +58,7 @@ FACE = ConsoleFace(switches=tuple(CONSOLE), lamps=(("HL1", RESET_LAMP),),
 # builds nothing but the inputs it returns.
 _ENABLES = tuple((k, ENABLE[k]) for k in AXES)
 _DAC_LOCS = tuple(DAC[k] for k in AXES)
+_OUTPUT_LOCS = tuple([ENABLE[k] for k in AXES] + [RESET_LAMP] + [DAC[k] for k in AXES])   # Tur10.outputs
 # Below this speed (codes/s) a link told to stop is at rest: what is left of its coasting
 # (speed x tau, 5e-5 codes) is added to its position at once. The exact lag only tends to zero
 # (a float takes some 35 s to get there), and a link that keeps "moving" by 1e-300 codes costs
@@ -85,7 +86,7 @@ class Drive:
 class Tur10(PlantModel):
     """The TUR-10 stand: five drives, the multiplexed sensor bus and the control console."""
 
-    outputs = [ENABLE[k] for k in AXES] + [RESET_LAMP] + [DAC[k] for k in AXES]
+    outputs = list(_OUTPUT_LOCS)
     inputs = list(CONSOLE.values()) + list(BUS_BITS)
     FACE = FACE
     CONSOLE = CONSOLE             # set_switch / press / release: plants.base.PlantModel
@@ -119,6 +120,7 @@ class Tur10(PlantModel):
         self._lag: tuple[float, float, float] = (-1.0, -1.0, 0.0)   # (dt, tau, exp(-dt / tau)) last used
         self._console_seen: dict[str, int] = {}        # console_bits when _console_inputs was made
         self._console_inputs: dict[str, int] = {}
+        self._rest: tuple[Any, ...] | None = None      # the outputs of the last step, where it had no fault
 
     # --- the plant contract -------------------------------------------------------------
 
@@ -151,7 +153,23 @@ class Tur10(PlantModel):
                 if faults or d.speed != 0.0 or not (d.tripped or d.reference == 0):
                     self._move(k, d, dt)
         self.bus = self._bus_value(selected)
+        self._rest = tuple(map(get, _OUTPUT_LOCS)) if dt > 0 and not self.faults else None
         return self._inputs()
+
+    def idle(self, outputs: tuple[int, ...], dt: float) -> bool:
+        """The plant contract's optional shortcut (plclab.runtime.plantio): would a step of dt
+        under `outputs` (the values of self.outputs, in order) change nothing but the time?
+        So it is where the outputs are those of the last step (the same sensors on the bus,
+        the same references: no new trip or contention), no fault is injected, the console is
+        as that step saw it and every link stands still and is told to (a link with a tripped
+        drive stays). Then the time has moved on by dt and the answer is True."""
+        if self._rest != outputs or dt <= 0 or self.faults or self.console_bits != self._console_seen:
+            return False
+        for d in self.drives.values():
+            if d.speed != 0.0 or not (d.tripped or d.reference == 0):
+                return False
+        self.time += dt
+        return True
 
     # --- console: the operator's side of the inputs -----------------------------------------
 

@@ -383,6 +383,60 @@ class NativeProgram:
         return cls
 
 
+def retain_fingerprint(plc: Any) -> Any:
+    """A function giving bytes that are equal only where the retained variables of `plc`
+    (a native PLC) hold equal values: the C memory of each (an FB instance, a structure or an
+    array with no VAR_IN_OUT pointer inside, whose target could change unseen) or the value of
+    an elementary one; a function giving None where one of them is none of these."""
+    np = plc.native
+    buffer = np.ffi.buffer
+    parts: list[Any] = []
+    for _path, owner, attr, _ty in plc.retained():
+        value = getattr(owner, attr)
+        memory = _memory_of(np, value)
+        if memory is not None:
+            if np.ffi.typeof(memory).kind not in ("pointer", "array"):
+                memory = np.ffi.addressof(memory)        # a struct member: where it lies
+            parts.append(buffer(memory))
+        elif isinstance(value, (bool, int, float, str)):
+            parts.append((owner, attr))
+        else:
+            return lambda: None
+
+    def fingerprint() -> tuple:
+        return tuple(p[:] if not isinstance(p, tuple) else getattr(*p) for p in parts)
+    return fingerprint
+
+
+def _memory_of(np: NativeProgram, value: Any) -> Any:
+    """The C memory holding all of `value` (a mirror or an ArrayMirror), or None where it
+    reaches through a pointer or is no mirror."""
+    if isinstance(value, ArrayMirror):
+        if value._items is not None and not all(_pointer_free(np, type(x)) for x in value._items[:1]):
+            return None
+        return value._a
+    fields = getattr(type(value), "_fields", None)
+    if fields is None or getattr(value, "_p", None) is None or not _pointer_free(np, type(value)):
+        return None
+    return value._p
+
+
+def _pointer_free(np: NativeProgram, cls: type) -> bool:
+    fields = getattr(cls, "_fields", None)
+    if fields is None:
+        return False
+    seen: set[str] = set()
+    todo = list(fields.values())
+    while todo:
+        f = todo.pop()
+        if f.kind == "ref":
+            return False
+        if f.sub is not None and f.sub not in seen and (f.kind in ("struct", "fb") or f.sub_kind != "scalar"):
+            seen.add(f.sub)
+            todo.extend(np.cprog.layouts[f.sub].fields)
+    return True
+
+
 def _wrap_raw(x: int) -> int:
     """A raw image value as the C reads it: its low 64 bits (the conversions mask it)."""
     x = int(x) & 0xFFFFFFFFFFFFFFFF

@@ -9,6 +9,12 @@ real OpenPLC runtime through the PSM protocol (plclab.modbus.psm), which uses th
 The exchange runs once per scan next to the scan itself, so it is generated code: one
 function builds the outputs dict from the image cells, another writes a step's inputs back
 (by the names the plant returned last time, looked up once), instead of a loop over names.
+
+A plant may also offer `idle(outputs, dt) -> bool` (outputs: the values of `outputs`, in
+order): True when a step of dt under those outputs would change nothing but its time, which
+it then advances. Where the outputs and the input cells are what they were after the last
+step and the plant says it is idle, the binding neither builds the outputs dict nor writes
+the inputs again, and says so (`idle`) to whoever observes the plant after it in the scan.
 """
 from __future__ import annotations
 
@@ -37,23 +43,40 @@ class PlantBinding:
         self._outs = [(loc, areas[a], i) for loc in plant.outputs for a, i in [image_slot(loc, percent=False)]]
         self._cells: dict[str, tuple[list[int], int, int]] = {}   # input name -> (area, index, mask)
         self.read_outputs: Callable[[], dict[str, int]] = self._compile_reader()
-        self._writer: Optional[Callable[[dict[str, Any]], None]] = None
+        self._output_values: Callable[[], tuple[int, ...]] = self._compile_reader(as_tuple=True)
+        self._writer: Optional[Callable[[dict[str, Any]], tuple[int, ...]]] = None
         self._writer_size = -1       # how many names the generated writer writes
         self._compiles = 0
+        self._idle: Optional[Callable[[tuple[int, ...], float], bool]] = getattr(plant, "idle", None)
+        self._written: Optional[tuple[int, ...]] = None    # what the last write put in the cells
+        self._read_written: Optional[Callable[[], tuple[int, ...]]] = None
+        self.idle = False            # this scan's step changed nothing but the plant's time
 
     def step(self, dt: float) -> None:
-        self.write_inputs(self.plant.step(self.read_outputs(), dt))
+        if not self.step_idle(dt):
+            self.write_inputs(self.plant.step(self.read_outputs(), dt))
 
-    def _compile_reader(self) -> Callable[[], dict[str, int]]:
+    def step_idle(self, dt: float) -> bool:
+        """The step of dt where the plant is idle under unchanged outputs and its input cells
+        still hold what it wrote last (nothing else wrote them): then only its time moves and
+        the answer is True; else False, and the caller steps it in full."""
+        idle, written = self._idle, self._written
+        self.idle = (idle is not None and written is not None
+                     and self._read_written() == written                   # type: ignore[misc]
+                     and idle(self._output_values(), dt))
+        return self.idle
+
+    def _compile_reader(self, as_tuple: bool = False) -> Callable[[], Any]:
         """`read_outputs()`: the plant's outputs as the PLC's last scan left them in the image,
-        a new dict each call (the plant may keep it)."""
+        a new dict each call (the plant may keep it); `as_tuple`: their values only, in the
+        plant's order (what `idle` compares)."""
         ns: dict[str, Any] = {}
         items = []
         for n, (loc, area, i) in enumerate(self._outs):
             ns[f"a{n}"] = area                    # the image's area lists are never replaced
-            items.append(f"{loc!r}: a{n}[{i}]")
-        source = "def read_outputs():\n    return {" + ", ".join(items) + "}\n"
-        exec(compile(source, "<plant-outputs>", "exec"), ns)
+            items.append(f"a{n}[{i}]" if as_tuple else f"{loc!r}: a{n}[{i}]")
+        body = "(" + "".join(f"{x}, " for x in items) + ")" if as_tuple else "{" + ", ".join(items) + "}"
+        exec(compile(f"def read_outputs():\n    return {body}\n", "<plant-outputs>", "exec"), ns)
         return ns["read_outputs"]
 
     def _cell(self, loc: str) -> tuple[list[int], int, int]:
@@ -68,20 +91,25 @@ class PlantBinding:
         writer = self._writer
         if writer is not None and len(inputs) == self._writer_size:
             try:
-                writer(inputs)                    # the same names as last time (nearly always)
+                self._written = writer(inputs)    # the same names as last time (nearly always)
                 return
             except KeyError:                      # other names of the same count: written below
                 pass
+        self._written = None                      # (idle needs a generated writer's record)
         for loc, value in inputs.items():
             area, i, mask = self._cell(loc)
             area[i] = int(value) & mask
         if self._compiles < MAX_WRITER_COMPILES:  # a plant that returns other names each step
             self._compiles += 1                   # keeps the loop above
-            self._writer, self._writer_size = self._compile_writer(list(inputs)), len(inputs)
+            compiled = self._compile_writer(list(inputs))
+            self._writer, self._read_written = compiled if compiled is not None else (None, None)
+            self._writer_size = len(inputs)
 
-    def _compile_writer(self, names: list[str]) -> Optional[Callable[[dict[str, Any]], None]]:
-        """A function writing exactly `names` of an inputs dict into their image cells, or None
-        where two names share a cell (then the dict's order decides, as the loop keeps it)."""
+    def _compile_writer(self, names: list[str]) -> Optional[tuple[Callable[[dict[str, Any]], tuple[int, ...]],
+                                                                  Callable[[], tuple[int, ...]]]]:
+        """A function writing exactly `names` of an inputs dict into their image cells and
+        returning the values written, with one reading those cells back; None where two names
+        share a cell (then the dict's order decides, as the loop keeps it)."""
         ns: dict[str, Any] = {"int": int}
         lines = ["def write(d):"]
         cells = set()
@@ -91,7 +119,9 @@ class PlantBinding:
                 return None
             cells.add((id(area), i))
             ns[f"a{n}"] = area
-            lines.append(f"    a{n}[{i}] = int(d[{loc!r}]) & {mask}")
-        lines.append("    return None")
+            lines.append(f"    v{n} = a{n}[{i}] = int(d[{loc!r}]) & {mask}")
+        lines.append("    return (" + "".join(f"v{n}, " for n in range(len(names))) + ")")
+        lines.append("def read():")
+        lines.append("    return (" + "".join(f"a{n}[{self._cell(loc)[1]}], " for n, loc in enumerate(names)) + ")")
         exec(compile("\n".join(lines) + "\n", "<plant-inputs>", "exec"), ns)
-        return ns["write"]
+        return ns["write"], ns["read"]

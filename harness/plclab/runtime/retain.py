@@ -125,17 +125,26 @@ def _int_range(b: T.Type) -> tuple[int, int]:
 def fb_values_from_json(data: Any, inst: Any, types: Optional[dict[str, T.Type]] = None) -> list[tuple[str, Any]]:
     """(variable, value) pairs of a saved FB instance, each of the type the variable holds
     now (and in its declared range, when `types` gives the block's declarations); RetainError
-    (naming the variable) if one is not. Nested blocks are not saved (to_json_value leaves out
-    what is callable), so they start afresh."""
+    (naming the variable) if one is not; its arrays and structures whole, as declared (without
+    `types`, they start afresh). Nested blocks are not saved (to_json_value leaves out what is
+    callable), so they start afresh."""
     saved = data.get("fb", {}) if isinstance(data, dict) else {}
     values = []
     for k, v in saved.items():
         current = getattr(inst, k, None)
+        declared = (types or {}).get(k)
+        if isinstance(current, (list, T.StructValue)):      # an ARRAY or STRUCT variable of the block
+            if declared is None:
+                continue
+            try:
+                values.append((k, from_json_value(v, declared)))
+            except RetainError as e:
+                raise RetainError(str(e), field=k) from None
+            continue
         if type(current) not in (bool, int, float, str):
             continue                          # not a variable of the block
         if type(v) is not type(current) and not (type(current) is float and type(v) is int):
             raise RetainError(f"{quoted(v)} is not of the variable's type", field=k)
-        declared = (types or {}).get(k)
         if declared is not None and isinstance(T.base_of(declared), T.ElementaryType):
             try:
                 v = from_json_value(v, declared)
@@ -273,6 +282,8 @@ class MemoryRetainStore:
     the same snapshot and signature check as a file. A grading saves every second of plant
     time, thousands of times per program; a file (written and fsynced each time) added
     nothing there but wall time, as nobody reads it after the session."""
+
+    exclusive = True     # written by one PLC at a time only: a flush of what it holds changes nothing
 
     def __init__(self) -> None:
         self.last_problem: Optional[str] = None

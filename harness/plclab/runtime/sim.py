@@ -183,18 +183,24 @@ class Simulation:
         dt_s = dt / 1e9
         events, times = self._events, self._event_times
         sample = self._sample
-        record = self.recorder.record
+        # nothing sampled (a search's play): the trace's end is set below all the same
+        record = self.recorder.record if self._names else None
+        steps = [plant.step for plant in self.plants]
+        scan, advance = plc.scan, plc.advance
         for _ in range(ticks):
             now = plc.now_ns
-            for plant in self.plants:      # at t = 0 with dt = 0: the plant's power-up state
-                plant.step(dt_s if plc.ticks else 0.0)
-            while self._next_event < len(events) and times[self._next_event] <= now:
-                ev = events[self._next_event]
-                self.set(ev.name, ev.value)
-                self._next_event += 1
-            plc.scan()
-            record(now, sample())
-            plc.advance()
+            step_dt = dt_s if plc.ticks else 0.0    # at t = 0 with dt = 0: the plant's power-up state
+            for step in steps:
+                step(step_dt)
+            if self._next_event < len(events):
+                while self._next_event < len(events) and times[self._next_event] <= now:
+                    ev = events[self._next_event]
+                    self.set(ev.name, ev.value)
+                    self._next_event += 1
+            scan()
+            if record is not None:
+                record(now, sample())
+            advance()
         self.trace.advance(plc.now_ns - dt if plc.ticks else 0)
 
     def step_profiled(self, ticks: int, costs: dict[str, float]) -> None:
@@ -222,6 +228,11 @@ class Simulation:
                     binding.step(step_dt)
                     observe_s += clock() - t0
                     n_observe += 1
+                    continue
+                t0 = clock()
+                if binding.step_idle(step_dt):    # unchanged and at rest: the plant's own shortcut
+                    plant_s += clock() - t0
+                    n_plant += 1
                     continue
                 t0 = clock()
                 outputs = binding.read_outputs()
