@@ -5,6 +5,8 @@ Contract (plclab.runtime.plantio uses it in-process, plclab.modbus.psm over PSM)
   inputs   PLC inputs the plant drives ("IX0.0", "IW0")
   period   seconds between steps when it runs on its own in real time (PSM)
   step(outputs, dt) -> inputs   values are raw: bits 0/1, words unsigned 16-bit; dt seconds
+  idle(outputs, dt) -> bool     optional: True where a step of dt under these outputs (their
+           values, `outputs` order) would change nothing but the time, which it then moves on
   FACE     the console face (ConsoleFace): which switches an operator sets, which PLC
            outputs are lamps, which plant readouts are shown; set_switch(name, value) and
            readouts() serve it (plclab.modbus.console puts it on Modbus TCP)
