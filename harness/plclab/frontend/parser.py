@@ -5,8 +5,11 @@ kept), which is what keeps a 5,000-line program well under the benchmark's 0.5 s
 """
 from __future__ import annotations
 
+import hashlib
+import pickle
 import re
 import threading
+from collections import OrderedDict
 from functools import lru_cache
 from importlib import resources
 from typing import Any, Iterable
@@ -675,10 +678,66 @@ def _too_deep(text: str) -> tuple[int, int] | None:
     return None
 
 
+# Parsed units by their file name and text, pickled as the parser left them (before the
+# checker annotates the tree in place): the same program is checked again and again (a
+# grading's restarts, a lab's reloads, a class's model answer, the test suite), and reading a
+# unit back from its pickle takes a tenth of parsing it. A text is kept from its second parse
+# on (a file checked once pays nothing for it). Bounded: the most recent entries only.
+PARSE_CACHE_BYTES = 32 * 1024 * 1024       # all entries together
+PARSE_CACHE_MAX_BYTES = 2 * 1024 * 1024    # a unit that pickles larger is parsed each time
+_PARSED: "OrderedDict[bytes, bytes]" = OrderedDict()
+_PARSED_LOCK = threading.Lock()
+_parsed_bytes = 0
+_PARSED_ONCE: "OrderedDict[bytes, None]" = OrderedDict()     # keys of texts parsed once
+PARSED_ONCE_KEYS = 4096
+
+
 def parse_source(text: str, file: str) -> tuple[A.Unit | None, list[Diagnostic]]:
-    """Parse one file. Returns the unit (None on a syntax error) and the diagnostics."""
+    """Parse one file. Returns the unit (None on a syntax error) and the diagnostics.
+    A text parsed before under the same name comes back as a fresh copy of its tree."""
     if len(text) > MAX_SOURCE_BYTES:
         return None, [Diagnostic(file, 1, 1, f"file too large ({len(text)} bytes; the limit is {MAX_SOURCE_BYTES})")]
+    key = hashlib.blake2b(f"{file}\0{text}".encode("utf-8", "surrogatepass"), digest_size=20).digest()
+    with _PARSED_LOCK:
+        pickled = _PARSED.get(key)
+        if pickled is not None:
+            _PARSED.move_to_end(key)
+    if pickled is not None:
+        return pickle.loads(pickled), []
+    unit, diags = _parse(text, file)
+    if unit is not None and _seen_before(key):
+        try:
+            pickled = pickle.dumps(unit, protocol=pickle.HIGHEST_PROTOCOL)
+        except (pickle.PicklingError, TypeError, AttributeError, RecursionError):   # pragma: no cover
+            pickled = None
+        if pickled is not None and len(pickled) <= PARSE_CACHE_MAX_BYTES:
+            _remember(key, pickled)
+    return unit, diags
+
+
+def _seen_before(key: bytes) -> bool:
+    with _PARSED_LOCK:
+        if key in _PARSED_ONCE:
+            return True
+        _PARSED_ONCE[key] = None
+        while len(_PARSED_ONCE) > PARSED_ONCE_KEYS:
+            _PARSED_ONCE.popitem(last=False)
+        return False
+
+
+def _remember(key: bytes, pickled: bytes) -> None:
+    global _parsed_bytes
+    with _PARSED_LOCK:
+        if key in _PARSED:
+            return
+        _PARSED[key] = pickled
+        _parsed_bytes += len(pickled)
+        while _parsed_bytes > PARSE_CACHE_BYTES:
+            _old, dropped = _PARSED.popitem(last=False)
+            _parsed_bytes -= len(dropped)
+
+
+def _parse(text: str, file: str) -> tuple[A.Unit | None, list[Diagnostic]]:
     if "\x00" in text:
         line = text.count("\n", 0, text.index("\x00")) + 1
         return None, [Diagnostic(file, line, 1, "binary data (NUL byte) in ST source")]
