@@ -56,9 +56,10 @@ FACE = ConsoleFace(switches=tuple(CONSOLE), lamps=(("HL1", RESET_LAMP),),
 
 # Stepping runs every scan of every grading: its tables are made once here, so that a step
 # builds nothing but the inputs it returns.
-_ENABLES = tuple((k, ENABLE[k]) for k in AXES)
 _DAC_LOCS = tuple(DAC[k] for k in AXES)
 _OUTPUT_LOCS = tuple([ENABLE[k] for k in AXES] + [RESET_LAMP] + [DAC[k] for k in AXES])   # Tur10.outputs
+_ENABLE_LOCS = tuple(ENABLE[k] for k in AXES)
+_SELECTED: dict[tuple[Any, ...], tuple[int, ...]] = {}     # enable outputs -> the sensors they select
 # Below this speed (codes/s) a link told to stop is at rest: what is left of its coasting
 # (speed x tau, 5e-5 codes) is added to its position at once. The exact lag only tends to zero
 # (a float takes some 35 s to get there), and a link that keeps "moving" by 1e-300 codes costs
@@ -121,6 +122,7 @@ class Tur10(PlantModel):
         self._console_seen: dict[str, int] = {}        # console_bits when _console_inputs was made
         self._console_inputs: dict[str, int] = {}
         self._rest: tuple[Any, ...] | None = None      # the outputs of the last step, where it had no fault
+        self._dacs: tuple[Any, ...] | None = None      # the DAC outputs the references were read from
 
     # --- the plant contract -------------------------------------------------------------
 
@@ -135,13 +137,22 @@ class Tur10(PlantModel):
             raise PlantError(f"dt must not be negative (got {dt})")
         get = outputs.get
         self.reset_indicator = 1 if get(RESET_LAMP, 0) else 0
-        self.selected = selected = tuple([k for k, loc in _ENABLES if not get(loc, 0)])
+        enables = tuple(map(get, _ENABLE_LOCS))
+        selected = _SELECTED.get(enables)
+        if selected is None:                               # each pattern worked out once
+            selected = _SELECTED[enables] = tuple([k for k, on in zip(AXES, enables) if not on])
+        self.selected = selected
         if dt > 0:
             limit = self.dac_limit
             faults = self.faults
-            for (k, d), loc in zip(self.drives.items(), _DAC_LOCS):
-                raw = get(loc, 0) & 0xFFFF                 # the signed INT the PLC wrote
-                d.reference = reference = raw - 0x10000 if raw & 0x8000 else raw
+            dacs = tuple(map(get, _DAC_LOCS))
+            if dacs != self._dacs:                         # the references as last step: as they are
+                self._dacs = dacs
+                for d, raw in zip(self.drives.values(), dacs):
+                    raw = (raw or 0) & 0xFFFF               # the signed INT the PLC wrote
+                    d.reference = raw - 0x10000 if raw & 0x8000 else raw
+            for k, d in self.drives.items():
+                reference = d.reference
                 if (reference > limit or reference < -limit) and not d.tripped:
                     self._check_overvoltage(k, d)
             if len(selected) > 1 or self._contention:

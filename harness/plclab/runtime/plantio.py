@@ -50,6 +50,7 @@ class PlantBinding:
         self._idle: Optional[Callable[[tuple[int, ...], float], bool]] = getattr(plant, "idle", None)
         self._written: Optional[tuple[int, ...]] = None    # what the last write put in the cells
         self._read_written: Optional[Callable[[], tuple[int, ...]]] = None
+        self._stepped: Optional[tuple[int, ...]] = None    # the outputs of the last full step
         self.idle = False            # this scan's step changed nothing but the plant's time
 
     def step(self, dt: float) -> None:
@@ -59,11 +60,18 @@ class PlantBinding:
     def step_idle(self, dt: float) -> bool:
         """The step of dt where the plant is idle under unchanged outputs and its input cells
         still hold what it wrote last (nothing else wrote them): then only its time moves and
-        the answer is True; else False, and the caller steps it in full."""
+        the answer is True; else False, and the caller steps it in full (the outputs that
+        step sees are remembered: most scans of a moving stand fail here, at one comparison)."""
         idle, written = self._idle, self._written
-        self.idle = (idle is not None and written is not None
-                     and self._read_written() == written                   # type: ignore[misc]
-                     and idle(self._output_values(), dt))
+        if idle is None:
+            return False
+        outputs = self._output_values()
+        if outputs != self._stepped:
+            self._stepped = outputs
+            self.idle = False
+            return False
+        self.idle = (written is not None and self._read_written() == written     # type: ignore[misc]
+                     and idle(outputs, dt))
         return self.idle
 
     def _compile_reader(self, as_tuple: bool = False) -> Callable[[], Any]:
