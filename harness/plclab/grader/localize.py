@@ -31,7 +31,7 @@ from dataclasses import dataclass
 from typing import Any, Callable, Optional, Sequence
 
 from plclab.runtime.retain import MemoryRetainStore
-from plclab.runtime.tracing import WILD, StateReader, StopReplay, Tracer, matches
+from plclab.runtime.tracing import WILD, StateReader, StopReplay, Tracer, paths_overlap
 
 MAX_CANDIDATES = 3
 SCRATCH_SHARE = 0.5       # under this share of the starting program's lines kept: rewritten from scratch
@@ -196,7 +196,7 @@ def backward_slice(tracer: Tracer, criterion: Sequence[tuple], mapped: Callable[
                 if not paths:
                     continue
                 for p in list(paths):
-                    if p == k[1] or matches(k, (k[0], p)):
+                    if p == k[1] or paths_overlap(k[1], p):
                         d = paths[p] if d is None else min(d, paths[p])
                         if strong and p == k[1]:
                             del paths[p]
@@ -373,11 +373,17 @@ def rank(tracer: Tracer, sl: Slice, failing_scans: set[int], sources: Sequence[t
         return range(line, min(end, line + 6))
 
     # spectrum: per statement, the scans it ran in
-    ran: dict[tuple[str, int], set[int]] = {}
+    by_line: dict[int, set[int]] = {}              # generated line -> scans (then by statement)
     for e in tracer.events.values():
-        info = compiled.where(e.line)
+        scans = by_line.get(e.line)
+        if scans is None:
+            scans = by_line[e.line] = set()
+        scans.add(e.scan)
+    ran: dict[tuple[str, int], set[int]] = {}
+    for py_line, scans in by_line.items():
+        info = compiled.where(py_line)
         if info is not None:
-            ran.setdefault((info.file, info.line), set()).add(e.scan)
+            ran.setdefault((info.file, info.line), set()).update(scans)
     total_failed = len(failing_scans)
 
     best: dict[tuple[str, int], list] = {}          # statement -> [steps, pou, written patterns, child stmts]

@@ -20,6 +20,7 @@ from __future__ import annotations
 import ast
 import sys
 from dataclasses import dataclass, field
+from functools import lru_cache
 from typing import Any, Callable, Optional
 
 _PRIMITIVE = (bool, int, float, str, bytes, type(None))
@@ -415,7 +416,13 @@ def matches(written: tuple, wanted: tuple) -> bool:
         return True
     if len(written) != 2 or len(wanted) != 2 or written[0] != wanted[0]:
         return False
-    a, b = written[1], wanted[1]
+    return paths_overlap(written[1], wanted[1])
+
+
+@lru_cache(maxsize=1 << 16)
+def paths_overlap(a: str, b: str) -> bool:
+    """Whether storage paths `a` and `b` of one object overlap (matches, for one object): a
+    program's paths are few and a slice asks about the same pairs again and again."""
     if a == WILD or b == WILD or a == "" or b == "":
         return True
     a, b = a.replace("[]", ".[]"), b.replace("[]", ".[]")
