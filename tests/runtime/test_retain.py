@@ -19,6 +19,12 @@ from plclab.runtime.compiler import compile_unit
 from plclab.runtime.plc import PLC
 from plclab.runtime.retain import RetainStore
 
+TASK_CONFIG = """CONFIGURATION Config0 RESOURCE Res0 ON PLC
+TASK t (INTERVAL := T#10ms, PRIORITY := 0);
+PROGRAM inst WITH t : main;
+END_RESOURCE END_CONFIGURATION
+"""
+
 COUNTER = """
 PROGRAM main
 VAR RETAIN count : DINT; frames : ARRAY[1..4] OF INT; END_VAR
@@ -27,11 +33,7 @@ count := count + 1;
 frames[1] := DINT_TO_INT(count MOD 1000);
 scratch := scratch + 1;
 END_PROGRAM
-CONFIGURATION Config0 RESOURCE Res0 ON PLC
-TASK t (INTERVAL := T#10ms, PRIORITY := 0);
-PROGRAM inst WITH t : main;
-END_RESOURCE END_CONFIGURATION
-"""
+""" + TASK_CONFIG
 
 
 def make_plc(src: str, path: Path, **kw) -> PLC:
@@ -183,11 +185,7 @@ PROGRAM main
 VAR RETAIN h : FB_Hold; END_VAR
 h(go := TRUE);
 END_PROGRAM
-CONFIGURATION Config0 RESOURCE Res0 ON PLC
-TASK t (INTERVAL := T#10ms, PRIORITY := 0);
-PROGRAM inst WITH t : main;
-END_RESOURCE END_CONFIGURATION
-"""
+""" + TASK_CONFIG
 
 
 def test_retained_fb_instance_is_restored_and_checked(tmp_path):
@@ -214,11 +212,7 @@ PROGRAM main
 VAR RETAIN rec : FB_Recorder; END_VAR
 rec(put := TRUE);
 END_PROGRAM
-CONFIGURATION Config0 RESOURCE Res0 ON PLC
-TASK t (INTERVAL := T#10ms, PRIORITY := 0);
-PROGRAM inst WITH t : main;
-END_RESOURCE END_CONFIGURATION
-"""
+""" + TASK_CONFIG
 
 
 @pytest.mark.parametrize("native", [False, True], ids=["python", "native"])
