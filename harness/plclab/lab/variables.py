@@ -171,7 +171,7 @@ class Forces:
             def force_then_write() -> None:
                 self.apply()
                 write_outputs()
-            plc.wrap_io(read_then_force, force_then_write)
+            plc.read_inputs, plc.write_outputs = read_then_force, force_then_write
             plc._lab_forces = True
         return dropped
 

@@ -284,9 +284,8 @@ class MP9C(PlantModel):
         if dt < 0:
             raise PlantError(f"mp9c: dt must not be negative ({dt})")
         seen = tuple(map(outputs.get, _OUTPUT_LOCS))
-        last = self._last
-        if (last is not None and dt > 0 and last[0] == seen and last[1] == self.console.changes
-                and not self.faults and self.REST_SHORTCUT):
+        last = self._same_valves(seen, dt)
+        if last is not None:
             if self._quiet:
                 self.time += dt
                 return dict(last[2])
@@ -303,15 +302,25 @@ class MP9C(PlantModel):
             self._quiet = self._at_rest() and not self.console.pending()
         return inputs
 
+    def _same_valves(self, outputs: tuple[Any, ...], dt: float) -> tuple[Any, int, dict[str, int]] | None:
+        """The last step's record where a step of dt under `outputs` keeps the valves as that
+        step left them (the same outputs, the console as it was, no fault); else None."""
+        last = self._last
+        if (last is not None and dt > 0 and last[0] == outputs and last[1] == self.console.changes
+                and not self.faults and self.REST_SHORTCUT):
+            return last
+        return None
+
     def _travel(self, dt: float, last: tuple[Any, int, dict[str, int]]) -> dict[str, int]:
         """`_step` under the valves of the step before (no fault, no bounce under way): only
-        the links move; the inputs are read again where one reached or left an end."""
+        the links move; the inputs are read again where one reached an end. (A link leaves an
+        end only in the step that turns its valve, which is a full one.)"""
         ends = False
         for link in self.links.values():
             before = link.position
             link.move(dt, 1.0)
             after = link.position
-            if after != before and (after == 0.0 or after == 1.0 or before == 0.0 or before == 1.0):
+            if after != before and (after == 0.0 or after == 1.0):
                 ends = True
         self.time += dt
         self.console.advance(self.time)          # nothing pending: as _step, for the record
@@ -330,9 +339,7 @@ class MP9C(PlantModel):
         and lamp are those of the last step. The closed loop then neither builds the outputs
         nor writes the inputs again, and a grader's probe need not look (most scans of a
         robot: a pause, a wait for the operator)."""
-        last = self._last
-        if (self._quiet and last is not None and dt > 0 and last[0] == outputs
-                and last[1] == self.console.changes and not self.faults and self.REST_SHORTCUT):
+        if self._quiet and self._same_valves(outputs, dt) is not None:
             self.time += dt
             return True
         return False

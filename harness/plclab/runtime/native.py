@@ -412,13 +412,11 @@ def _memory_of(np: NativeProgram, value: Any) -> Any:
     """The C memory holding all of `value` (a mirror or an ArrayMirror), or None where it
     reaches through a pointer or is no mirror."""
     if isinstance(value, ArrayMirror):
-        if value._items is not None and not all(_pointer_free(np, type(x)) for x in value._items[:1]):
-            return None
-        return value._a
-    fields = getattr(type(value), "_fields", None)
-    if fields is None or getattr(value, "_p", None) is None or not _pointer_free(np, type(value)):
-        return None
-    return value._p
+        items = value._items                 # an array's elements are all of one layout
+        return value._a if not items or _pointer_free(np, type(items[0])) else None
+    if getattr(value, "_p", None) is not None and _pointer_free(np, type(value)):
+        return value._p
+    return None
 
 
 def _pointer_free(np: NativeProgram, cls: type) -> bool:

@@ -287,23 +287,11 @@ class PLC:
         if self.native is not None:
             self._copy_in, self._copy_out = self.native.io(self, self._copy_in, self._copy_out)
 
-    def wrap_io(self, read_inputs: Callable[[], None], write_outputs: Callable[[], None]) -> None:
-        """Let the scan's input and output stages be `read_inputs` and `write_outputs` (the
-        lab's forces: each wraps the PLC's own stage, `plc.read_inputs` as it was)."""
-        self.read_inputs, self.write_outputs = read_inputs, write_outputs     # type: ignore[method-assign]
-        self._io_wrapped = True
-
-    _io_wrapped = False
-
     def scan(self) -> bool:
         """Run one tick at the current PLC time; returns False if the PLC is (now) faulted."""
         if self.state != RUN:
             return False
-        image = self.image
-        if self._io_wrapped:
-            self.read_inputs()
-        else:                            # read_inputs, without its calls (every scan of a grading)
-            self._copy_in(image.apply_pending() if image._pending else 0)
+        self.read_inputs()
         tick = self.ticks
         if self._has_loops:       # only a loop can run past the watchdog limit
             self._scan_started = time.perf_counter()
@@ -315,11 +303,7 @@ class PLC:
         except Exception as exc:         # a program fault, or the harness's own bug (see _enter_fault)
             self._enter_fault(exc)
             return False
-        if self._io_wrapped:
-            self.write_outputs()
-        else:                            # write_outputs, as read_inputs above
-            with image._lock:
-                self._copy_out(image.areas)
+        self.write_outputs()
         if self.retain_store is not None and self.now_ns - self._last_persist_ns >= self.retain_period_ns:
             self._last_persist_ns = self.now_ns
             if not self.persist_retain() and self.retain_fault:
