@@ -214,6 +214,61 @@ def test_a_lines_storage_worked_out_once_is_what_working_it_out_each_time_gives(
         assert _line(src, "bump(P := x") in runs[1][1] and _line(src, "P.a := P.a + Amount") in runs[1][1]
 
 
+
+def test_the_state_log_records_each_scans_changes_as_reading_every_variable_by_name_gives():
+    """StateLog reads hundreds of values per scan through a reader generated for the objects
+    it walked; what it records is what reading each variable by name (getattr, every scan)
+    records, through a whole struct assigned (other objects), a VAR_IN_OUT rebound at each
+    call and a cold restart (a new set of objects)."""
+    from plclab.runtime.tracing import StateReader, _get
+
+    class ByName(StateReader):
+        def _walk(self, plc):
+            super()._walk(plc)
+            self._same = lambda: all(_get(c, k) is o for c, k, o in self.edges)
+            self._get_all = lambda: [_get(c, k) for c, k, _path in self.leaves]
+
+    sim = _sim(IN_OUT)
+    log, by_name = StateLog(), StateLog()
+    by_name._reader = ByName()
+    for n in range(12):
+        if n == 6:
+            sim.plc.restart()
+        if n == 8:
+            sim.plc.write("main.x", sim.plc.read("main.y"))      # a whole struct assigned
+        for one in (log, by_name):
+            one.record(n * 0.01, sim.plc)
+        sim.step(1)
+    assert log._reader.walks >= 2                   # the restart's objects were walked anew
+    assert log.changes == by_name.changes
+    assert sum(len(ch) for ch in log.changes.values()) > 2 * len(log.changes)   # values changed over the scans
+
+
+def test_the_tracer_leaves_the_garbage_collector_as_it_found_it():
+    """The collector is off while a trace is recorded (it would walk the growing trace again
+    and again) and on again after, whether or not it was on before."""
+    import gc
+    assert gc.isenabled()
+    sim = _sim(CHAIN)
+    tr = Tracer(sim.plc.compiled, lambda: sim.plc.now_ns / 1e9)
+    tr.start()
+    try:
+        off_while_tracing = not gc.isenabled()
+        sim.step(3)
+    finally:
+        tr.stop()
+    assert off_while_tracing and gc.isenabled()
+    assert len(tr.scan_times) == 3 and tr.events
+    gc.disable()
+    try:
+        tr2 = Tracer(sim.plc.compiled, lambda: sim.plc.now_ns / 1e9)
+        tr2.start()
+        sim.step(1)
+        tr2.stop()
+        assert not gc.isenabled()
+    finally:
+        gc.enable()
+
 START = """FUNCTION_BLOCK FB_Pulse
 VAR_INPUT
     Go : BOOL;

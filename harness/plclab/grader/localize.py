@@ -25,7 +25,9 @@ from __future__ import annotations
 import ast
 import bisect
 import difflib
+import itertools
 import math
+import operator
 import re
 from dataclasses import dataclass
 from typing import Any, Callable, Optional, Sequence
@@ -264,10 +266,14 @@ class StateLog:
                 if k not in last or last[k] != v or type(last[k]) is not type(v):
                     self.changes.setdefault(k, []).append((t, v))
             self._norm = None
-        elif values != self._values:          # most scans change a few values of hundreds
-            for k, a, v in zip(self._names, self._values, values):
+        elif values != self._values:
+            # most scans change a few values of hundreds: a value still the same object is
+            # unchanged (found in C), only the others are compared here
+            old = self._values
+            for n in itertools.compress(range(len(values)), map(operator.is_not, old, values)):
+                a, v = old[n], values[n]
                 if a != v or type(a) is not type(v):
-                    self.changes.setdefault(k, []).append((t, v))
+                    self.changes.setdefault(self._names[n], []).append((t, v))
         self._values = values
 
     def value_at(self, path: str, t: float) -> Any:
@@ -518,9 +524,14 @@ def localize(student: Any, model: Optional[Any], replay: Replay, output: Optiona
     outs: list[dict[str, Any]] = []
     labels = [k for k in student.labels if output_attr(student, k) is not None]
 
+    bound: list = [None, []]       # the PLC's bindings, and (label, owner, attribute) by them
+
     def sample() -> None:
-        slog.record(student.now, student.plc)
-        outs.append({k: getattr(*a) for k in labels if (a := output_attr(student, k)) is not None})
+        plc = student.plc
+        slog.record(student.now, plc)
+        if bound[0] is not plc.bindings:     # new objects: a restart
+            bound[:] = [plc.bindings, [(k, *a) for k in labels if (a := output_attr(student, k)) is not None]]
+        outs.append({k: getattr(owner, attr) for k, owner, attr in bound[1]})
 
     tracer = Tracer(compiled, lambda: student.now, sample=sample, since=t0, stop_at=t_fail)
     _traced(student, tracer, replay)

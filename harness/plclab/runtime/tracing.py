@@ -18,6 +18,8 @@ A local temporary of one call is `('L', call, name)`, the value a call returns `
 from __future__ import annotations
 
 import ast
+import gc
+import keyword
 import sys
 from dataclasses import dataclass, field
 from functools import lru_cache
@@ -171,14 +173,14 @@ def line_shapes(source: str) -> dict[int, LineShape]:
     return shapes
 
 
-@dataclass
+@dataclass(slots=True)
 class Event:
     """One execution of one generated line."""
 
     line: int
     scan: int                                  # index into Tracer.scan_times
-    reads: list                                # storage keys
-    writes: list                               # (key, strong)
+    reads: tuple                               # storage keys
+    writes: tuple                              # (key, strong)
     parent: Optional[int]                      # the event it ran under (a test, or its call)
     call: int = 0
 
@@ -199,15 +201,29 @@ class _LineKeys:
     writes: tuple                     # (key, strong)
     per_call: bool                    # some key is a call's temporary
 
-    def in_call(self, call: int) -> tuple[list, list]:
+    def in_call(self, call: int) -> tuple[tuple, tuple]:
         if not self.per_call:
-            return list(self.reads), list(self.writes)
-        return ([_in_call(k, call) for k in self.reads],
-                [(_in_call(k, call), strong) for k, strong in self.writes])
+            return self.reads, self.writes
+        return (tuple([_in_call(k, call) for k in self.reads]),
+                tuple([(_in_call(k, call), strong) for k, strong in self.writes]))
 
 
 def _in_call(key: tuple, call: int) -> tuple:
     return ("L", call, key[2]) if key[0] == "L" else key
+
+
+class _Call:
+    """One traced call of generated code: its number, the event it was called from (`parent`),
+    the last event of each test line it ran (`headers`), its statement not yet completed
+    (`pending`), its caller's _Call, its `self` and the storage keys of that `self`'s lines
+    (line -> _LineKeys, shared by every call on the same object)."""
+
+    __slots__ = ("call", "parent", "headers", "pending", "caller", "me", "keys")
+
+    def __init__(self, call: int, parent: Optional[int], caller: Optional["_Call"], me: Any, keys: dict) -> None:
+        self.call, self.parent, self.caller, self.me, self.keys = call, parent, caller, me, keys
+        self.headers: dict[int, int] = {}
+        self.pending: Optional[int] = None
 
 
 @dataclass
@@ -233,11 +249,12 @@ class Tracer:
         self._filename = self.compiled.filename
         self._next = 0
         self._calls = 0
-        self._frames: dict[int, dict] = {}             # id(frame) -> per-call state
+        self._frames: dict[int, _Call] = {}            # id(frame) -> its call
         self._old: Any = None
+        self._gc_was_on = False
         self._slotsets: dict[type, frozenset] = {}
-        # (line, id(self)) -> the keys of a line whose keys are all stable (Tracer._resolve)
-        self._line_keys: dict[tuple[int, int], _LineKeys] = {}
+        # id(self) -> line -> the keys of a line whose keys are all stable (Tracer._resolve)
+        self._line_keys: dict[int, dict[int, _LineKeys]] = {}
 
     # ---------------------------------------------------------------- storage keys
     def _obj_key(self, obj: Any, path: str) -> tuple:
@@ -250,18 +267,18 @@ class Tracer:
             got = self._slotsets[cls] = frozenset(_slots(cls)) if hasattr(cls, "__slots__") else frozenset()
         return got
 
-    def key(self, frame: Any, st: dict, root: str, path: str, write: bool) -> Optional[tuple]:
+    def key(self, frame: Any, st: "_Call", root: str, path: str, write: bool) -> Optional[tuple]:
         """The storage key of `root.path` in `frame` (None: a constant, a function, a module's
         own name). A POU's `v_X` mirrors `self.X` (an object: the same one), so `self` is
         enough to name it and the frame's locals are read only in a function (FC)."""
         return self._resolve(frame, st, root, path, write)[0]
 
-    def _resolve(self, frame: Any, st: dict, root: str, path: str, write: bool) -> tuple[Optional[tuple], int]:
+    def _resolve(self, frame: Any, st: "_Call", root: str, path: str, write: bool) -> tuple[Optional[tuple], int]:
         """`key` and how long it holds: STABLE (the same for every execution of the line by the
         same `self` under the same globals: IEC storage is fixed, so only a VAR_IN_OUT, which
         each call binds anew, can put another object on the way), PER_CALL (a temporary of the
         call: the same but for the call's number) or 0 (worked out again each time)."""
-        me = st["self"]
+        me = st.me
         if root == "self":
             obj, fixed = me, True
         elif root.startswith("v_") and me is not None and root[2:] in self._slotset(type(me)):
@@ -270,7 +287,7 @@ class Tracer:
                 return self._obj_key(me, root[2:]), STABLE if write or obj is not None else 0
             fixed = root[2:] not in getattr(type(me), "_IN_OUT", ())
         elif root.startswith("_") and not path:
-            return ("L", st["call"], root), PER_CALL
+            return ("L", st.call, root), PER_CALL
         elif root == "G" or (not root.startswith("v_") and root in frame.f_globals):
             obj = frame.f_globals.get(root)
             if not path or obj is None or isinstance(obj, _PRIMITIVE) or callable(obj) and not hasattr(obj, "__dict__"):
@@ -279,13 +296,13 @@ class Tracer:
         else:
             loc = frame.f_locals
             if root not in loc:
-                return (("L", st["call"], root) if write or root.startswith(("_", "v_")) else None), 0
+                return (("L", st.call, root) if write or root.startswith(("_", "v_")) else None), 0
             obj = loc[root]
             if not path and (write or isinstance(obj, _PRIMITIVE)):
-                return ("L", st["call"], root), 0
+                return ("L", st.call, root), 0
             fixed = False
         if obj is None:
-            return ("L", st["call"], root), 0
+            return ("L", st.call, root), 0
         if not path:
             return self._obj_key(obj, ""), STABLE if fixed else 0
         # walk plain attributes down to the last object
@@ -309,20 +326,27 @@ class Tracer:
 
     # ---------------------------------------------------------------- sys.settrace
     def start(self) -> None:
+        """Install the tracer. The cyclic garbage collector is off while it is: a trace is
+        hundreds of thousands of events that all stay alive, and every full collection would
+        walk them all again (a third of a traced replay's time). A replay makes little cyclic
+        garbage, and what it makes is collected once the tracer is stopped."""
         self._old = sys.gettrace()
+        self._gc_was_on = gc.isenabled()
+        gc.disable()
         sys.settrace(self._global)
 
     def stop(self) -> None:
         sys.settrace(self._old)
+        if self._gc_was_on:
+            gc.enable()
         for st in list(self._frames.values()):
             self._finish(st)
         self._frames.clear()
 
-    def _finish(self, st: dict) -> None:
-        pending = st.get("pending")
-        if pending is not None:
-            self.order.append(pending)
-            st["pending"] = None
+    def _finish(self, st: "_Call") -> None:
+        if st.pending is not None:
+            self.order.append(st.pending)
+            st.pending = None
 
     def _global(self, frame: Any, event: str, _arg: Any) -> Any:
         if frame.f_code.co_filename != self._filename:
@@ -342,14 +366,17 @@ class Tracer:
             return None
         caller = self._frames.get(id(back)) if back is not None else None
         self._calls += 1
-        st = {"call": self._calls, "parent": caller.get("pending") if caller else None, "headers": {},
-              "pending": None, "caller": caller, "self": frame.f_locals.get("self")}
+        me = frame.f_locals.get("self")
+        keys = self._line_keys.get(id(me))
+        if keys is None:
+            keys = self._line_keys[id(me)] = {}
+        st = _Call(self._calls, caller.pending if caller else None, caller, me, keys)
         self._frames[id(frame)] = st
-        return self._local
+        return self._local_for(st)
 
     CACHE_LINES = True     # False: every line's keys worked out anew (the tests compare both)
 
-    def _line_keys_of(self, frame: Any, st: dict, shape: LineShape) -> tuple[list, list, bool, bool]:
+    def _line_keys_of(self, frame: Any, st: "_Call", shape: LineShape) -> tuple[tuple, tuple, bool, bool]:
         """A line's read keys and (write key, strong) pairs, whether all of them are stable (or
         per call) so that the next execution by the same `self` may reuse them, and whether
         one is per call."""
@@ -370,43 +397,54 @@ class Tracer:
             if len(k) == 2 and k[1] == "":
                 reads.append((k[0], WILD))
                 writes.append(((k[0], WILD), False))
-        return reads, writes, all(hows), PER_CALL in hows
+        return tuple(reads), tuple(writes), all(hows), PER_CALL in hows
 
-    def _local(self, frame: Any, event: str, arg: Any) -> Any:
-        st = self._frames.get(id(frame))
-        if st is None:
-            return None
-        if event == "line":
-            self._finish(st)
-            shape = self.shapes.get(frame.f_lineno)
-            if shape is None:
-                return self._local
-            eid = self._next
-            self._next += 1
-            me = st["self"]
-            lineno = frame.f_lineno
-            known = self._line_keys.get((lineno, id(me))) if self.CACHE_LINES else None
-            g = frame.f_globals.get("G")
-            if known is not None and known.me is me and known.g is g:
-                reads, writes = known.in_call(st["call"])
-            else:
-                reads, writes, stable, per_call = self._line_keys_of(frame, st, shape)
-                if stable and self.CACHE_LINES:
-                    self._line_keys[(lineno, id(me))] = _LineKeys(me, g, tuple(reads), tuple(writes), per_call)
-            if shape.is_return:
-                writes.append((("R", st["call"]), True))
-            parent = st["headers"].get(shape.header) if shape.header is not None else st["parent"]
-            self.events[eid] = Event(frame.f_lineno, len(self.scan_times) - 1, reads, writes, parent, st["call"])
-            st["pending"] = eid
-            st["headers"][frame.f_lineno] = eid
-            if shape.is_return and st["caller"] is not None:
-                ce = st["caller"].get("pending")
-                if ce is not None:
-                    self.events[ce].reads.append(("R", st["call"]))
-        elif event == "return":
-            self._finish(st)
-            self._frames.pop(id(frame), None)
-        return self._local
+    def _local_for(self, st: "_Call") -> Callable[[Any, str, Any], Any]:
+        """The line tracer of one call (sys.settrace's local function): it holds its call's
+        state, so that each line costs no look-up of it. Each executed statement line becomes
+        an Event: its storage keys (from the per-object cache where they are stable), the
+        scan, and the test line or call it ran under."""
+        shapes, events, order = self.shapes, self.events, self.order
+        scan_times, keys_of_me, headers = self.scan_times, st.keys, st.headers
+        cache = self.CACHE_LINES
+        me, call = st.me, st.call
+
+        def local(frame: Any, event: str, _arg: Any) -> Any:
+            if event == "line":
+                if st.pending is not None:
+                    order.append(st.pending)
+                    st.pending = None
+                lineno = frame.f_lineno
+                shape = shapes.get(lineno)
+                if shape is None:
+                    return local
+                eid = self._next
+                self._next = eid + 1
+                g = frame.f_globals.get("G")
+                known = keys_of_me.get(lineno) if cache else None
+                if known is not None and known.me is me and known.g is g:
+                    reads, writes = known.in_call(call) if known.per_call else (known.reads, known.writes)
+                else:
+                    reads, writes, stable, per_call = self._line_keys_of(frame, st, shape)
+                    if stable and cache:
+                        keys_of_me[lineno] = _LineKeys(me, g, reads, writes, per_call)
+                header = shape.header
+                if shape.is_return:
+                    writes = writes + ((("R", call), True),)
+                    caller = st.caller
+                    if caller is not None and caller.pending is not None:
+                        ce = events[caller.pending]
+                        ce.reads = ce.reads + (("R", call),)
+                events[eid] = Event(lineno, len(scan_times) - 1, reads, writes,
+                                    headers.get(header) if header is not None else st.parent, call)
+                st.pending = eid
+                headers[lineno] = eid
+            elif event == "return":
+                self._finish(st)
+                self._frames.pop(id(frame), None)
+            return local
+
+        return local
 
 
 def matches(written: tuple, wanted: tuple) -> bool:
@@ -455,17 +493,31 @@ class StateReader:
         self.paths: dict[int, str] = {}
         self.walks = 0                  # how many times the objects were walked (the leaves made)
         self._plc: Any = None
+        self._same: Callable[[], bool] = lambda: False
+        self._get_all: Callable[[], list[Any]] = list
 
     def values(self, plc: Any) -> list[Any]:
         """The values of `leaves`, in their order (walked again first where needed)."""
-        if plc is not self._plc or any(_get(c, k) is not o for c, k, o in self.edges):
+        if plc is not self._plc or not self._unchanged():
             self._plc = plc
             self._walk(plc)
-        out = [_get(c, k) for c, k, _path in self.leaves]
-        if any(not isinstance(v, _PRIMITIVE) for v in out):    # a reference bound since
+        out = self._read()
+        if not _PRIMITIVE_SET.issuperset(map(type, out)):    # a reference bound since
             self._walk(plc)
-            out = [_get(c, k) for c, k, _path in self.leaves]
+            out = self._read()
         return out
+
+    def _unchanged(self) -> bool:
+        try:
+            return self._same()
+        except (AttributeError, IndexError, KeyError, TypeError):   # a variable that went away
+            return False
+
+    def _read(self) -> list[Any]:
+        try:
+            return self._get_all()
+        except (AttributeError, IndexError, KeyError, TypeError):
+            return [_get(c, k) for c, k, _path in self.leaves]
 
     def _walk(self, plc: Any) -> None:
         leaves: list[tuple[Any, Any, str]] = []
@@ -499,6 +551,7 @@ class StateReader:
             edges.append((inst, "obj", inst.obj))
             walk(inst.obj, inst.name.upper(), 0, None, None)
         self.leaves, self.edges, self.paths = leaves, edges, paths
+        self._same, self._get_all = _readers(leaves, edges)
         self.walks += 1
 
 
@@ -511,3 +564,37 @@ def _fields(obj: Any) -> list[str]:
 
 def _get(container: Any, key: Any) -> Any:
     return container[key] if isinstance(key, int) else getattr(container, key, None)
+
+
+_PRIMITIVE_SET = frozenset(_PRIMITIVE)
+
+
+def _readers(leaves: list[tuple[Any, Any, str]], edges: list[tuple[Any, Any, Any]]
+             ) -> tuple[Callable[[], bool], Callable[[], list[Any]]]:
+    """Two functions generated for one walk: whether every edge still holds its object, and
+    the leaves' values in order. A state is read as each scan begins, hundreds of values at a
+    time; one generated expression reads them several times faster than a loop of getattr.
+    They raise where a variable went away (the caller then walks again or reads the slow way)."""
+    objects: list[Any] = []
+    index: dict[int, int] = {}
+
+    def ref(obj: Any) -> str:
+        n = index.get(id(obj))
+        if n is None:
+            n = index[id(obj)] = len(objects)
+            objects.append(obj)
+        return f"_o[{n}]"
+
+    def get(container: Any, key: Any) -> str:
+        if isinstance(key, int):
+            return f"{ref(container)}[{key}]"
+        if key.isidentifier() and not keyword.iskeyword(key) and hasattr(container, key):
+            return f"{ref(container)}.{key}"
+        return f"getattr({ref(container)}, {key!r}, None)"      # not set (yet): None, as _get
+
+    same = " and ".join(f"{get(c, k)} is {ref(o)}" for c, k, o in edges) or "True"
+    values = ", ".join(get(c, k) for c, k, _path in leaves)
+    src = f"def same():\n    return {same}\ndef values():\n    return [{values}]\n"
+    ns: dict[str, Any] = {"_o": objects}
+    exec(compile(src, "<state reader>", "exec"), ns)
+    return ns["same"], ns["values"]
