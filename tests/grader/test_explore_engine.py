@@ -122,24 +122,29 @@ def test_coverage_guided_exploration_finds_a_rare_mistake_within_the_default_bud
     assert result.episodes <= expl.episodes
 
 
+@pytest.mark.parametrize("record", [True, False], ids=["recorded", "searching"])
 @pytest.mark.parametrize("stand", ["mp9c", "tur10"])
-def test_a_play_through_idle_scans_shows_what_stepping_every_scan_shows(stand, monkeypatch):
+def test_a_play_through_idle_scans_shows_what_stepping_every_scan_shows(stand, record, monkeypatch):
     """Where a robot stands idle under unchanged outputs, the closed loop does not step it, write
-    its inputs again or look at it (issue 30). Over generated scripts with faults and power
-    cycles, each played with those shortcuts and with every scan stepped in full: the same
-    recorded trace, the same changes the probe saw and the model answer's states, the same
-    plant and the same plant events at the end; and the shortcut was taken."""
+    its inputs again or look at it (issue 30); while searching (nothing recorded) it runs such
+    quiet stretches in one native call, up to the scan that changes an output or the model
+    answer's inner state (PLC.run_quiet). Over generated scripts with faults and power cycles,
+    each played with those shortcuts and with every scan stepped in full: the same recorded
+    trace, the same changes the probe saw and the model answer's states, the same plant, plant
+    events and PLC at the end; and the shortcuts were taken."""
     import random
 
     from plclab.grader.explore import play
     from plclab.runtime.plantio import PlantBinding
+    from plclab.runtime.plc import PLC
     from plclab.runtime.retain import MemoryRetainStore
     expl = stand_spec(stand).explore
     model, _why = model_answer(stand, "task3", None)
     req = requirement_set(stand, "task3")
-    idle_scans = 0
+    idle_scans = quiet_scans = 0
     for seed in range(3):
         script = expl.generate(random.Random(seed), "task3", expl.episode_s)
+        inner = expl.state_paths if seed != 1 else ()      # the model answer's side, and a student's
         seen = []
         for shortcut in (True, False):
             s = req.make_session(list(model.sources), MemoryRetainStore(), model.checked)
@@ -147,17 +152,29 @@ def test_a_play_through_idle_scans_shows_what_stepping_every_scan_shows(stand, m
                 monkeypatch.setattr(PlantBinding, "step_idle", lambda self, dt: False)
                 monkeypatch.setattr(type(s.plant), "idle", lambda self, outputs, dt: False)
             else:
-                original = PlantBinding.step_idle
+                original, original_quiet = PlantBinding.step_idle, PLC.run_quiet
 
                 def counting(self, dt):
                     nonlocal idle_scans
                     idle = original(self, dt)
                     idle_scans += idle
                     return idle
+
+                def counting_quiet(self, n, watch=None):
+                    nonlocal quiet_scans
+                    k = original_quiet(self, n, watch)
+                    quiet_scans += k
+                    return k
                 monkeypatch.setattr(PlantBinding, "step_idle", counting)
-            probe = play(s, script, expl, record=True, inner=expl.state_paths)
+                monkeypatch.setattr(PLC, "run_quiet", counting_quiet)
+            probe = play(s, script, expl, record=record, inner=inner)
             monkeypatch.undo()
+            plc = s.plc
             seen.append(({n: s.trace.changes(n) for n in s.trace.signals()}, probe.changes, probe.states,
-                         s.plant.snapshot(), list(s.plant.events)))
+                         s.plant.snapshot(), list(s.plant.events), plc.ticks, plc.state, plc.fault,
+                         plc.retain_snapshot(), {a: list(v) for a, v in plc.image.areas.items()}))
         assert seen[0] == seen[1]
-    assert idle_scans > 1000
+    if record:                          # a recorded play samples every scan: no quiet stretch
+        assert idle_scans > 1000 and quiet_scans == 0
+    else:                               # the quiet stretches take most idle scans
+        assert quiet_scans > 1000 and idle_scans > 0

@@ -337,10 +337,10 @@ def test_snapshot_shows_positions_spools_and_io(plant):
 
 @pytest.mark.parametrize("seed", range(12))
 def test_the_rest_shortcut_changes_nothing_a_full_step_would_not(seed):
-    """A step at rest or on the way under unchanged outputs moves the links only and returns
-    what it returned before unless a switch changed (the closed loop's fast path): over random
-    coil patterns held for random spans, console changes with
-    and without bounce, faults injected and cleared and zero-length steps, the plant with the
+    """A step at rest or on the way under unchanged outputs (and faults) moves the links only
+    and returns what it returned before unless a switch changed (the closed loop's fast path):
+    over random coil patterns held for random spans, console changes with and without bounce,
+    faults injected and cleared and zero-length steps, the plant with the
     shortcut reports every input, event and snapshot as the plant computing every step."""
     import random
     rng = random.Random(seed)
@@ -350,17 +350,18 @@ def test_the_rest_shortcut_changes_nothing_a_full_step_would_not(seed):
     faults = [("jammed", {"mechanism": "rotation"}), ("stuck_switch", {"switch": "SQ2", "state": 1}),
               ("low_pressure", {"factor": 2.0}), ("dead_coil", {"coil": "L3"}), ("bounce", {"duration": 0.02})]
     outputs = out()
-    calls = {"_step": 0, "_travel": 0}
+    calls = {"_step": 0, "_travel": 0, "faulted_step": 0}
 
     def counted(name):
         method = getattr(fast, name)
 
         def call(*args):
             calls[name] += 1
+            calls["faulted_step"] += name == "_step" and bool(fast.faults)
             return method(*args)
         return call
     fast._step, fast._travel = counted("_step"), counted("_travel")
-    steps = 0
+    steps = faulted_steps = 0
     for _ in range(400):
         r = rng.random()
         if r < 0.25:
@@ -378,6 +379,7 @@ def test_the_rest_shortcut_changes_nothing_a_full_step_would_not(seed):
                 p.clear()
         for _ in range(rng.choice((0, 1, 5, 40, 150))):
             dt = rng.choice((0.01, 0.01, 0.01, 0.0))
+            faulted_steps += bool(fast.faults)
             a, b = fast.step(outputs, dt), full.step(outputs, dt)
             steps += 1
             assert a == b
@@ -385,3 +387,5 @@ def test_the_rest_shortcut_changes_nothing_a_full_step_would_not(seed):
             assert fast.events == full.events
     # both shortcuts were taken, and often: at rest, and on the way
     assert steps - calls["_step"] - calls["_travel"] > 1000 and calls["_travel"] > 300
+    # a fault that stays acts the same at every step: under one, the shortcuts are taken too
+    assert faulted_steps - calls["faulted_step"] > 300

@@ -379,3 +379,48 @@ def test_bad_parameters_are_plant_errors():
     for params in ({"tau": 0}, {"start": 500}, {"stops": (1000, 40000)}, {"start": (1, 2)}):
         with pytest.raises(PlantError):
             create(**params)
+
+
+@pytest.mark.parametrize("seed", range(8))
+def test_an_idle_step_is_what_a_full_step_gives_and_a_fault_that_stays_keeps_it_idle(seed):
+    """The plant contract's `idle` (the closed loop's shortcut): where it says a step under the
+    same outputs changes nothing but the time, a full step indeed changes nothing else. Over
+    random outputs (references, enables) held for random spans, console changes, faults
+    injected and cleared: the plant that is stepped only where `idle` says no reports every
+    input, snapshot and event as the plant stepped in full; and it stood idle often, also
+    under a fault (a stuck drive, a dead sensor)."""
+    import random
+    rng = random.Random(seed)
+    fast, full = create(), create()
+    faults = [("stuck_drive", {"axis": 2}), ("dead_sensor", {"axis": 2, "value": 1234}),
+              ("slow_drive", {"axis": 1, "factor": 0.5})]
+    out = outputs()
+    inputs = fast.step(out, 0.01)
+    full.step(out, 0.01)
+    idle = idle_faulted = 0
+    for _ in range(300):
+        r = rng.random()
+        if r < 0.3:
+            refs = {k: rng.choice((0, 0, 0, 200, -300)) for k in range(1, 6)}
+            out = outputs(qb0=rng.choice((IDLE, 15, 23, 27)), refs=refs, lamp=rng.randint(0, 1))
+        elif r < 0.4:
+            name, value = rng.choice(sorted(fast.console_bits)), rng.randint(0, 1)
+            for p in (fast, full):
+                p.set_switch(name, value)
+        elif r < 0.5:
+            fault, params = rng.choice(faults)
+            for p in (fast, full):
+                p.inject(fault, **dict(params))
+        elif r < 0.55:
+            for p in (fast, full):
+                p.clear()
+        values = tuple(out.get(loc, 0) for loc in fast.outputs)
+        for _ in range(rng.choice((1, 5, 40, 120))):
+            if fast.idle(values, 0.01):
+                idle += 1
+                idle_faulted += bool(fast.faults)
+            else:
+                inputs = fast.step(out, 0.01)
+            assert inputs == full.step(out, 0.01)
+            assert fast.snapshot() == full.snapshot() and fast.events == full.events
+    assert idle > 200 and idle_faulted > 50, (idle, idle_faulted)

@@ -405,3 +405,121 @@ def test_a_gradings_retain_memory_is_written_when_a_retained_value_changed_and_h
     for plc in back.values():
         assert plc.read("inst.store.frames") == [0, 0, 9, 0, 0, 0, 0, -2]
         assert plc.read("inst.store.count") == 3
+
+
+QUIET = """
+PROGRAM main
+VAR
+    q AT %QX0.0 : BOOL;
+    w AT %QW0 : INT;
+    x AT %IX0.0 : BOOL;
+    level AT %IW0 : INT;
+END_VAR
+VAR
+    n : INT;
+    t : TON;
+    pulses : INT;
+END_VAR
+VAR RETAIN
+    kept : INT;
+END_VAR
+n := n + 1;
+t(IN := NOT t.Q, PT := T#250ms);
+IF t.Q THEN pulses := pulses + 1; END_IF;
+q := x AND pulses MOD 2 = 1;
+w := pulses * 10 + level;
+IF n MOD 37 = 0 THEN kept := kept + 1; END_IF;
+END_PROGRAM
+
+PROGRAM slow
+VAR
+    n : INT;
+    t : TON;
+    pulses : INT;
+END_VAR
+n := n + 1;
+t(IN := NOT t.Q, PT := T#90ms);
+IF t.Q THEN pulses := pulses + 1; END_IF;
+IF n = 120 THEN n := n / (n - 120); END_IF;
+END_PROGRAM
+
+CONFIGURATION Config0 RESOURCE Res0 ON PLC
+TASK fast (INTERVAL := T#10ms, PRIORITY := 0);
+TASK slow_task (INTERVAL := T#30ms, PRIORITY := 1);
+PROGRAM a WITH fast : main;
+PROGRAM b WITH slow_task : slow;
+END_RESOURCE END_CONFIGURATION
+"""
+
+
+def test_a_quiet_run_leaves_the_plc_where_as_many_scans_would():
+    """PLC.run_quiet (the closed loop's stretches where the plant stands idle) runs scans in
+    one native call until an output or a watched variable changes or a scan faults. Played
+    against scanning tick by tick, with inputs changed between runs, two tasks of different
+    periods, a retain save every 0.1 s and a division by zero at the 120th scan of the slow
+    one: after each run, the same time, outputs, variables, retained store and fault; a run
+    stops at the scan that changed an output or the watched variable; and most ticks ran in
+    runs of many scans."""
+    unit = compile_unit(check_sources([("t.st", QUIET)]))
+    stores = {"quiet": CountingMemory(), "scans": CountingMemory()}
+    plcs = {how: PLC(unit, native=True, retain=stores[how], retain_period_ns=100_000_000) for how in stores}
+    quiet, scans = plcs["quiet"], plcs["scans"]
+    assert quiet.native is not None
+    inputs = {0: (1, 5), 63: (0, 7), 64: (1, 7), 140: (1, -3)}     # tick -> (%IX0.0, %IW0)
+
+    def state(plc: PLC) -> tuple:
+        return (plc.ticks, plc.now_ns, plc.state, plc.fault, {a: list(v) for a, v in plc.image.areas.items()},
+                plc.read("a.n"), plc.read("b.n"), plc.read("a.pulses"), plc.read("b.t.ET"), plc.read("a.kept"),
+                plc.retain_snapshot())
+
+    def put(plc: PLC, tick: int) -> None:
+        if tick in inputs:
+            plc.image.areas["IX"][0], plc.image.areas["IW"][0] = inputs[tick][0], inputs[tick][1] & 0xFFFF
+
+    history = []
+    for tick in range(400):
+        put(scans, tick)
+        scans.scan()
+        scans.advance()
+        history.append(state(scans))
+    runs = []
+    watch_pairs = [quiet.resolve("b.pulses")]
+    while quiet.ticks < 400:
+        tick = quiet.ticks
+        put(quiet, tick)
+        later = [t for t in inputs if t > tick]
+        n = min(400, *later) - tick if later else 400 - tick
+        outputs = list(quiet.image.areas["QX"][:1]) + list(quiet.image.areas["QW"][:1])
+        watched = quiet.read("b.pulses")
+        k = ran = quiet.run_quiet(n, native.Watch.of(quiet, watch_pairs))
+        if k == 0:                               # a retain save due, or faulted: scan as usual
+            quiet.scan()
+            quiet.advance()
+            k = 1
+        runs.append(k)
+        assert state(quiet) == history[quiet.ticks - 1], f"after the run of {k} from tick {tick}"
+        # stopped before n, not at a save's scan nor by a fault: it changed something
+        if ran and k < n and quiet.state != FAULT and quiet.ticks % 10 != 0:
+            assert ([quiet.image.areas["QX"][0], quiet.image.areas["QW"][0]] != outputs
+                    or quiet.read("b.pulses") != watched), tick
+    assert quiet.fault is not None and quiet.fault.kind == "division_by_zero"
+    assert stores["quiet"].flushes == stores["scans"].flushes and stores["quiet"]._saved == stores["scans"]._saved
+    assert max(runs) >= 8 and len(runs) < 400 / 2, runs      # runs up to each save (every 10 ticks)
+
+
+def test_no_quiet_run_where_it_could_differ_from_scanning():
+    """The Python path, a PLC not running, a Modbus write waiting and replaced I/O stages (the
+    lab's forces) all scan tick by tick (run_quiet answers 0)."""
+    unit = compile_unit(check_sources([("t.st", QUIET)]))
+    with native.python_only():
+        assert PLC(unit).run_quiet(10) == 0
+    plc = PLC(unit, native=True)
+    plc.image.queue_write("QW", 0, [3])
+    assert plc.run_quiet(10) == 0
+    plc.image.apply_pending()
+    plc.read_inputs = plc.read_inputs            # an instance's own stage, as the lab sets it
+    assert plc.run_quiet(10) == 0
+    del plc.read_inputs
+    assert plc.run_quiet(10) > 0
+    plc.stop()
+    assert plc.run_quiet(10) == 0

@@ -94,6 +94,14 @@ class _Probe:
                 self.states.append((round(self.clock(), 6), state))
                 self._inner_last = state
 
+    def quiet_watch(self) -> Optional[list[tuple[Any, Any]]]:
+        """What a quiet stretch of the closed loop (plclab.runtime.sim) must stop at so that
+        this probe misses nothing: the inner state's variables; None where the probe looks at
+        every scan (no plant binding to say it stood idle)."""
+        if self.binding is None or self.last is None:
+            return None
+        return self.inner.pairs() if isinstance(self.inner, _InnerReader) else ([] if self.inner is None else None)
+
 
 def actions(script: Script) -> list[tuple[float, int, str, str, str]]:
     """The script as timed actions (time, order, kind, name, value): set, press, release,
@@ -112,19 +120,33 @@ def actions(script: Script) -> list[tuple[float, int, str, str, str]]:
     return sorted(out, key=lambda a: (round(a[0], 6), a[1]))
 
 
-def _inner_reader(s: Session, paths: Sequence[str]) -> Callable[[], tuple]:
-    """A function reading the running program's variables `paths` (those it has; PLC restarts
-    make new objects, so they are looked up again after one)."""
-    plc: Any = None
-    get: Callable[[], tuple] = tuple
+class _InnerReader:
+    """Reads the running program's variables `paths` (those it has; PLC restarts make new
+    objects, so they are looked up again after one)."""
 
-    def read() -> tuple:
-        nonlocal plc, get
-        if plc is not s.plc:
-            plc = s.plc
-            get = _getter([s.plc.resolve(p) for p in paths if s.has(p)])
-        return get()
-    return read
+    def __init__(self, s: Session, paths: Sequence[str]):
+        self.session, self.paths = s, paths
+        self._plc: Any = None
+        self._get: Callable[[], tuple] = tuple
+        self._found: list[tuple[Any, Any]] = []
+
+    def pairs(self) -> list[tuple[Any, Any]]:
+        """(container, key) of each variable read, as PLC.resolve gives them."""
+        s = self.session
+        if self._plc is not s.plc:
+            self._plc = s.plc
+            self._found = [s.plc.resolve(p) for p in self.paths if s.has(p)]
+            self._get = _getter(self._found)
+        return self._found
+
+    def __call__(self) -> tuple:
+        if self._plc is not self.session.plc:
+            self.pairs()
+        return self._get()
+
+
+def _inner_reader(s: Session, paths: Sequence[str]) -> _InnerReader:
+    return _InnerReader(s, paths)
 
 
 def _getter(found: Sequence[tuple[Any, Any]]) -> Callable[[], tuple]:

@@ -6,7 +6,9 @@ Contract (plclab.runtime.plantio uses it in-process, plclab.modbus.psm over PSM)
   period   seconds between steps when it runs on its own in real time (PSM)
   step(outputs, dt) -> inputs   values are raw: bits 0/1, words unsigned 16-bit; dt seconds
   idle(outputs, dt) -> bool     optional: True where a step of dt under these outputs (their
-           values, `outputs` order) would change nothing but the time, which it then moves on
+           values, `outputs` order) would change nothing but the time, which it then moves on;
+           once True, True again for the same outputs until the plant is stepped in full or
+           its console or faults change (the closed loop runs such stretches in one go)
   FACE     the console face (ConsoleFace): which switches an operator sets, which PLC
            outputs are lamps, which plant readouts are shown; set_switch(name, value) and
            readouts() serve it (plclab.modbus.console puts it on Modbus TCP)
@@ -64,6 +66,7 @@ class PlantModel:
         self.time = 0.0
         self.events: list[PlantEvent] = []
         self.faults: dict[str, dict[str, Any]] = {}
+        self.fault_changes = 0       # counts injections and clears: a step may compare it
         # console inputs at rest: released buttons, switches off (normally closed ones conduct)
         self.console_bits: dict[str, int] = {name: int(name in self.NORMALLY_CLOSED) for name in self.CONSOLE}
 
@@ -99,10 +102,12 @@ class PlantModel:
         if fault not in self.FAULTS:
             raise PlantError(f"unknown fault {fault!r}; this plant has: {', '.join(sorted(self.FAULTS))}")
         self.faults[fault] = dict(params)
+        self.fault_changes += 1
         self.event("fault_injected", fault_words(fault, params))
 
     def clear(self, fault: str | None = None) -> None:
         """Remove one injected fault, or all of them."""
+        self.fault_changes += 1
         if fault is None:
             self.faults.clear()
         else:

@@ -252,9 +252,9 @@ class MP9C(PlantModel):
         self.coils = {name: 0 for name in COILS}
         self.hl1 = 0
         self._bounce_rng = random.Random(0)
-        # (outputs, console changes, inputs) of the last step of time without a fault, and
-        # whether it ended at rest (every link at its spool's end, no bounce under way)
-        self._last: tuple[Any, int, dict[str, int]] | None = None
+        # (outputs, console changes, inputs, fault changes) of the last step of time, and
+        # whether it ended at rest (every link at its spool's end or jammed, no bounce under way)
+        self._last: tuple[Any, int, dict[str, int], int] | None = None
         self._quiet = False
 
     # -- console shortcuts (scenarios read better with plant.press("SB1")) -------------------
@@ -275,7 +275,7 @@ class MP9C(PlantModel):
     def step(self, outputs: dict[str, int], dt: float) -> dict[str, int]:
         """Valves take the coil states at the start of the interval, links move for dt.
 
-        Under the same outputs as the step before, without a fault and with the console as it
+        Under the same outputs as the step before, with the same faults and the console as it
         was, the valves stay as they are: at rest (every link at the end its spool selects, no
         bounce under way) nothing can change but the time, and a link on its way only moves on,
         so the step returns the inputs it returned then unless a link reached or left an end.
@@ -295,30 +295,42 @@ class MP9C(PlantModel):
         # a zero-length step drives no valve: only a step of time says what the outputs did;
         # links and bounces move only in a step, so "at rest" holds until the next one (or a
         # console change, which the count says)
-        if self.faults or dt == 0:
+        if dt == 0:
             self._last, self._quiet = None, False
         else:
-            self._last = (seen, self.console.changes, dict(inputs))
+            self._last = (seen, self.console.changes, dict(inputs), self.fault_changes)
             self._quiet = self._at_rest() and not self.console.pending()
         return inputs
 
-    def _same_valves(self, outputs: tuple[Any, ...], dt: float) -> tuple[Any, int, dict[str, int]] | None:
+    def _same_valves(self, outputs: tuple[Any, ...], dt: float) -> tuple[Any, int, dict[str, int], int] | None:
         """The last step's record where a step of dt under `outputs` keeps the valves as that
-        step left them (the same outputs, the console as it was, no fault); else None."""
+        step left them (the same outputs, the console as it was, the same faults: a fault
+        acts the same way at every step it stays); else None."""
         last = self._last
         if (last is not None and dt > 0 and last[0] == outputs and last[1] == self.console.changes
-                and not self.faults and self.REST_SHORTCUT):
+                and last[3] == self.fault_changes and self.REST_SHORTCUT):
             return last
         return None
 
-    def _travel(self, dt: float, last: tuple[Any, int, dict[str, int]]) -> dict[str, int]:
-        """`_step` under the valves of the step before (no fault, no bounce under way): only
-        the links move; the inputs are read again where one reached an end. (A link leaves an
-        end only in the step that turns its valve, which is a full one.)"""
+    def _fault_effects(self) -> tuple[str | None, str | None, float]:
+        """(dead coil, jammed mechanism, slowdown factor) of the injected faults."""
+        faults = self.faults
+        if not faults:
+            return None, None, 1.0
+        return (faults.get("dead_coil", {}).get("coil"), faults.get("jammed", {}).get("mechanism"),
+                faults.get("low_pressure", {}).get("factor", 1.0))
+
+    def _travel(self, dt: float, last: tuple[Any, int, dict[str, int], int]) -> dict[str, int]:
+        """`_step` under the valves of the step before (no bounce under way): only the links
+        move, as the faults let them; the inputs are read again where one reached an end. (A
+        link leaves an end only in the step that turns its valve, which is a full one.)"""
+        _dead, jammed, slowdown = self._fault_effects()
         ends = False
         for link in self.links.values():
+            if link.name == jammed:
+                continue
             before = link.position
-            link.move(dt, 1.0)
+            link.move(dt, slowdown)
             after = link.position
             if after != before and (after == 0.0 or after == 1.0):
                 ends = True
@@ -328,7 +340,7 @@ class MP9C(PlantModel):
             inputs = dict(last[2])
         else:
             inputs = self.read()
-            self._last = (last[0], last[1], dict(inputs))
+            self._last = (last[0], last[1], dict(inputs), last[3])
         self._quiet = self._at_rest()
         return inputs
 
@@ -345,9 +357,10 @@ class MP9C(PlantModel):
         return False
 
     def _at_rest(self) -> bool:
-        """Every link at the end its spool drives it to: the same coils move nothing."""
+        """Every link at the end its spool drives it to, or jammed: the same coils move nothing."""
+        jammed = self.faults.get("jammed", {}).get("mechanism") if self.faults else None
         for link in self.links.values():
-            if link.position != link.spool:
+            if link.position != link.spool and link.name != jammed:
                 return False
         return True
 
@@ -356,14 +369,7 @@ class MP9C(PlantModel):
         self.coils = {name: 1 if get(loc, 0) else 0 for name, loc in _COIL_ITEMS}
         self.hl1 = 1 if get(HL1, 0) else 0
         if dt > 0:
-            faults = self.faults
-            if faults:
-                dead = faults.get("dead_coil", {}).get("coil")
-                jammed = faults.get("jammed", {}).get("mechanism")
-                slowdown = faults.get("low_pressure", {}).get("factor", 1.0)
-            else:
-                dead = jammed = None
-                slowdown = 1.0
+            dead, jammed, slowdown = self._fault_effects()
             for link in self.links.values():
                 if link.drive(self.coils, dead):
                     self.event("valve_conflict",

@@ -121,7 +121,8 @@ class Tur10(PlantModel):
         self._lag: tuple[float, float, float] = (-1.0, -1.0, 0.0)   # (dt, tau, exp(-dt / tau)) last used
         self._console_seen: dict[str, int] = {}        # console_bits when _console_inputs was made
         self._console_inputs: dict[str, int] = {}
-        self._last_outputs: tuple[Any, ...] | None = None   # of the last step of time, where it had no fault
+        self._last_outputs: tuple[Any, ...] | None = None   # of the last step of time
+        self._faults_seen = 0                          # fault_changes at that step
         self._dacs: tuple[Any, ...] | None = None      # the DAC outputs the references were read from
 
     # --- the plant contract -------------------------------------------------------------
@@ -164,20 +165,24 @@ class Tur10(PlantModel):
                 if faults or d.speed != 0.0 or not (d.tripped or d.reference == 0):
                     self._move(k, d, dt)
         self.bus = self._bus_value(selected)
-        self._last_outputs = tuple(map(get, _OUTPUT_LOCS)) if dt > 0 and not self.faults else None
+        self._last_outputs = tuple(map(get, _OUTPUT_LOCS)) if dt > 0 else None
+        self._faults_seen = self.fault_changes
         return self._inputs()
 
     def idle(self, outputs: tuple[int, ...], dt: float) -> bool:
         """The plant contract's optional shortcut (plclab.runtime.plantio): would a step of dt
         under `outputs` (the values of self.outputs, in order) change nothing but the time?
         So it is where the outputs are those of the last step (the same sensors on the bus,
-        the same references: no new trip or contention), no fault is injected, the console is
-        as that step saw it and every link stands still and is told to (a link with a tripped
-        drive stays). Then the time has moved on by dt and the answer is True."""
-        if self._last_outputs != outputs or dt <= 0 or self.faults or self.console_bits != self._console_seen:
+        the same references: no new trip or contention), the faults are those of that step
+        (each acts the same at every step), the console is as that step saw it and every link
+        stands still and is told to (a link with a tripped or stuck drive stays). Then the time
+        has moved on by dt and the answer is True."""
+        if (self._last_outputs != outputs or dt <= 0 or self.fault_changes != self._faults_seen
+                or self.console_bits != self._console_seen):
             return False
-        for d in self.drives.values():
-            if d.speed != 0.0 or not (d.tripped or d.reference == 0):
+        stuck = self.faults["stuck_drive"]["axis"] if "stuck_drive" in self.faults else None
+        for k, d in self.drives.items():
+            if d.speed != 0.0 or not (d.tripped or d.reference == 0 or k == stuck):
                 return False
         self.time += dt
         return True

@@ -30,7 +30,7 @@ import sysconfig
 import tempfile
 import threading
 from pathlib import Path
-from typing import Any, Iterator, Optional
+from typing import Any, Callable, Iterator, Optional, Sequence
 
 from plclab.iec import types as T
 from plclab.runtime.cgen import FAULT_KINDS, CProgram, Layout, Unsupported, emit_c
@@ -346,7 +346,33 @@ class NativeProgram:
             for j, (a, i) in enumerate(outs):
                 lines.append(f"    a_{a}[{i}] = v[{j}]")
         exec(compile("\n".join(lines) + "\n", "<plc-native-io>", "exec"), ns)
+        plc._native_obuf = obuf
         return ns["_copy_in"], ns["_copy_out"]
+
+    def quiet(self, plc: Any) -> Callable[[int, Optional["Watch"]], tuple[int, int]]:
+        """`run(n, watch) -> (scans, fault code)`: up to n scans in one C call with the inputs
+        the image holds now, stopping after the first that changes an output or a `watch`ed
+        variable, or faults (PLC.run_quiet says when that is the same as n scans)."""
+        ffi, lib = self.ffi, self.lib
+        ins = self.cprog.io_bindings[0]
+        raw_in = ffi.new("int64_t[]", max(1, len(ins)))
+        rc = ffi.new("int32_t *")
+        cells = [(plc.image.areas[a], i) for a, i in ins]
+        obuf, st, quiet = plc._native_obuf, plc._native_state, lib.scan_quiet
+        nothing = Watch(ffi, [])
+
+        def run(n: int, watch: Optional[Watch]) -> tuple[int, int]:
+            raw = [area[i] for area, i in cells]
+            try:
+                raw_in[0:len(raw)] = raw
+            except (OverflowError, TypeError):       # a raw value past 64 bits: its low 64 bits
+                raw_in[0:len(raw)] = [_wrap_raw(x) for x in raw]
+            w = watch or nothing
+            k = quiet(st, plc.ticks, plc.tick_ns, plc.watchdog_s, plc._native_periods, n, raw_in, obuf,
+                      w.ptrs, w.sizes, w.count, w.snap, rc)
+            return k, rc[0]
+        return run
+
 
     def schedule(self, plc: Any, sched: list) -> list:
         """PLC._make_schedule's list as one entry: one C call runs every instance whose
@@ -381,6 +407,39 @@ class NativeProgram:
             cls = _make_class(self, layout, pytype, pyobj)
             self._classes[key] = cls
         return cls
+
+
+class Watch:
+    """C memory a quiet run compares after each scan (PLC.run_quiet): the variables named by
+    (container, key) pairs as PLC.resolve gives them, and room for a copy of their bytes
+    (taken by the run as it begins)."""
+
+    def __init__(self, ffi: Any, places: list[tuple[Any, int]]):
+        self.count = len(places)
+        self.ptrs = ffi.new("char *[]", [ffi.cast("char *", p) for p, _n in places] or [ffi.NULL])
+        self.sizes = ffi.new("int64_t[]", [n for _p, n in places] or [0])
+        self.snap = ffi.new("char[]", max(1, sum(n for _p, n in places)))   # the C fills it
+        self._keep = places
+
+    @staticmethod
+    def of(plc: Any, pairs: Sequence[tuple[Any, Any]]) -> Optional["Watch"]:
+        """The watch of `pairs` on `plc`'s native memory; None where one of them is not a
+        scalar in it (a Python path, a reference): then no quiet run can keep it."""
+        np = plc.native
+        if np is None:
+            return None
+        ffi = np.ffi
+        places = []
+        for o, k in pairs:
+            if isinstance(o, ArrayMirror) and o._items is None and isinstance(k, int):
+                places.append((ffi.addressof(o._a, k), ffi.sizeof(ffi.typeof(o._a).item)))
+                continue
+            f = getattr(type(o), "_fields", {}).get(k) if isinstance(k, str) else None
+            if f is None or f.kind != "scalar" or not hasattr(o, "_p"):
+                return None
+            ptr = ffi.addressof(o._p[0] if ffi.typeof(o._p).kind == "pointer" else o._p, f.cname)
+            places.append((ptr, ffi.sizeof(ffi.typeof(ptr).item)))
+        return Watch(ffi, places)
 
 
 def retain_fingerprint(plc: Any) -> Any:

@@ -284,8 +284,10 @@ class PLC:
         lines_out.append("    pass")
         exec(compile("\n".join(lines_in + lines_out) + "\n", "<plc-io>", "exec"), ns)
         self._copy_in, self._copy_out = ns["_copy_in"], ns["_copy_out"]
+        self._quiet_run = None
         if self.native is not None:
             self._copy_in, self._copy_out = self.native.io(self, self._copy_in, self._copy_out)
+            self._quiet_run = self.native.quiet(self)
 
     def scan(self) -> bool:
         """Run one tick at the current PLC time; returns False if the PLC is (now) faulted."""
@@ -310,6 +312,36 @@ class PLC:
                 self.enter_fault("retain", f"cannot save the retained variables: {self.retain_store.save_error}")
                 return False
         return True
+
+    def run_quiet(self, n: int, watch: Any = None) -> int:
+        """Up to `n` ticks of `scan(); advance()` in one native call, for a closed loop whose
+        plant stands idle (nothing but this PLC's outputs could change what it does): every
+        scan takes the inputs the image holds now, and the run stops after the first scan
+        that changes an output or a variable of `watch` (plclab.runtime.native.Watch) or
+        faults. Returns how many ticks were run; the PLC is then where as many `scan();
+        advance()` would have left it (the image's outputs, time, fault). 0 where no such run
+        can be the same: the Python path, a PLC not running, a Modbus write waiting, the I/O
+        stages replaced (the lab's forces), or a retain save due at the first scan."""
+        run = self._quiet_run
+        if (run is None or n < 1 or self.state != RUN or self.image._pending
+                or "read_inputs" in self.__dict__ or "write_outputs" in self.__dict__
+                or self.now_ns != self.ticks * self.tick_ns):
+            return 0
+        if self.retain_store is not None:      # the scan that saves runs on the usual path
+            n = min(n, -(-(self._last_persist_ns + self.retain_period_ns - self.now_ns) // self.tick_ns))
+            if n < 1:
+                return 0
+        k, rc = run(n, watch)
+        if rc:                                  # the k-th scan faulted, as scan() would
+            self.ticks += k - 1
+            self.now_ns = self.ticks * self.tick_ns
+            self._enter_fault(_native._fault(rc, self._native_state, self.native.cprog.sites, self))
+            self.advance()
+            return k
+        self.write_outputs()
+        self.ticks += k
+        self.now_ns = self.ticks * self.tick_ns
+        return k
 
     def advance(self) -> None:
         """Move PLC time to the next tick (virtual time)."""
