@@ -523,3 +523,30 @@ def test_no_quiet_run_where_it_could_differ_from_scanning():
     assert plc.run_quiet(10) > 0
     plc.stop()
     assert plc.run_quiet(10) == 0
+
+
+def test_a_build_in_the_background_leaves_the_main_threads_output_alone(tmp_path, monkeypatch):
+    """A program loaded again is built in a background thread (program_for); the build writes
+    nothing and never redirects sys.stdout, so every line the main thread prints meanwhile (a
+    command's report) reaches its stream."""
+    import io
+    import threading
+
+    from plclab.runtime.cgen import emit_c
+    monkeypatch.setenv("XDG_CACHE_HOME", str(tmp_path))
+    cprog = emit_c(compile_unit(check_sources([("t.st", QUIET)])).checked)
+    ours = io.StringIO()
+    monkeypatch.setattr(sys, "stdout", ours)
+    before = set(threading.enumerate())
+    assert native.build(cprog, wait=False, later=True) is None          # not built yet: later
+    builders = [t for t in threading.enumerate() if t not in before]
+    assert builders
+    n = 0
+    while any(t.is_alive() for t in builders) and n < 2_000_000:
+        print(f"line {n}")
+        n += 1
+    for t in builders:
+        t.join(timeout=120)
+    printed = ours.getvalue().splitlines()
+    assert sys.stdout is ours and n > 0 and printed == [f"line {k}" for k in range(n)]
+    assert native.build(cprog, wait=False) is not None                   # and it was built

@@ -21,7 +21,6 @@ from __future__ import annotations
 import contextlib
 import contextvars
 import hashlib
-import io
 import os
 import shutil
 import subprocess
@@ -214,11 +213,13 @@ def _compile(cprog: CProgram, cc: str, api: bool, include: str, modname: str, ou
     try:
         src = work / f"{modname}.c"
         if api:
+            from cffi.recompiler import make_c_source
             ffi = cffi.FFI()
             ffi.cdef(cprog.cdef)
-            ffi.set_source(modname, cprog.source)
-            with contextlib.redirect_stdout(io.StringIO()):      # cffi says "generating ..."
-                ffi.emit_c_code(str(src))
+            # what ffi.emit_c_code writes, without its "generating ..." line: a build may run in
+            # a background thread, where redirecting sys.stdout to hush it would take the main
+            # thread's output away too (seen: a command's report lost in the test suite)
+            make_c_source(ffi, modname, cprog.source, str(src), verbose=False)
             extra = [f"-I{include}"]
         else:
             src.write_text(cprog.source)
