@@ -534,7 +534,10 @@ def test_a_build_in_the_background_leaves_the_main_threads_output_alone(tmp_path
 
     from plclab.runtime.cgen import emit_c
     monkeypatch.setenv("XDG_CACHE_HOME", str(tmp_path))
-    cprog = emit_c(compile_unit(check_sources([("t.st", QUIET)])).checked)
+    import uuid
+    # a program no test of this process has loaded yet (a loaded one is not built again)
+    src = QUIET.replace("    kept : INT;", f"    kept : INT;\n    unique_{uuid.uuid4().hex} : INT;")
+    cprog = emit_c(compile_unit(check_sources([("t.st", src)])).checked)
     ours = io.StringIO()
     monkeypatch.setattr(sys, "stdout", ours)
     before = set(threading.enumerate())
