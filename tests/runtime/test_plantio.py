@@ -125,3 +125,20 @@ def test_an_idle_plant_only_moves_its_time_until_an_output_or_one_of_its_input_c
     assert (plant.full_steps, binding.idle, image.areas["IX"][0]) == (4, False, 1)
     binding.step(0.01)
     assert (plant.full_steps, binding.idle, plant.time) == (4, True, pytest.approx(0.09))
+
+
+def test_the_ticks_a_quiet_run_skipped_move_the_plants_time_and_a_broken_idle_is_said():
+    """Where the closed loop ran several idle ticks' scans in one go, the binding moves the
+    plant's time by as many idle steps; a plant whose `idle` says no under the same outputs
+    breaks the contract, and that is raised as the harness's error, never taken as a step."""
+    image = ProcessImage()
+    plant = IdlePlant()
+    binding = PlantBinding(plant, image)
+    for _ in range(3):
+        binding.step(0.01)
+    assert binding.can_idle and binding.idle
+    binding.repeat_idle(7, 0.01)
+    assert plant.time == pytest.approx(0.10) and plant.full_steps == 2
+    plant.last = None                       # its idle now says no to the same outputs
+    with pytest.raises(RuntimeError, match="IdlePlant.idle changed its answer"):
+        binding.repeat_idle(1, 0.01)

@@ -74,6 +74,21 @@ class PlantBinding:
                      and idle(outputs, dt))
         return self.idle
 
+    @property
+    def can_idle(self) -> bool:
+        """Whether the plant has the `idle` shortcut (the plant contract's optional method)."""
+        return self._idle is not None
+
+    def repeat_idle(self, count: int, dt: float) -> None:
+        """`count` more idle steps of dt under the outputs of this tick's idle step: where the
+        closed loop ran the scans of those ticks in one go (plclab.runtime.sim), the plant's
+        time moves on as stepping it tick by tick would. The contract says `idle` holds for
+        the same outputs; a plant that breaks it is the harness's bug, said as such."""
+        idle, outputs = self._idle, self._stepped
+        for _ in range(count):
+            if idle is None or not idle(outputs, dt):
+                raise RuntimeError(f"{type(self.plant).__name__}.idle changed its answer under the same outputs")
+
     def _compile_reader(self, as_tuple: bool = False) -> Callable[[], Any]:
         """`read_outputs()`: the plant's outputs as the PLC's last scan left them in the image,
         a new dict each call (the plant may keep it); `as_tuple`: their values only, in the
