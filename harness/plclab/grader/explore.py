@@ -43,6 +43,7 @@ from typing import Any, Callable, Iterator, Optional, Sequence
 
 from plclab.errors import PlcLabError
 from plclab.runtime.retain import MemoryRetainStore
+from plclab.runtime.tracing import pair_reader
 from plclab.scenario import Session, compiled_once
 from plclab.stands.operators import (BLINK_END_TOL, BLINK_HALF_MAX, BLINKING, START_S, Exploration, Observed,
                                      blink_spans)
@@ -64,7 +65,7 @@ class _Probe:
     only the changes: signal -> [(t, value)], the first entry the power-up value."""
 
     def __init__(self, plant: Any, observe: Callable[[Any, Any], dict[str, Any]], clock: Callable[[], float],
-                 inner: Optional[Callable[[], tuple]] = None):
+                 inner: Optional[_InnerReader] = None):
         self.plant, self.observe, self.clock = plant, observe, clock
         self.last: Optional[dict[str, Any]] = None
         self.changes: dict[str, list[tuple[float, Any]]] = {}
@@ -100,7 +101,7 @@ class _Probe:
         every scan (no plant binding to say it stood idle)."""
         if self.binding is None or self.last is None:
             return None
-        return self.inner.pairs() if isinstance(self.inner, _InnerReader) else ([] if self.inner is None else None)
+        return [] if self.inner is None else self.inner.pairs()
 
 
 def actions(script: Script) -> list[tuple[float, int, str, str, str]]:
@@ -136,30 +137,13 @@ class _InnerReader:
         if self._plc is not s.plc:
             self._plc = s.plc
             self._found = [s.plc.resolve(p) for p in self.paths if s.has(p)]
-            self._get = _getter(self._found)
+            self._get = pair_reader(self._found, as_tuple=True)
         return self._found
 
     def __call__(self) -> tuple:
         if self._plc is not self.session.plc:
             self.pairs()
         return self._get()
-
-
-def _inner_reader(s: Session, paths: Sequence[str]) -> _InnerReader:
-    return _InnerReader(s, paths)
-
-
-def _getter(found: Sequence[tuple[Any, Any]]) -> Callable[[], tuple]:
-    """One generated function reading (container, key) pairs as resolve gives them (an
-    array element or an attribute) into a tuple: every scan of the model answer's plays."""
-    ns: dict[str, Any] = {}
-    parts = []
-    for n, (o, k) in enumerate(found):
-        ns[f"o{n}"], ns[f"k{n}"] = o, k
-        parts.append(f"o{n}[k{n}]" if isinstance(o, list) else f"getattr(o{n}, k{n})")
-    exec(compile("def get():\n    return (" + "".join(p + ", " for p in parts) + ")\n",
-                 "<inner-state>", "exec"), ns)
-    return ns["get"]
 
 
 def unrecorded(s: Session) -> None:
@@ -184,7 +168,7 @@ def play(s: Session, script: Script, expl: Optional[Exploration] = None, until: 
     `split = (t, fn)`: fn() is called once when plant time t is reached (a line tracer starts).
     `record=False`: no trace is kept (exploration's search: only the probe's changes count).
     `inner`: ST paths of the program's state the probe keeps too (the model answer's coverage)."""
-    probe = _Probe(s.plant, expl.observe, lambda: s.now, _inner_reader(s, inner) if inner else None) \
+    probe = _Probe(s.plant, expl.observe, lambda: s.now, _InnerReader(s, inner) if inner else None) \
         if expl is not None else None
 
     def attach() -> None:

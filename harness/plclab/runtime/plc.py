@@ -332,15 +332,13 @@ class PLC:
             if n < 1:
                 return 0
         k, rc = run(n, watch)
-        if rc:                                  # the k-th scan faulted, as scan() would
-            self.ticks += k - 1
-            self.now_ns = self.ticks * self.tick_ns
-            self._enter_fault(_native._fault(rc, self._native_state, self.native.cprog.sites, self))
-            self.advance()
-            return k
-        self.write_outputs()
-        self.ticks += k
+        self.ticks += k - 1                     # at the last scan run
         self.now_ns = self.ticks * self.tick_ns
+        if rc:                                  # it faulted, as scan() would
+            self._enter_fault(_native._fault(rc, self._native_state, self.native.cprog.sites, self))
+        else:
+            self.write_outputs()
+        self.advance()
         return k
 
     def advance(self) -> None:

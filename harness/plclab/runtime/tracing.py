@@ -23,7 +23,7 @@ import keyword
 import sys
 from dataclasses import dataclass, field
 from functools import lru_cache
-from typing import Any, Callable, Optional
+from typing import Any, Callable, Optional, Sequence
 
 _PRIMITIVE = (bool, int, float, str, bytes, type(None))
 WILD = "*"
@@ -569,32 +569,50 @@ def _get(container: Any, key: Any) -> Any:
 _PRIMITIVE_SET = frozenset(_PRIMITIVE)
 
 
+class _Generated:
+    """Source of generated readers: each object they read from is named `_o[n]`, once."""
+
+    def __init__(self) -> None:
+        self.objects: list[Any] = []
+        self._index: dict[int, int] = {}
+
+    def ref(self, obj: Any) -> str:
+        n = self._index.get(id(obj))
+        if n is None:
+            n = self._index[id(obj)] = len(self.objects)
+            self.objects.append(obj)
+        return f"_o[{n}]"
+
+    def get(self, container: Any, key: Any) -> str:
+        """`_get(container, key)` as an expression (an attribute not set yet reads None)."""
+        if isinstance(key, int):
+            return f"{self.ref(container)}[{key}]"
+        if key.isidentifier() and not keyword.iskeyword(key) and hasattr(container, key):
+            return f"{self.ref(container)}.{key}"
+        return f"getattr({self.ref(container)}, {key!r}, None)"
+
+    def define(self, src: str) -> dict[str, Any]:
+        ns: dict[str, Any] = {"_o": self.objects}
+        exec(compile(src, "<generated reader>", "exec"), ns)
+        return ns
+
+
+def pair_reader(pairs: Sequence[tuple[Any, Any]], as_tuple: bool = False) -> Callable[[], Any]:
+    """One generated function reading (container, key) pairs (as PLC.resolve gives them: an
+    array element or an attribute) into a list, or a tuple: where values are read at every
+    scan, one generated expression reads them several times faster than a loop of getattr.
+    It raises where a container lost an attribute it had."""
+    g = _Generated()
+    exprs = [g.get(c, k) for c, k in pairs]
+    body = "(" + "".join(e + ", " for e in exprs) + ")" if as_tuple else "[" + ", ".join(exprs) + "]"
+    return g.define(f"def read():\n    return {body}\n")["read"]
+
+
 def _readers(leaves: list[tuple[Any, Any, str]], edges: list[tuple[Any, Any, Any]]
              ) -> tuple[Callable[[], bool], Callable[[], list[Any]]]:
     """Two functions generated for one walk: whether every edge still holds its object, and
-    the leaves' values in order. A state is read as each scan begins, hundreds of values at a
-    time; one generated expression reads them several times faster than a loop of getattr.
-    They raise where a variable went away (the caller then walks again or reads the slow way)."""
-    objects: list[Any] = []
-    index: dict[int, int] = {}
-
-    def ref(obj: Any) -> str:
-        n = index.get(id(obj))
-        if n is None:
-            n = index[id(obj)] = len(objects)
-            objects.append(obj)
-        return f"_o[{n}]"
-
-    def get(container: Any, key: Any) -> str:
-        if isinstance(key, int):
-            return f"{ref(container)}[{key}]"
-        if key.isidentifier() and not keyword.iskeyword(key) and hasattr(container, key):
-            return f"{ref(container)}.{key}"
-        return f"getattr({ref(container)}, {key!r}, None)"      # not set (yet): None, as _get
-
-    same = " and ".join(f"{get(c, k)} is {ref(o)}" for c, k, o in edges) or "True"
-    values = ", ".join(get(c, k) for c, k, _path in leaves)
-    src = f"def same():\n    return {same}\ndef values():\n    return [{values}]\n"
-    ns: dict[str, Any] = {"_o": objects}
-    exec(compile(src, "<state reader>", "exec"), ns)
-    return ns["same"], ns["values"]
+    the leaves' values in order (pair_reader). They raise where a variable went away (the
+    caller then walks again or reads the slow way)."""
+    g = _Generated()
+    same = " and ".join(f"{g.get(c, k)} is {g.ref(o)}" for c, k, o in edges) or "True"
+    return g.define(f"def same():\n    return {same}\n")["same"], pair_reader([(c, k) for c, k, _p in leaves])
