@@ -128,20 +128,36 @@ def test_a_play_through_idle_scans_shows_what_stepping_every_scan_shows(stand, r
     """Where a robot stands idle under unchanged outputs, the closed loop does not step it, write
     its inputs again or look at it (issue 30); while searching (nothing recorded) it runs such
     quiet stretches in one native call, up to the scan that changes an output or the model
-    answer's inner state (PLC.run_quiet). Over generated scripts with faults and power cycles,
-    each played with those shortcuts and with every scan stepped in full: the same recorded
-    trace, the same changes the probe saw and the model answer's states, the same plant, plant
-    events and PLC at the end; and the shortcuts were taken."""
+    answer's inner state (PLC.run_quiet). The TUR-10 is stepped on values in order (no dicts),
+    and where no link or lamp changed, the probe does not look and its trace records nothing.
+    Over generated scripts with faults and power cycles, each played with those shortcuts and
+    with every scan stepped in full through the plant's dict step, looked at and recorded:
+    the same recorded trace, the same changes the probe saw and the model answer's states,
+    the same plant, plant events and PLC at the end; and the shortcuts were taken."""
+    import dataclasses
     import random
 
     from plclab.grader.explore import play
+    from plclab.plants.tur10 import Tur10
     from plclab.runtime.plantio import PlantBinding
     from plclab.runtime.plc import PLC
     from plclab.runtime.retain import MemoryRetainStore
     expl = stand_spec(stand).explore
     model, _why = model_answer(stand, "task3", None)
     req = requirement_set(stand, "task3")
-    idle_scans = quiet_scans = 0
+    idle_scans = quiet_scans = unchanged_looks = 0
+    if expl.unchanged is not None:
+        last_seen: list = [None]
+
+        def counting_unchanged(plant):
+            nonlocal unchanged_looks
+            seen_now = expl.unchanged(plant)
+            unchanged_looks += seen_now == last_seen[0]
+            last_seen[0] = seen_now
+            return seen_now
+        expl_short = dataclasses.replace(expl, unchanged=counting_unchanged)
+    else:
+        expl_short = expl
     for seed in range(3):
         script = expl.generate(random.Random(seed), "task3", expl.episode_s)
         inner = expl.state_paths if seed != 1 else ()      # the model answer's side, and a student's
@@ -151,6 +167,17 @@ def test_a_play_through_idle_scans_shows_what_stepping_every_scan_shows(stand, r
             if not shortcut:                 # every step in full, the plant's own shortcut too
                 monkeypatch.setattr(PlantBinding, "step_idle", lambda self, dt: False)
                 monkeypatch.setattr(type(s.plant), "idle", lambda self, outputs, dt: False)
+                # the plant's step on names (a dict each way), and a TUR-10 whose every step
+                # counts as a change: looked at and recorded at every scan
+                monkeypatch.setattr(PlantBinding, "step",
+                                    lambda self, dt: self.write_inputs(self.plant.step(self.read_outputs(), dt)))
+                every_values = Tur10.step_values
+
+                def every_step_a_change(self, outputs, dt):
+                    values = every_values(self, outputs, dt)
+                    self.state_changes += 1
+                    return values
+                monkeypatch.setattr(Tur10, "step_values", every_step_a_change)
             else:
                 original, original_quiet = PlantBinding.step_idle, PLC.run_quiet
 
@@ -167,7 +194,8 @@ def test_a_play_through_idle_scans_shows_what_stepping_every_scan_shows(stand, r
                     return k
                 monkeypatch.setattr(PlantBinding, "step_idle", counting)
                 monkeypatch.setattr(PLC, "run_quiet", counting_quiet)
-            probe = play(s, script, expl, record=record, inner=inner)
+            probe = play(s, script, expl_short if shortcut else dataclasses.replace(expl, unchanged=None),
+                         record=record, inner=inner)
             monkeypatch.undo()
             plc = s.plc
             seen.append(({n: s.trace.changes(n) for n in s.trace.signals()}, probe.changes, probe.states,
@@ -178,3 +206,5 @@ def test_a_play_through_idle_scans_shows_what_stepping_every_scan_shows(stand, r
         assert idle_scans > 1000 and quiet_scans == 0
     else:                               # the quiet stretches take most idle scans
         assert quiet_scans > 1000 and idle_scans > 0
+    if stand == "tur10":                # scans where only the sensor bus changed: not looked at
+        assert unchanged_looks > 1000

@@ -424,3 +424,53 @@ def test_an_idle_step_is_what_a_full_step_gives_and_a_fault_that_stays_keeps_it_
             assert inputs == full.step(out, 0.01)
             assert fast.snapshot() == full.snapshot() and fast.events == full.events
     assert idle > 200 and idle_faulted > 50, (idle, idle_faulted)
+
+
+@pytest.mark.parametrize("seed", range(4))
+def test_a_step_on_values_in_order_is_the_step_on_names_and_counts_each_change_of_a_link(seed):
+    """`step_values` (the closed loop's form of the step: the outputs' values in `outputs`
+    order, the inputs' values in `inputs` order) is `step`: over random outputs, some missing
+    (a PLC switched off), steps of 0 s, console changes, faults and trip resets, both plants
+    report the same inputs, snapshot and events. And `state_changes` moves wherever a link (its
+    reference, trip, position or speed) or the reset lamp changed: a grader's probe does not
+    look again while it and the console stay (only the sensor bus changed)."""
+    import random
+    rng = random.Random(seed)
+    names, values = create(), create()
+    faults = [("stuck_drive", {"axis": 3}), ("dead_sensor", {"axis": 1}), ("slow_drive", {"axis": 2, "factor": 0.3})]
+    out: dict[str, int] = outputs()
+    stayed = 0
+    for _ in range(600):
+        r = rng.random()
+        if r < 0.25:
+            refs = {k: rng.choice((0, 0, 0, 300, -700, 1600)) for k in range(1, 6)}
+            out = outputs(qb0=rng.choice((IDLE, 15, 23, 27, 29, 30, 0)), refs=refs, lamp=rng.randint(0, 1))
+        elif r < 0.3:
+            out = {}                                          # the PLC off: no output given
+        elif r < 0.4:                                         # links told to stop, the bus scanned
+            out = outputs(qb0=rng.choice((15, 23, 27, 29, 30)))
+        elif r < 0.45:
+            name, bit = rng.choice(sorted(names.console_bits)), rng.randint(0, 1)
+            for p in (names, values):
+                p.set_switch(name, bit)
+        elif r < 0.5:
+            fault, params = rng.choice(faults)
+            for p in (names, values):
+                p.inject(fault, **dict(params))
+        elif r < 0.53:
+            for p in (names, values):
+                p.clear()
+        elif r < 0.56:
+            for p in (names, values):
+                p.reset_trip()
+        dt = rng.choice((0.01, 0.01, 0.01, 0.0, 0.05))
+        links = [(d.reference, d.tripped, d.position, d.speed) for d in values.drives.values()]
+        seen = (values.state_changes, values.console_changes, values.reset_indicator)
+        got = values.step_values(tuple(map(out.get, values.outputs)), dt)
+        assert dict(zip(values.inputs, got)) == names.step(out, dt)
+        assert values.snapshot() == names.snapshot() and values.events == names.events
+        if (values.state_changes, values.console_changes) == seen[:2]:
+            stayed += 1
+            assert values.reset_indicator == seen[2]
+            assert [(d.reference, d.tripped, d.position, d.speed) for d in values.drives.values()] == links
+    assert stayed > 50, stayed

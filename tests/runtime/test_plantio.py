@@ -127,6 +127,41 @@ def test_an_idle_plant_only_moves_its_time_until_an_output_or_one_of_its_input_c
     assert (plant.full_steps, binding.idle, plant.time) == (4, True, pytest.approx(0.09))
 
 
+class ValuesPlant(IdlePlant):
+    """IdlePlant with the step on values in order too (the contract's optional form), which
+    the binding then uses; a second input names the same cell as the first (the later wins)."""
+
+    inputs = ["IX0.0", "IW0", "IX1.1", "IX1.1"]
+
+    def step_values(self, outputs: tuple[int, ...], dt: float) -> tuple[int, ...]:
+        self.seen_values = outputs
+        got = self.step(dict(zip(self.outputs, outputs)), dt)
+        return got["IX0.0"], got["IW0"], 1, self.full_steps % 2
+
+
+def test_a_plant_stepped_on_values_gets_them_in_order_and_its_inputs_land_where_they_belong():
+    """Where a plant has `step_values`, the binding builds no dict: the plant gets the outputs'
+    values in its `outputs` order and its result lands in its `inputs` cells, in order (a
+    later name of the same cell wins, as a dict's loop writes it); the idle shortcut holds
+    from its second step, and a cell written by someone else steps it in full again."""
+    image = ProcessImage()
+    image.areas["QX"][1], image.areas["QW"][2] = 1, 7
+    plant = ValuesPlant()
+    binding = PlantBinding(plant, image)
+    binding.step(0.01)
+    assert plant.seen_values == (1, 7) and binding.output_values() == (1, 7)
+    assert (image.areas["IX"][0], image.areas["IW"][0], image.areas["IX"][9]) == (1, 41, 1)
+    for _ in range(3):
+        binding.step(0.01)
+    assert (plant.full_steps, binding.idle, plant.time) == (1, True, pytest.approx(0.04))
+    image.areas["IW"][0] = 0                          # someone else wrote an input cell
+    binding.step(0.01)
+    assert (plant.full_steps, binding.idle, image.areas["IW"][0], image.areas["IX"][9]) == (2, False, 42, 0)
+    other = ProcessImage()                            # a second binding of its kind: its own image
+    PlantBinding(ValuesPlant(), other).step(0.01)
+    assert (other.areas["IW"][0], image.areas["IW"][0]) == (41, 42)
+
+
 def test_the_ticks_a_quiet_run_skipped_move_the_plants_time_and_a_broken_idle_is_said():
     """Where the closed loop ran several idle ticks' scans in one go, the binding moves the
     plant's time by as many idle steps; a plant whose `idle` says no under the same outputs

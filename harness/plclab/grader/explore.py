@@ -65,8 +65,10 @@ class _Probe:
     only the changes: signal -> [(t, value)], the first entry the power-up value."""
 
     def __init__(self, plant: Any, observe: Callable[[Any, Any], dict[str, Any]], clock: Callable[[], float],
-                 inner: Optional[_InnerReader] = None):
+                 inner: Optional[_InnerReader] = None, unchanged: Optional[Callable[[Any], Any]] = None):
         self.plant, self.observe, self.clock = plant, observe, clock
+        # (Exploration.unchanged) where it gives what it gave at the last look, so would observe
+        self.unchanged, self._seen = unchanged, None
         self.last: Optional[dict[str, Any]] = None
         self.changes: dict[str, list[tuple[float, Any]]] = {}
         # the program's inner state (the model answer's, for coverage): [(t, state)] at each change
@@ -80,6 +82,11 @@ class _Probe:
         last = self.last
         binding = self.binding
         if last is None or binding is None or not binding.idle:
+            if self.unchanged is not None:
+                seen = self.unchanged(self.plant)
+                if seen == self._seen and last is not None:
+                    return self._inner_step()
+                self._seen = seen
             now = round(self.clock(), 6)     # the session's time of the scan about to run
             v = self.observe(self.plant, last)
             if last is None:
@@ -89,6 +96,9 @@ class _Probe:
                     if x != last[k]:
                         self.changes[k].append((now, x))
             self.last = v
+        self._inner_step()
+
+    def _inner_step(self) -> None:
         if self.inner is not None:
             state = self.inner()
             if state != self._inner_last:
@@ -168,8 +178,8 @@ def play(s: Session, script: Script, expl: Optional[Exploration] = None, until: 
     `split = (t, fn)`: fn() is called once when plant time t is reached (a line tracer starts).
     `record=False`: no trace is kept (exploration's search: only the probe's changes count).
     `inner`: ST paths of the program's state the probe keeps too (the model answer's coverage)."""
-    probe = _Probe(s.plant, expl.observe, lambda: s.now, _InnerReader(s, inner) if inner else None) \
-        if expl is not None else None
+    probe = _Probe(s.plant, expl.observe, lambda: s.now, _InnerReader(s, inner) if inner else None,
+                   expl.unchanged) if expl is not None else None
 
     def attach() -> None:
         if not record:

@@ -59,6 +59,9 @@ STEP = 0.1               # s the grader runs on between looks at the trace while
 
 # --------------------------------------------------------------------------- the stand
 
+_OFF = (None,) * len(Tur10.outputs)      # the outputs of a PLC switched off (a restart)
+
+
 class TracedTur10(Tur10):
     """The TUR-10 plant recording each link's true position (code) into a trace.
 
@@ -70,6 +73,7 @@ class TracedTur10(Tur10):
         self.trace: Optional[Trace] = None
         self.clock: Callable[[], float] = lambda: self.time
         self._codes: tuple[int, ...] = ()          # the codes last recorded, AXES order
+        self._recorded = -1                        # state_changes when they were worked out
 
     def attach(self, trace: Trace, clock: Callable[[], float]) -> None:
         """Record into `trace`, stamped with `clock()` (the time of the scan the step precedes)."""
@@ -85,9 +89,11 @@ class TracedTur10(Tur10):
         """true_code of every link, AXES order."""
         return tuple([min(max(math.floor(d.position), 0), 0x7FFF) for d in self.drives.values()])
 
-    def step(self, outputs: dict[str, int], dt: float) -> dict[str, int]:
-        inputs = super().step(outputs, dt)
-        if self.trace is not None and outputs:      # no outputs: the PLC is off (a restart)
+    def step_values(self, outputs: tuple[Any, ...], dt: float) -> tuple[int, ...]:
+        inputs = super().step_values(outputs, dt)
+        if self.trace is not None and outputs != _OFF and self.state_changes != self._recorded:
+            # (no outputs: the PLC is off, a restart; no change of a link: nothing to record)
+            self._recorded = self.state_changes
             codes = self.true_codes()
             if codes != self._codes:                # links at rest (most scans): nothing to record
                 t_ns = round(self.clock() * 1e6) * 1000

@@ -5,6 +5,9 @@ Contract (plclab.runtime.plantio uses it in-process, plclab.modbus.psm over PSM)
   inputs   PLC inputs the plant drives ("IX0.0", "IW0")
   period   seconds between steps when it runs on its own in real time (PSM)
   step(outputs, dt) -> inputs   values are raw: bits 0/1, words unsigned 16-bit; dt seconds
+  step_values(outputs, dt) -> values   optional, the same step on values in order: `outputs`
+           the values of `outputs` (None where not given), the result the values of `inputs`,
+           raw (0/1, 0..65535); the closed loop then builds and reads no dict
   idle(outputs, dt) -> bool     optional: True where a step of dt under these outputs (their
            values, `outputs` order) would change nothing but the time, which it then moves on;
            once True, True again for the same outputs until the plant is stepped in full or
@@ -67,6 +70,7 @@ class PlantModel:
         self.events: list[PlantEvent] = []
         self.faults: dict[str, dict[str, Any]] = {}
         self.fault_changes = 0       # counts injections and clears: a step may compare it
+        self.console_changes = 0     # counts changes of console_bits (written by set_switch only)
         # console inputs at rest: released buttons, switches off (normally closed ones conduct)
         self.console_bits: dict[str, int] = {name: int(name in self.NORMALLY_CLOSED) for name in self.CONSOLE}
 
@@ -79,7 +83,10 @@ class PlantModel:
             if not self.CONSOLE:
                 raise PlantError(f"this plant has no console switch {name!r}")
             raise PlantError(f"unknown console input {name!r}; one of {', '.join(self.CONSOLE)}")
-        self.console_bits[name] = 1 if value else 0
+        bit = 1 if value else 0
+        if self.console_bits[name] != bit:
+            self.console_bits[name] = bit
+            self.console_changes += 1
 
     def press(self, name: str = "SB1") -> None:
         """Press a push button: its contact closes, or opens for a normally closed one (an

@@ -56,9 +56,8 @@ FACE = ConsoleFace(switches=tuple(CONSOLE), lamps=(("HL1", RESET_LAMP),),
 
 # Stepping runs every scan of every grading: its tables are made once here, so that a step
 # builds nothing but the inputs it returns.
-_DAC_LOCS = tuple(DAC[k] for k in AXES)
 _OUTPUT_LOCS = tuple([ENABLE[k] for k in AXES] + [RESET_LAMP] + [DAC[k] for k in AXES])   # Tur10.outputs
-_ENABLE_LOCS = tuple(ENABLE[k] for k in AXES)
+_INPUT_LOCS = tuple(CONSOLE.values()) + BUS_BITS                                          # Tur10.inputs
 _SELECTED: dict[tuple[Any, ...], tuple[int, ...]] = {}     # enable outputs -> the sensors they select
 # Below this speed (codes/s) a link told to stop is at rest: what is left of its coasting
 # (speed x tau, 5e-5 codes) is added to its position at once. The exact lag only tends to zero
@@ -66,7 +65,6 @@ _SELECTED: dict[tuple[Any, ...], tuple[int, ...]] = {}     # enable outputs -> t
 # its step every scan of every grading.
 REST_SPEED = 1e-3
 _CONSOLE_NAMES = tuple(CONSOLE)
-_CONSOLE_LOCS = tuple(CONSOLE.values())
 # The bus bits of a code, low byte (I3.0..I3.7) and high seven bits (I2.0..I2.6) looked up
 _LOW_BITS = tuple(tuple((v >> b) & 1 for b in range(8)) for v in range(256))
 _HIGH_BITS = tuple(tuple((v >> b) & 1 for b in range(7)) for v in range(128))
@@ -88,7 +86,7 @@ class Tur10(PlantModel):
     """The TUR-10 stand: five drives, the multiplexed sensor bus and the control console."""
 
     outputs = list(_OUTPUT_LOCS)
-    inputs = list(CONSOLE.values()) + list(BUS_BITS)
+    inputs = list(_INPUT_LOCS)
     FACE = FACE
     CONSOLE = CONSOLE             # set_switch / press / release: plants.base.PlantModel
     FAULTS = {
@@ -119,8 +117,12 @@ class Tur10(PlantModel):
         self.bus = FULL_SCALE
         self._contention: tuple[int, ...] = ()
         self._lag: tuple[float, float, float] = (-1.0, -1.0, 0.0)   # (dt, tau, exp(-dt / tau)) last used
-        self._console_seen: dict[str, int] = {}        # console_bits when _console_inputs was made
-        self._console_inputs: dict[str, int] = {}
+        self._console_seen = -1                        # console_changes when _console_values was made
+        self._console_values: tuple[int, ...] = ()
+        # counts the steps that changed a link (reference, trip, position, speed) or the reset
+        # lamp: what the stand shows stays as it was while this and the console stay the same
+        # (the sensor selection and the bus may change: a grader's probe need not look again)
+        self.state_changes = 0
         self._last_outputs: tuple[Any, ...] | None = None   # of the last step of time
         self._faults_seen = 0                          # fault_changes at that step
         self._dacs: tuple[Any, ...] | None = None      # the DAC outputs the references were read from
@@ -134,11 +136,20 @@ class Tur10(PlantModel):
         Conditions of the outputs (overvoltage, contention) are stamped at the start of the
         step, when the PLC published them; collisions at its end, when they are seen.
         """
+        return dict(zip(_INPUT_LOCS, self.step_values(tuple(map(outputs.get, _OUTPUT_LOCS)), dt)))
+
+    def step_values(self, outputs: tuple[Any, ...], dt: float) -> tuple[int, ...]:
+        """`step` on values in order (the plant contract's optional form, which the closed loop
+        uses): `outputs` the values of self.outputs (None: not given), the inputs returned as
+        the values of self.inputs, raw."""
         if dt < 0:
             raise PlantError(f"dt must not be negative (got {dt})")
-        get = outputs.get
-        self.reset_indicator = 1 if get(RESET_LAMP, 0) else 0
-        enables = tuple(map(get, _ENABLE_LOCS))
+        moved = False                                     # anything but the time, bus and selection
+        reset = 1 if outputs[5] else 0
+        if reset != self.reset_indicator:
+            self.reset_indicator = reset
+            moved = True
+        enables = outputs[:5]
         selected = _SELECTED.get(enables)
         if selected is None:                               # each pattern worked out once
             selected = _SELECTED[enables] = tuple([k for k, on in zip(AXES, enables) if not on])
@@ -146,9 +157,10 @@ class Tur10(PlantModel):
         if dt > 0:
             limit = self.dac_limit
             faults = self.faults
-            dacs = tuple(map(get, _DAC_LOCS))
+            dacs = outputs[6:]
             if dacs != self._dacs:                         # the references as last step: as they are
                 self._dacs = dacs
+                moved = True
                 for d, raw in zip(self.drives.values(), dacs):
                     raw = (raw or 0) & 0xFFFF               # the signed INT the PLC wrote
                     d.reference = raw - 0x10000 if raw & 0x8000 else raw
@@ -156,6 +168,7 @@ class Tur10(PlantModel):
                 reference = d.reference
                 if (reference > limit or reference < -limit) and not d.tripped:
                     self._check_overvoltage(k, d)
+                    moved = True
             if len(selected) > 1 or self._contention:
                 self._check_contention()
             self.time += dt
@@ -163,11 +176,18 @@ class Tur10(PlantModel):
                 # a link at rest and told to stay, without a fault, does not move (most
                 # links, most ticks): _move would return at once
                 if faults or d.speed != 0.0 or not (d.tripped or d.reference == 0):
+                    x, v = d.position, d.speed
                     self._move(k, d, dt)
-        self.bus = self._bus_value(selected)
-        self._last_outputs = tuple(map(get, _OUTPUT_LOCS)) if dt > 0 else None
+                    moved = moved or d.position != x or d.speed != v
+        if moved:
+            self.state_changes += 1
+        bus = self.bus = self._bus_value(selected)
+        self._last_outputs = outputs if dt > 0 else None
         self._faults_seen = self.fault_changes
-        return self._inputs()
+        if self.console_changes != self._console_seen:     # the console's part again where a contact changed
+            self._console_seen = self.console_changes
+            self._console_values = tuple(map(self.console_bits.__getitem__, _CONSOLE_NAMES))
+        return self._console_values + _LOW_BITS[bus & 0xFF] + _HIGH_BITS[(bus >> 8) & 0x7F]
 
     def idle(self, outputs: tuple[int, ...], dt: float) -> bool:
         """The plant contract's optional shortcut (plclab.runtime.plantio): would a step of dt
@@ -178,7 +198,7 @@ class Tur10(PlantModel):
         stands still and is told to (a link with a tripped or stuck drive stays). Then the time
         has moved on by dt and the answer is True."""
         if (self._last_outputs != outputs or dt <= 0 or self.fault_changes != self._faults_seen
-                or self.console_bits != self._console_seen):
+                or self.console_changes != self._console_seen):
             return False
         stuck = self.faults["stuck_drive"]["axis"] if "stuck_drive" in self.faults else None
         for k, d in self.drives.items():
@@ -224,6 +244,7 @@ class Tur10(PlantModel):
         """Reset the overvoltage trip of one drive (or all): it follows its reference again."""
         for k in AXES if axis is None else (_axis(axis),):
             self.drives[k].tripped = False
+        self.state_changes += 1
 
     def snapshot(self) -> dict[str, Any]:
         """Flat state for timelines and plots: posK, codeK, speedK, refK, trippedK, bus..."""
@@ -317,18 +338,6 @@ class Tur10(PlantModel):
         for k in selected:
             value &= self._code(k)
         return value
-
-    def _inputs(self) -> dict[str, int]:
-        """Every input: the console contacts, then the bus bits (bit n of the code on BUS_BITS[n]).
-        The console's part is made again only when a contact changed."""
-        console = self.console_bits
-        if console != self._console_seen:
-            self._console_seen = dict(console)
-            self._console_inputs = dict(zip(_CONSOLE_LOCS, map(console.__getitem__, _CONSOLE_NAMES)))
-        inputs = self._console_inputs.copy()
-        bus = self.bus
-        inputs.update(zip(BUS_BITS, _LOW_BITS[bus & 0xFF] + _HIGH_BITS[(bus >> 8) & 0x7F]))
-        return inputs
 
 
 def _axis(axis: Any) -> int:

@@ -34,6 +34,7 @@ from typing import Any, Callable, Iterator, Optional, Sequence
 from plclab.iec import types as T
 from plclab.runtime.cgen import FAULT_KINDS, CProgram, Layout, Unsupported, emit_c
 from plclab.runtime.faults import PlcFault
+from plclab.runtime.gencode import define
 
 ENV = "PLCLAB_NATIVE"
 CFLAGS = ("-O1", "-shared", "-fPIC", "-fwrapv", "-ffp-contract=off", "-fno-fast-math", "-std=gnu11")
@@ -346,7 +347,7 @@ class NativeProgram:
             lines.append(f"    v = unpack(obuf, {len(outs)})")
             for j, (a, i) in enumerate(outs):
                 lines.append(f"    a_{a}[{i}] = v[{j}]")
-        exec(compile("\n".join(lines) + "\n", "<plc-native-io>", "exec"), ns)
+        define("\n".join(lines) + "\n", "<plc-native-io>", ns)
         plc._native_obuf = obuf
         return ns["_copy_in"], ns["_copy_out"]
 
@@ -618,7 +619,7 @@ def _make_class(np: "NativeProgram", layout: Layout, pytype: type, pyobj: Any) -
     if not is_struct:
         src += "    def __call__(self):\n        raise TypeError('a native block is called by the C code')\n"
     ns: dict[str, Any] = {"StructMirror": StructMirror, "_assign": _assign, "_ref": _ref}
-    exec(compile(src, f"<plc-native-{layout.cname}>", "exec"), ns)
+    define(src, f"<plc-native-{layout.cname}>", ns)
     cls = ns["Mirror"]
     cls.__name__ = cls.__qualname__ = getattr(pytype, "__name__", layout.cname)
     cls._np = np

@@ -20,6 +20,7 @@ from __future__ import annotations
 
 from typing import Any, Callable, Optional, Protocol
 
+from plclab.runtime.gencode import define
 from plclab.runtime.image import ProcessImage, image_slot
 
 
@@ -52,10 +53,32 @@ class PlantBinding:
         self._read_written: Optional[Callable[[], tuple[int, ...]]] = None
         self._stepped: Optional[tuple[int, ...]] = None    # the outputs of the last full step
         self.idle = False            # this scan's step changed nothing but the plant's time
+        # the plant's step on values in order (the contract's optional form): no dicts
+        self.step_values: Optional[Callable[[tuple[int, ...], float], tuple[int, ...]]] = \
+            getattr(plant, "step_values", None)
+        self._values_writer: Optional[tuple[Callable[[tuple[int, ...]], None], Callable[[], tuple[int, ...]]]] = None
 
     def step(self, dt: float) -> None:
-        if not self.step_idle(dt):
+        if self.step_idle(dt):
+            return
+        step_values = self.step_values
+        if step_values is None:
             self.write_inputs(self.plant.step(self.read_outputs(), dt))
+            return
+        self.write_values(step_values(self._output_values(), dt))
+
+    def output_values(self) -> tuple[int, ...]:
+        """The plant's outputs as the PLC's last scan left them, the values in `outputs` order."""
+        return self._output_values()
+
+    def write_values(self, values: tuple[int, ...]) -> None:
+        """A `step_values` result (the values of the plant's `inputs`, in order, raw) into the
+        image, one generated assignment per cell."""
+        writer = self._values_writer
+        if writer is None:
+            writer = self._values_writer = self._compile_values_writer()
+        writer[0](values)
+        self._written, self._read_written = values, writer[1]
 
     def step_idle(self, dt: float) -> bool:
         """The step of dt where the plant is idle under unchanged outputs and its input cells
@@ -99,7 +122,7 @@ class PlantBinding:
             ns[f"a{n}"] = area                    # the image's area lists are never replaced
             items.append(f"a{n}[{i}]" if as_tuple else f"{loc!r}: a{n}[{i}]")
         body = "(" + "".join(f"{x}, " for x in items) + ")" if as_tuple else "{" + ", ".join(items) + "}"
-        exec(compile(f"def read_outputs():\n    return {body}\n", "<plant-outputs>", "exec"), ns)
+        define(f"def read_outputs():\n    return {body}\n", "<plant-outputs>", ns)
         return ns["read_outputs"]
 
     def _cell(self, loc: str) -> tuple[list[int], int, int]:
@@ -128,6 +151,21 @@ class PlantBinding:
             self._writer, self._read_written = compiled if compiled is not None else (None, None)
             self._writer_size = len(inputs)
 
+    def _compile_values_writer(self) -> tuple[Callable[[tuple[int, ...]], None], Callable[[], tuple[int, ...]]]:
+        """write(values): the plant's `inputs` cells set in order (a later name of the same cell
+        wins, as in a dict's loop); read(): those cells' values, in the same order."""
+        ns: dict[str, Any] = {}
+        cells = []
+        for n, loc in enumerate(self.plant.inputs):        # type: ignore[attr-defined]
+            area, i, _mask = self._cell(loc)
+            ns[f"a{n}"] = area
+            cells.append(f"a{n}[{i}]")
+        targets = "".join(f"{c}, " for c in cells)          # "a0[3], a0[4], ": a tuple either side
+        src = (f"def write(v):\n    {targets}= v\n" if cells else "def write(v):\n    pass\n") + \
+            f"def read():\n    return ({targets})\n"
+        define(src, "<plant-input-values>", ns)
+        return ns["write"], ns["read"]
+
     def _compile_writer(self, names: list[str]) -> Optional[tuple[Callable[[dict[str, Any]], tuple[int, ...]],
                                                                   Callable[[], tuple[int, ...]]]]:
         """A function writing exactly `names` of an inputs dict into their image cells and
@@ -146,5 +184,5 @@ class PlantBinding:
         lines.append("    return (" + "".join(f"v{n}, " for n in range(len(names))) + ")")
         lines.append("def read():")
         lines.append("    return (" + "".join(f"a{n}[{self._cell(loc)[1]}], " for n, loc in enumerate(names)) + ")")
-        exec(compile("\n".join(lines) + "\n", "<plant-inputs>", "exec"), ns)
+        define("\n".join(lines) + "\n", "<plant-inputs>", ns)
         return ns["write"], ns["read"]

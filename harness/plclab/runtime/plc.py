@@ -25,6 +25,7 @@ from plclab.iec.address import SIZE_BITS, Address
 from plclab.runtime import native as _native
 from plclab.runtime.compiler import CompiledProgram, compile_unit, located_attr
 from plclab.runtime.faults import FaultRecord, PlcFault
+from plclab.runtime.gencode import define
 from plclab.runtime.image import AREAS, ProcessImage, image_slot
 from plclab.runtime.stdfb import ScanClock
 
@@ -282,7 +283,7 @@ class PLC:
             lines_out.append(f"    {cell(b)} = {to_raw(b, access(b, j), j)}")
         lines_in.append("        pass")
         lines_out.append("    pass")
-        exec(compile("\n".join(lines_in + lines_out) + "\n", "<plc-io>", "exec"), ns)
+        define("\n".join(lines_in + lines_out) + "\n", "<plc-io>", ns)
         self._copy_in, self._copy_out = ns["_copy_in"], ns["_copy_out"]
         self._quiet_run = None
         if self.native is not None:

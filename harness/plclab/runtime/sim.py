@@ -18,6 +18,7 @@ from plclab.iec import types as T
 from plclab.iec.address import parse_address
 from plclab.runtime.image import image_slot
 from plclab.runtime.plantio import Plant, PlantBinding
+from plclab.runtime.gencode import define
 from plclab.runtime.plc import PLC, image_bits
 from plclab.trace import Recorder, Trace
 
@@ -89,7 +90,7 @@ class Simulation:
             ns[f"c{i}"] = container
             parts.append(f"c{i}.{key}" if how == "attr" else f"c{i}[{key}] != 0" if how == "bit" else f"c{i}[{key}]")
         values = f"({', '.join(parts)},)" if parts else "()"
-        exec(compile(f"def _sample():\n    return {values}\n", "<sim-sample>", "exec"), ns)
+        define(f"def _sample():\n    return {values}\n", "<sim-sample>", ns)
         return ns["_sample"]
 
     def _type_of(self, name: str, value: Any) -> T.Type:
@@ -287,11 +288,18 @@ class Simulation:
                     n_plant += 1
                     continue
                 t0 = clock()
-                outputs = binding.read_outputs()
-                t1 = clock()
-                inputs = binding.plant.step(outputs, step_dt)
-                t2 = clock()
-                binding.write_inputs(inputs)
+                if binding.step_values is not None:     # the plant's step on values in order
+                    outputs = binding.output_values()
+                    t1 = clock()
+                    values = binding.step_values(outputs, step_dt)
+                    t2 = clock()
+                    binding.write_values(values)
+                else:
+                    outputs = binding.read_outputs()
+                    t1 = clock()
+                    inputs = binding.plant.step(outputs, step_dt)
+                    t2 = clock()
+                    binding.write_inputs(inputs)
                 t3 = clock()
                 plant_s += t2 - t1
                 exchange_s += (t1 - t0) + (t3 - t2)

@@ -25,6 +25,8 @@ from dataclasses import dataclass, field
 from functools import lru_cache
 from typing import Any, Callable, Optional, Sequence
 
+from plclab.runtime.gencode import define
+
 _PRIMITIVE = (bool, int, float, str, bytes, type(None))
 WILD = "*"
 STABLE, PER_CALL = 1, 2       # how long a storage key holds (Tracer._resolve)
@@ -593,7 +595,7 @@ class _Generated:
 
     def define(self, src: str) -> dict[str, Any]:
         ns: dict[str, Any] = {"_o": self.objects}
-        exec(compile(src, "<generated reader>", "exec"), ns)
+        define(src, "<generated reader>", ns)
         return ns
 
 

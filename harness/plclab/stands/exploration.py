@@ -258,6 +258,13 @@ def _tur10_observe(plant: Any, previous: Any) -> dict[str, Any]:
     return out
 
 
+def _tur10_unchanged(plant: Any) -> tuple[int, int]:
+    """_tur10_observe reads the links, the reset lamp and SA7: while no step changed a link or
+    the lamp and no console contact changed, it gives what it gave (the sensor bus, which the
+    program scans every few scans, is not observed)."""
+    return plant.state_changes, plant.console_changes
+
+
 _LEVEL_WORDS = {2: "moving forward fast", 1: "moving forward slowly", -1: "moving backward slowly",
                 -2: "moving backward fast"}
 
@@ -301,7 +308,7 @@ def _tur10_compared(task: str) -> tuple[Observed, ...]:
 TUR10 = Exploration(
     generate=lambda rng, task, seconds: generate(TUR10_CONSOLE, rng, task, seconds),
     aim=lambda rng, task, script, times: aim(TUR10_CONSOLE, rng, task, script, times),
-    observe=_tur10_observe, compared=_tur10_compared,
+    observe=_tur10_observe, compared=_tur10_compared, unchanged=_tur10_unchanged,
     references={"task1": "task1", "task2": "task2", "task3": "task3"},
     buttons=("SB1",) + tuple(f"SA{k}_{d}" for k in (1, 2, 3, 4, 5) for d in ("FWD", "BWD")),
     free_after=lambda task: _enable_back("I15", "SA7") if task == "task3" and TUR10_RULES.enable_latched else (),

@@ -170,6 +170,10 @@ class Exploration:
     # fault): scripts that take it to states not seen before are kept and mutated (coverage-guided
     # exploration, plclab.grader.explore); paths a model answer lacks are left out
     state_paths: tuple[str, ...] = ()
+    # plant -> a value that stays the same while what `observe` gives does (given its last
+    # values): where it is as at the last look, the probe need not look again; None: look at
+    # every scan the plant did not stand idle
+    unchanged: Optional[Callable[[Any], Any]] = None
     episode_s: float = 45.0           # plant seconds of one random script
     episodes: int = 40                # default budget: scripts per task and program
     tick_s: float = 0.01
