@@ -56,3 +56,31 @@ def _shared_explorations(tmp_path_factory):
     os.environ["PLCLAB_TESTS_SHARED_DIR"] = str(base / "shared-explorations")
     yield
     os.environ.pop("PLCLAB_TESTS_SHARED_DIR", None)
+
+
+# The heaviest test files first. scripts/test runs pytest-xdist with --dist loadfile: whole
+# files go, in the order collected, to whichever worker is free. A file of minutes collected
+# late runs on alone at the end while the other cores idle; longest first keeps every core
+# busy to the end (the figures: a run's `--durations=0`, summed per file). The order of the
+# tests inside a file, and of the other files, stays as collected.
+HEAVY_FIRST = (
+    "tests/grader/test_explore.py",
+    "tests/grader/test_localize.py",
+    "tests/grader/test_classroom.py",
+    "tests/lab/test_page_console.py",
+    "tests/lab/test_page.py",
+    "tests/grader/test_explore_engine.py",
+    "tests/runtime/test_native.py",
+    "tests/lab/test_page_program.py",
+    "tests/cnc/test_cnc_fine_cycle.py",
+    "tests/grader/test_rules.py",
+    "tests/stands/test_student_programs.py",
+    "tests/lab/test_page_stand.py",
+    "tests/grader/test_class_untrusted.py",
+    "tests/grader/test_class_cluster.py",
+)
+
+
+def pytest_collection_modifyitems(config, items):
+    rank = {path: n for n, path in enumerate(HEAVY_FIRST)}
+    items.sort(key=lambda item: rank.get(item.nodeid.split("::", 1)[0], len(HEAVY_FIRST)))

@@ -381,6 +381,25 @@ def test_bad_parameters_are_plant_errors():
             create(**params)
 
 
+def act_on_both(rng, plants: tuple[Tur10, Tur10], action: str, faults: list[tuple[str, dict]]) -> None:
+    """One random operator or maintenance action, the same on both plants: a console contact
+    set ('switch'), a fault of `faults` injected ('inject'), every fault cleared ('clear') or
+    the drives' trips reset ('reset_trip')."""
+    if action == "switch":
+        name, bit = rng.choice(sorted(plants[0].console_bits)), rng.randint(0, 1)
+    elif action == "inject":
+        fault, params = rng.choice(faults)
+    for p in plants:
+        if action == "switch":
+            p.set_switch(name, bit)
+        elif action == "inject":
+            p.inject(fault, **dict(params))
+        elif action == "clear":
+            p.clear()
+        else:
+            p.reset_trip()
+
+
 @pytest.mark.parametrize("seed", range(8))
 def test_an_idle_step_is_what_a_full_step_gives_and_a_fault_that_stays_keeps_it_idle(seed):
     """The plant contract's `idle` (the closed loop's shortcut): where it says a step under the
@@ -404,16 +423,11 @@ def test_an_idle_step_is_what_a_full_step_gives_and_a_fault_that_stays_keeps_it_
             refs = {k: rng.choice((0, 0, 0, 200, -300)) for k in range(1, 6)}
             out = outputs(qb0=rng.choice((IDLE, 15, 23, 27)), refs=refs, lamp=rng.randint(0, 1))
         elif r < 0.4:
-            name, value = rng.choice(sorted(fast.console_bits)), rng.randint(0, 1)
-            for p in (fast, full):
-                p.set_switch(name, value)
+            act_on_both(rng, (fast, full), "switch", faults)
         elif r < 0.5:
-            fault, params = rng.choice(faults)
-            for p in (fast, full):
-                p.inject(fault, **dict(params))
+            act_on_both(rng, (fast, full), "inject", faults)
         elif r < 0.55:
-            for p in (fast, full):
-                p.clear()
+            act_on_both(rng, (fast, full), "clear", faults)
         values = tuple(out.get(loc, 0) for loc in fast.outputs)
         for _ in range(rng.choice((1, 5, 40, 120))):
             if fast.idle(values, 0.01):
@@ -450,19 +464,13 @@ def test_a_step_on_values_in_order_is_the_step_on_names_and_counts_each_change_o
         elif r < 0.4:                                         # links told to stop, the bus scanned
             out = outputs(qb0=rng.choice((15, 23, 27, 29, 30)))
         elif r < 0.45:
-            name, bit = rng.choice(sorted(names.console_bits)), rng.randint(0, 1)
-            for p in (names, values):
-                p.set_switch(name, bit)
+            act_on_both(rng, (names, values), "switch", faults)
         elif r < 0.5:
-            fault, params = rng.choice(faults)
-            for p in (names, values):
-                p.inject(fault, **dict(params))
+            act_on_both(rng, (names, values), "inject", faults)
         elif r < 0.53:
-            for p in (names, values):
-                p.clear()
+            act_on_both(rng, (names, values), "clear", faults)
         elif r < 0.56:
-            for p in (names, values):
-                p.reset_trip()
+            act_on_both(rng, (names, values), "reset_trip", faults)
         dt = rng.choice((0.01, 0.01, 0.01, 0.0, 0.05))
         links = [(d.reference, d.tripped, d.position, d.speed) for d in values.drives.values()]
         seen = (values.state_changes, values.console_changes, values.reset_indicator)
