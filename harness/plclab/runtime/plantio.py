@@ -44,7 +44,8 @@ class PlantBinding:
         self._outs = [(loc, areas[a], i) for loc in plant.outputs for a, i in [image_slot(loc, percent=False)]]
         self._cells: dict[str, tuple[list[int], int, int]] = {}   # input name -> (area, index, mask)
         self.read_outputs: Callable[[], dict[str, int]] = self._compile_reader()
-        self._output_values: Callable[[], tuple[int, ...]] = self._compile_reader(as_tuple=True)
+        # the outputs' values in the plant's `outputs` order (what `idle` and `step_values` take)
+        self.output_values: Callable[[], tuple[int, ...]] = self._compile_reader(as_tuple=True)
         self._writer: Optional[Callable[[dict[str, Any]], tuple[int, ...]]] = None
         self._writer_size = -1       # how many names the generated writer writes
         self._compiles = 0
@@ -65,11 +66,8 @@ class PlantBinding:
         if step_values is None:
             self.write_inputs(self.plant.step(self.read_outputs(), dt))
             return
-        self.write_values(step_values(self._output_values(), dt))
-
-    def output_values(self) -> tuple[int, ...]:
-        """The plant's outputs as the PLC's last scan left them, the values in `outputs` order."""
-        return self._output_values()
+        # step_idle has just read this scan's outputs into _stepped (where the plant has idle)
+        self.write_values(step_values(self._stepped if self._idle is not None else self.output_values(), dt))
 
     def write_values(self, values: tuple[int, ...]) -> None:
         """A `step_values` result (the values of the plant's `inputs`, in order, raw) into the
@@ -88,7 +86,7 @@ class PlantBinding:
         idle, written = self._idle, self._written
         if idle is None:
             return False
-        outputs = self._output_values()
+        outputs = self.output_values()
         if outputs != self._stepped:
             self._stepped = outputs
             self.idle = False
