@@ -24,8 +24,8 @@ sys.path.insert(0, str(HERE))
 import make_explore_fixtures as mef  # noqa: E402
 import make_fixtures as mf  # noqa: E402
 from explored import explored  # noqa: E402
+from graded import graded_fixture  # noqa: E402
 
-from plclab.grader import engine  # noqa: E402
 from plclab.stands import bundle, get_stand  # noqa: E402
 
 ROBOTS = ("mp9c", "tur10")
@@ -88,7 +88,7 @@ def measure(case: Case) -> tuple[bool, bool, str]:
     candidates) and the exploration's row, whose candidates are its finding's. The exploration
     is the one the other test files make of the fixture (explored.py: once per test session)."""
     text = case.path.read_text(encoding="utf-8")
-    report = engine.grade(case.stand, case.task, [str(case.path)], explore=0, lines=True)
+    report = graded_fixture(case.stand, case.task, case.path)
     said_rows = [(r.id, r.lines) for r in report.failed()]
     if case.explore:
         finding = explored(case.stand, case.task, case.path).finding

@@ -16,6 +16,7 @@ from plclab.errors import PlcLabError
 from plclab.grader import GradeReport, Row, grade, grade_sources, requirement_table, tasks
 from plclab.stands import bundle, sources
 from plclab.stands.mp9c import STAND
+from graded import graded_fixture
 from grader_helpers import (FIXTURES_DIR, TASKS, assert_fails_exactly, assert_fails_with,
                             assert_traces_written, fixtures, fixtures_per_task)
 
@@ -91,7 +92,7 @@ def test_at_least_three_wrong_solutions_per_task():
 
 @pytest.mark.parametrize("name,task,rid", fixtures("mp9c"))
 def test_wrong_solution_fails_with_the_row_that_says_why(name, task, rid):
-    assert_fails_with(grade("mp9c", task, [str(FIXTURES / name)]), rid)
+    assert_fails_with(graded_fixture("mp9c", task, FIXTURES / name), rid)
 
 
 # --------------------------------------------------------------------------- errors and faults

@@ -16,6 +16,7 @@ from plclab.grader import GradeReport, grade, grade_sources, requirement_table, 
 from plclab.grader.tur10 import POS, make_session
 from plclab.stands import bundle, sources
 from plclab.stands.tur10 import STAND
+from graded import graded_fixture
 from grader_helpers import (FIXTURES_DIR, TASKS, assert_fails_exactly, assert_fails_with,
                             assert_traces_written, fixtures, fixtures_per_task)
 
@@ -101,7 +102,7 @@ def test_at_least_three_wrong_solutions_per_task():
 
 @pytest.mark.parametrize("name,task,rid", fixtures("tur10"))
 def test_wrong_solution_fails_with_the_row_that_says_why(name, task, rid):
-    assert_fails_with(grade("tur10", task, [str(FIXTURES / name)]), rid)
+    assert_fails_with(graded_fixture("tur10", task, FIXTURES / name), rid)
 
 
 # --------------------------------------------------------------------------- faults, tables

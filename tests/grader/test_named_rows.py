@@ -7,7 +7,7 @@ from __future__ import annotations
 
 import pytest
 
-from plclab.grader import grade
+from graded import graded_fixture
 from grader_helpers import FIXTURES_DIR, assert_fault_stop_named, assert_row_names_mistake, fixtures
 
 NAMED = {   # (stand, fixture): (its row, words the row must say, the only rows that may fail)
@@ -45,7 +45,7 @@ NAMED = {   # (stand, fixture): (its row, words the row must say, the only rows 
 @pytest.mark.parametrize("stand,name", sorted(NAMED))
 def test_wrong_solution_row_names_its_mistake(stand, name):
     task = next(t for n, t, _ in fixtures(stand) if n == f"{name}.st")
-    report = grade(stand, task, [str(FIXTURES_DIR / stand / f"{name}.st")])
+    report = graded_fixture(stand, task, FIXTURES_DIR / stand / f"{name}.st")
     assert_row_names_mistake(report, *NAMED[stand, name])
 
 
@@ -53,5 +53,5 @@ def test_wrong_solution_row_names_its_mistake(stand, name):
 def test_a_fault_stop_is_not_taken_for_a_task_mistake(stand, watchdog):
     """The whole-run watchdog stops playback with HL1 blinking: the task's rows say so and
     point at the watchdog requirement instead of blaming the pause input."""
-    report = grade(stand, "task2", [str(FIXTURES_DIR / stand / "task2_watchdog_whole_run.st")])
+    report = graded_fixture(stand, "task2", FIXTURES_DIR / stand / "task2_watchdog_whole_run.st")
     assert_fault_stop_named(report, "T2", watchdog)

@@ -25,6 +25,7 @@ from __future__ import annotations
 import ast
 import bisect
 import difflib
+import functools
 import itertools
 import math
 import operator
@@ -220,9 +221,11 @@ def backward_slice(tracer: Tracer, criterion: Sequence[tuple], mapped: Callable[
     return Slice(steps, before)
 
 
+@functools.lru_cache(maxsize=64)
 def declaration_lines(source: str) -> dict[tuple[str, str], int]:
     """(generated class name, attribute) -> the generated line that gives it its initial value
-    (`__init__`, or `_init_globals` for the globals object's class '_Globals')."""
+    (`__init__`, or `_init_globals` for the globals object's class '_Globals'). Once per
+    source text, read only."""
     out: dict[tuple[str, str], int] = {}
     tree = ast.parse(source)
     for node in tree.body:

@@ -116,9 +116,12 @@ def _target(t: ast.AST, into: _Reads) -> None:
         into.visit(i)
 
 
+@lru_cache(maxsize=64)
 def line_shapes(source: str) -> dict[int, LineShape]:
     """Every statement line of the generated `source`: what it reads and writes, and the
-    test line it is control dependent on (None: the function's entry, i.e. its call)."""
+    test line it is control dependent on (None: the function's entry, i.e. its call).
+    Worked out once per source text (a parse of the whole generated program: a grading
+    traces the same student's program for each failing row); the answer is read only."""
     shapes: dict[int, LineShape] = {}
 
     def add(line: int, r: _Reads, header: Optional[int], is_return: bool = False) -> None:
