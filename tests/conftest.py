@@ -65,19 +65,22 @@ def _shared_explorations(tmp_path_factory):
 # tests inside a file, and of the other files, stays as collected.
 HEAVY_FIRST = (
     "tests/grader/test_explore.py",
-    "tests/grader/test_localize.py",
     "tests/grader/test_classroom.py",
-    "tests/lab/test_page_console.py",
-    "tests/lab/test_page.py",
-    "tests/grader/test_explore_engine.py",
+    "tests/grader/test_grader_tur10.py",
     "tests/runtime/test_native.py",
-    "tests/lab/test_page_program.py",
+    "tests/grader/test_grader_mp9c.py",
+    "tests/lab/test_page_console.py",
+    "tests/grader/test_explore_engine.py",
+    "tests/grader/test_localize.py",
     "tests/cnc/test_cnc_fine_cycle.py",
+    "tests/grader/test_class_untrusted.py",
+    "tests/lab/test_page.py",
     "tests/grader/test_rules.py",
+    "tests/lab/test_page_program.py",
+    "tests/runtime/test_semantics_fastpaths.py",
+    "tests/grader/test_class_cluster.py",
     "tests/stands/test_student_programs.py",
     "tests/lab/test_page_stand.py",
-    "tests/grader/test_class_untrusted.py",
-    "tests/grader/test_class_cluster.py",
 )
 
 
