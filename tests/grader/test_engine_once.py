@@ -93,3 +93,49 @@ def test_plclab_grade_with_an_out_that_is_a_file_is_one_line_and_leaves_it(tmp_p
     err = capsys.readouterr().err.strip()
     assert "is a file, not a directory" in err and len(err.splitlines()) == 1
     assert taken.read_text() == "keep me\n"
+
+
+def _native_library(text: str):
+    """The native library of program `text` if it has been built (in this process, or in the
+    cache folder $XDG_CACHE_HOME names), once every background build is over; else None."""
+    import threading
+
+    from plclab.frontend import check_sources
+    from plclab.runtime import native
+    from plclab.runtime.cgen import emit_c
+    from plclab.runtime.compiler import compile_unit
+    for t in list(threading.enumerate()):
+        if t.name == "plclab-native-build":
+            t.join(120)
+    return native.build(emit_c(compile_unit(check_sources([("robot.st", text)])).checked), wait=False, later=False)
+
+
+def _unique_task1() -> str:
+    """The MP-9C Task 1 bundle with a variable of its own: C that no test has built."""
+    import uuid
+
+    from plclab.stands import bundle
+    text = bundle(STAND, "task1")
+    at = text.index("\n", text.index("\nPROGRAM ") + 1)
+    return text[:at] + f"\nVAR\n    unique_{uuid.uuid4().hex} : INT;\nEND_VAR" + text[at:]
+
+
+def test_a_grading_that_does_not_explore_builds_no_native_library(tmp_path, monkeypatch):
+    """Scenarios alone (no exploration) run on the Python path and build nothing: a few
+    seconds of plant time cost less than compiling the program's C. PLCLAB_NATIVE=1 asks for
+    native in such a grading too; a program graded with an exploration starts its build in
+    the scenarios (the search plays it many times)."""
+    from plclab.runtime import native
+    monkeypatch.delenv(native.ENV, raising=False)
+    monkeypatch.setenv("XDG_CACHE_HOME", str(tmp_path))
+    alone = _unique_task1()
+    report = grade_sources("mp9c", "task1", [("robot.st", alone)])
+    assert report.passed and not report.errors
+    assert _native_library(alone) is None
+    monkeypatch.setenv(native.ENV, "1")
+    assert grade_sources("mp9c", "task1", [("robot.st", alone)]).passed
+    assert _native_library(alone) is not None
+    monkeypatch.delenv(native.ENV)
+    explored = _unique_task1()
+    assert grade_sources("mp9c", "task1", [("robot.st", explored)], explore=1).passed
+    assert _native_library(explored) is not None
