@@ -381,10 +381,15 @@ def test_bad_parameters_are_plant_errors():
             create(**params)
 
 
-def act_on_both(rng, plants: tuple[Tur10, Tur10], action: str, faults: list[tuple[str, dict]]) -> None:
-    """One random operator or maintenance action, the same on both plants: a console contact
-    set ('switch'), a fault of `faults` injected ('inject'), every fault cleared ('clear') or
-    the drives' trips reset ('reset_trip')."""
+def act_on_both(rng, r: float, plants: tuple[Tur10, Tur10], faults: list[tuple[str, dict]],
+                bands: tuple[tuple[float, str], ...]) -> None:
+    """One random operator or maintenance action, the same on both plants: the action of the
+    first of `bands` ((upper bound, action), rising) that `r` falls below, if any: a console
+    contact set ('switch'), a fault of `faults` injected ('inject'), every fault cleared
+    ('clear') or the drives' trips reset ('reset_trip')."""
+    action = next((a for bound, a in bands if r < bound), None)
+    if action is None:
+        return
     if action == "switch":
         name, bit = rng.choice(sorted(plants[0].console_bits)), rng.randint(0, 1)
     elif action == "inject":
@@ -422,12 +427,8 @@ def test_an_idle_step_is_what_a_full_step_gives_and_a_fault_that_stays_keeps_it_
         if r < 0.3:
             refs = {k: rng.choice((0, 0, 0, 200, -300)) for k in range(1, 6)}
             out = outputs(qb0=rng.choice((IDLE, 15, 23, 27)), refs=refs, lamp=rng.randint(0, 1))
-        elif r < 0.4:
-            act_on_both(rng, (fast, full), "switch", faults)
-        elif r < 0.5:
-            act_on_both(rng, (fast, full), "inject", faults)
-        elif r < 0.55:
-            act_on_both(rng, (fast, full), "clear", faults)
+        else:
+            act_on_both(rng, r, (fast, full), faults, ((0.4, "switch"), (0.5, "inject"), (0.55, "clear")))
         values = tuple(out.get(loc, 0) for loc in fast.outputs)
         for _ in range(rng.choice((1, 5, 40, 120))):
             if fast.idle(values, 0.01):
@@ -463,14 +464,9 @@ def test_a_step_on_values_in_order_is_the_step_on_names_and_counts_each_change_o
             out = {}                                          # the PLC off: no output given
         elif r < 0.4:                                         # links told to stop, the bus scanned
             out = outputs(qb0=rng.choice((15, 23, 27, 29, 30)))
-        elif r < 0.45:
-            act_on_both(rng, (names, values), "switch", faults)
-        elif r < 0.5:
-            act_on_both(rng, (names, values), "inject", faults)
-        elif r < 0.53:
-            act_on_both(rng, (names, values), "clear", faults)
-        elif r < 0.56:
-            act_on_both(rng, (names, values), "reset_trip", faults)
+        else:
+            act_on_both(rng, r, (names, values), faults,
+                        ((0.45, "switch"), (0.5, "inject"), (0.53, "clear"), (0.56, "reset_trip")))
         dt = rng.choice((0.01, 0.01, 0.01, 0.0, 0.05))
         links = [(d.reference, d.tripped, d.position, d.speed) for d in values.drives.values()]
         seen = (values.state_changes, values.console_changes, values.reset_indicator)

@@ -58,16 +58,18 @@ class PlantBinding:
         self.step_values: Optional[Callable[[tuple[int, ...], float], tuple[int, ...]]] = \
             getattr(plant, "step_values", None)
         self._values_writer: Optional[tuple[Callable[[tuple[int, ...]], None], Callable[[], tuple[int, ...]]]] = None
+        # a full step's three parts: read the outputs, step the plant, write what it returns
+        # (on values in order where the plant offers step_values, else on dicts by name)
+        self.exchange: tuple[Callable[[], Any], Callable[[Any, float], Any], Callable[[Any], None]] = \
+            (self.output_values, self.step_values, self.write_values) if self.step_values is not None else \
+            (self.read_outputs, plant.step, self.write_inputs)
 
     def step(self, dt: float) -> None:
         if self.step_idle(dt):
             return
-        step_values = self.step_values
-        if step_values is None:
-            self.write_inputs(self.plant.step(self.read_outputs(), dt))
-            return
-        # step_idle has just read this scan's outputs into _stepped (where the plant has idle)
-        self.write_values(step_values(self._stepped if self._idle is not None else self.output_values(), dt))
+        read, step, write = self.exchange
+        # step_idle has just read this scan's output values into _stepped (where the plant has idle)
+        write(step(self._stepped if self._idle is not None and self.step_values is not None else read(), dt))
 
     def write_values(self, values: tuple[int, ...]) -> None:
         """A `step_values` result (the values of the plant's `inputs`, in order, raw) into the

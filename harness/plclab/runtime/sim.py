@@ -288,18 +288,12 @@ class Simulation:
                     n_plant += 1
                     continue
                 t0 = clock()
-                if binding.step_values is not None:     # the plant's step on values in order
-                    outputs = binding.output_values()
-                    t1 = clock()
-                    values = binding.step_values(outputs, step_dt)
-                    t2 = clock()
-                    binding.write_values(values)
-                else:
-                    outputs = binding.read_outputs()
-                    t1 = clock()
-                    inputs = binding.plant.step(outputs, step_dt)
-                    t2 = clock()
-                    binding.write_inputs(inputs)
+                read, step, write = binding.exchange
+                outputs = read()
+                t1 = clock()
+                inputs = step(outputs, step_dt)
+                t2 = clock()
+                write(inputs)
                 t3 = clock()
                 plant_s += t2 - t1
                 exchange_s += (t1 - t0) + (t3 - t2)
