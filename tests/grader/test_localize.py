@@ -269,6 +269,38 @@ def test_the_tracer_leaves_the_garbage_collector_as_it_found_it():
     finally:
         gc.enable()
 
+def test_a_trace_stopped_in_kept_out_of_gc_is_not_walked_and_the_block_gives_everything_back():
+    """A row's localization keeps its traces out of the collector's walks (issue 30: the
+    first collection after a replay walked every event): a tracer stopped in the block leaves
+    the collector on with the trace frozen out of it, and the block's end gives back what is
+    alive, so cyclic garbage made while tracing is still collected."""
+    import gc
+    import weakref
+
+    from plclab.runtime.tracing import kept_out_of_gc
+
+    class Cycle:
+        me: object = None
+
+    sim = _sim(CHAIN)
+    with kept_out_of_gc():
+        tr = Tracer(sim.plc.compiled, lambda: sim.plc.now_ns / 1e9)
+        tr.start()
+        sim.step(3)
+        garbage = Cycle()
+        garbage.me = garbage
+        gone = weakref.ref(garbage)
+        del garbage
+        tr.stop()
+        assert gc.isenabled() and gc.get_freeze_count() > 0
+        event = next(iter(tr.events.values()))
+        assert not any(o is event for o in gc.get_objects()), "the trace is walked by the collector"
+        del tr, event
+    assert gc.get_freeze_count() == 0 and gc.isenabled()
+    gc.collect()
+    assert gone() is None, "cyclic garbage made while tracing was never collected"
+
+
 START = """FUNCTION_BLOCK FB_Pulse
 VAR_INPUT
     Go : BOOL;
@@ -397,3 +429,48 @@ def test_the_changed_line_is_named_by_most_failing_reports_of_the_one_mistake_fi
     with capsys.disabled():
         rate = localize_rates.main([])
     assert rate >= 0.8
+
+
+def test_the_model_answers_state_is_sampled_at_each_scan_through_a_power_cycle_and_not_past_the_failure():
+    """A row's lines compare the student's state with the model answer's, sampled as each scan
+    of the model answer's replay begins (its inputs read). The TUR-10 `restart` scenario power
+    cycles the PLC (another PLC object after it): the model answer is sampled once at every
+    scan before the restart and after it, in time order, from the window's start on, and the
+    replay stops at the first scan past the failure. (The line tracer that sampled it before
+    issue 30 took the restarted program's start-up for a scan: one sample out of time order,
+    which left the state log's changes unsorted.)"""
+    from plclab.grader.explore import model_answer
+    from plclab.grader.localize import _sampled
+    from plclab.grader.registry import Checks, requirement_set
+    from plclab.runtime.retain import MemoryRetainStore
+    from plclab.scenario import ScenarioFailure, compiled_once
+
+    req = requirement_set("tur10", "task2")
+    scenario = next(s for s in req.scenarios if s.name == "restart")
+    model, why = model_answer("tur10", "task2", None)
+    assert model is not None, why
+    with python_only(), compiled_once(model.checked, share=model.cache):
+        session = req.make_session(list(model.sources), MemoryRetainStore(), model.checked)
+        seen: list[tuple[float, int, int]] = []         # (time, PLC object, scans it ran before)
+        since, stop_at = 0.5, 6.0
+
+        def replay(sess, begin):
+            begin()
+            try:
+                scenario.run(sess, Checks(req.requirements))
+            except ScenarioFailure:
+                pass
+
+        _sampled(session, lambda: seen.append((session.now, id(session.plc), session.plc.ticks)), since, stop_at,
+                 replay)
+    times = [t for t, _plc, _ticks in seen]
+    plcs = list(dict.fromkeys(p for _t, p, _ticks in seen))
+    assert len(plcs) >= 2, "the PLC of the restart was not sampled"
+    assert times == sorted(set(times)) and since - 1e-9 <= times[0] < since + 0.011
+    assert stop_at - 0.011 < times[-1] <= stop_at + 1e-9          # the scan at the failure, none after it
+    tick = session.plc.tick_ns / 1e9
+    for plc in plcs:                    # every scan of each PLC in the window, none skipped
+        ticks = [k for _t, p, k in seen if p == plc]
+        assert ticks == list(range(ticks[0], ticks[0] + len(ticks))), "a scan was not sampled"
+    off = [(a, b) for (a, _p, _k), (b, _q, _l) in zip(seen, seen[1:]) if b - a > tick + 1e-9]
+    assert len(off) <= 1                # the power-off gap, if the restart turned it off for a while

@@ -74,7 +74,7 @@ class _Stub:
     expl: object = field(default_factory=lambda: stand_spec("mp9c").explore)
     plays: int = 0
 
-    def diverges(self, script: Script):
+    def diverges(self, script: Script, confirm: bool = True):
         self.plays += 1
         names = [(e.name, e.time) for e in script.events]
         press = next((t for n, t in names if n == "SB1"), None)
@@ -93,6 +93,37 @@ def test_a_shrunk_script_is_one_minimal_no_single_step_can_go():
     first = ex.diverges(script)
     small, _div = shrink(ex, script, first, budget=30)          # a budget too small for the rounds alone
     assert [e.name for e in small.events] == ["SB1", "SA1"], small.events
+
+
+@dataclass
+class _Coincidence(_Stub):
+    """As _Stub, but a difference with SA1 less than 1 s after the SB1 press is a one-scan
+    coincidence: its one play shows it, the plays with the actions moved (robust) do not."""
+
+    def diverges(self, script: Script, confirm: bool = True):
+        d = super().diverges(script)
+        if d is None or not confirm:
+            return d
+        self.plays += 2
+        press = next(e.time for e in script.events if e.name == "SB1")
+        mode = next(e.time for e in script.events if e.name == "SA1" and e.time > press)
+        return d if mode - press >= 1.0 else None
+
+
+def test_a_shrunk_script_is_robust_though_a_pass_takes_its_removals_on_one_play():
+    """The shrinker takes a removal on its one play and confirms the pass's result once (issue
+    30); the moves of actions it confirms as it takes them. Whatever it passed through, the
+    script it returns shows the difference with its actions moved: here SA1 stays at least
+    1 s after SB1, and every other step goes."""
+    events = [Event(0.5 + 0.3 * k, "SA5", str(k % 2)) for k in range(9)] + \
+        [Event(3.3, "SB1", "1", 0.2)] + [Event(3.8 + 0.2 * k, "I07", str(k % 2)) for k in range(6)] + \
+        [Event(6.2, "SA1", "1")] + [Event(6.4 + 0.1 * k, "SA6", str(k % 2)) for k in range(4)]
+    script = Script(tuple(sorted(events, key=lambda e: e.time)), 12.0)
+    ex = _Coincidence()
+    small, _div = shrink(ex, script, ex.diverges(script))
+    assert [e.name for e in small.events] == ["SB1", "SA1"], small.events
+    assert ex.diverges(small) is not None, small.events          # robust
+    assert small.events[1].time - small.events[0].time < 2.0, small.events   # and moved closer all the same
 
 
 # --------------------------------------------------------------------------- windows and messages

@@ -662,6 +662,7 @@ class Explorer:
         self.record = record
         self.model_plays = model_plays if model_plays is not None else ModelPlays(_model_salt(task, model))
         self._judged: dict[Script, Optional[Divergence]] = {}     # diverges(), by script
+        self._unconfirmed: dict[Script, Optional[Divergence]] = {}   # the same, robustness not played
 
     def model_side(self, script: Script) -> ModelPlay:
         """The model answer's play of `script`: played once, then reused."""
@@ -727,15 +728,21 @@ class Explorer:
                             round(max(script.duration, max(e.time + e.hold for e in events) + 1.0), 3))
         return script, None, True
 
-    def diverges(self, script: Script) -> Optional[Divergence]:
+    def diverges(self, script: Script, confirm: bool = True) -> Optional[Divergence]:
         """The divergence of `script`, if no action is ambiguous and it does not hang on the scan
-        the actions fall in (robust). Each script is judged once: the shrinker comes back to a
-        candidate it has tried (its last pass over single steps, when nothing else gained), and
-        the answer cannot differ (virtual time), so it costs no play of its budget again."""
+        the actions fall in (robust; `confirm=False`: that is not played, the shrinker confirms
+        a whole pass's result at once). Each script is judged once: the shrinker comes back to
+        a candidate it has tried (its last pass over single steps, when nothing else gained),
+        and the answer cannot differ (virtual time), so it costs no play of its budget again."""
         if script in self._judged:
             return self._judged[script]
-        out = self.outcome(script)
-        found = None if out.divergence is None or out.suspect or not self.robust(script) else out.divergence
+        if script not in self._unconfirmed:
+            out = self.outcome(script)
+            self._unconfirmed[script] = None if out.divergence is None or out.suspect else out.divergence
+        seen = self._unconfirmed[script]
+        if not confirm or seen is None:
+            return seen
+        found = seen if self.robust(script) else None
         self._judged[script] = found
         return found
 
@@ -762,32 +769,89 @@ def _truncated(script: Script, div: Divergence, expl: Exploration) -> Script:
     return Script(events, min(script.duration, end))
 
 
+SQUEEZE_GAPS = (0.3, 1.0, 3.5, 8.0)     # s: the caps tried on every wait between two actions at once
+
+
+def squeezed(script: Script, cap: float) -> Script:
+    """`script` with every wait between one action's end and the next action cut to `cap` s at
+    most (and the first action's from START_S), the later actions moved with it."""
+    events, shift, prev_end = [], 0.0, START_S
+    for e in script.events:
+        t = round(e.time - shift, 3)
+        if t - prev_end > cap:
+            cut = round(t - prev_end - cap, 3)
+            shift, t = round(shift + cut, 3), round(t - cut, 3)
+        events.append(Event(t, e.name, e.value, e.hold))
+        prev_end = t + e.hold
+    return Script(tuple(events), round(script.duration - shift, 3))
+
+
+def started_later(script: Script, k: int) -> Optional[Script]:
+    """`script` from its action `k` on, moved to begin at START_S (None: nothing to move)."""
+    shift = round(script.events[k].time - START_S, 3)
+    if shift <= 0:
+        return None
+    return Script(tuple(Event(round(e.time - shift, 3), e.name, e.value, e.hold) for e in script.events[k:]),
+                  round(script.duration - shift, 3))
+
+
 def shrink(ex: Explorer, script: Script, div: Divergence, budget: int = SHRINK_RUNS) -> tuple[Script, Divergence]:
-    """A smaller script that still diverges: fewest actions (chunks then single actions
-    removed), shortest holds, earliest times (gaps halved). Each candidate is played on both
-    programs; `budget` plays at most (deterministic)."""
+    """A smaller script that still diverges: shortest first (every wait cut at once, the latest
+    start), then fewest actions (chunks then single actions removed), shortest holds, earliest
+    times (gaps halved). Each candidate is played on both programs; about `budget` plays
+    (deterministic).
+
+    A play costs what its script lasts, so the cuts that shorten the whole script come first:
+    the candidates after them are cheaper. A removal (or a shorter hold, a later start) is
+    taken on its one play; whether the pass's result is robust (Explorer.robust: its actions
+    moved a few scans) is played once at the pass's end, and a pass whose result is not is
+    undone. The moves of actions (cut waits, earlier times) and the last pass, for
+    1-minimality, confirm each change as they take it. So the script returned is always
+    robust. The confirmations may take a few plays past `budget`."""
     start = ex.plays
     best, best_div = _truncated(script, div, ex.expl), div
 
     def left() -> bool:
         return ex.plays - start < budget
 
-    def accept(candidate: Script) -> bool:
+    def accept(candidate: Optional[Script], confirm: bool = False) -> bool:
         nonlocal best, best_div
-        if not left():
+        if candidate is None or not left():
             return False
-        d = ex.diverges(candidate)
+        d = ex.diverges(candidate, confirm=confirm)
         if d is None:
             return False
         best, best_div = _truncated(candidate, d, ex.expl), d
         return True
 
+    def confirmed(since: tuple[Script, Divergence]) -> None:
+        """The pass that began at `since` is kept if its result is robust, else undone."""
+        nonlocal best, best_div
+        if best is not since[0] and ex.diverges(best) is None:
+            best, best_div = since
+
     if ex.diverges(best) is None:                    # truncation changed the outcome: keep the whole
         best = script
+    # 0. shortest: every wait cut to a cap at once (the smallest that still shows it, confirmed
+    #    as it is taken: a cap is a move of actions), then the latest start (the first actions
+    #    dropped, the rest moved to the start; a binary search)
+    for cap in SQUEEZE_GAPS:
+        if best.duration - squeezed(best, cap).duration >= 0.5 and accept(squeezed(best, cap), confirm=True):
+            break
+    since = (best, best_div)
+    lo, hi = 0, len(best.events) - 1
+    while lo < hi and left():
+        k = (lo + hi + 1) // 2
+        if accept(started_later(best, k)):
+            lo, hi = 0, len(best.events) - 1
+        else:
+            hi = k - 1
+    confirmed(since)
     # rounds of: fewer actions, shorter holds, earlier times, while one of them gains
     for _round in range(3):
         before = (len(best.events), best.duration, sum(e.hold for e in best.events))
         # 1. fewest actions: chunks of 16, 8, 4, 2 then single actions removed, from the end back
+        since = (best, best_div)
         for size in ((16, 8, 4, 2, 1) if _round == 0 else (2, 1)):
             i = len(best.events) - size
             while i >= 0 and left():
@@ -797,7 +861,9 @@ def shrink(ex: Explorer, script: Script, div: Divergence, budget: int = SHRINK_R
                 i = min(i, len(best.events)) - size
             if size > 1 and not left():
                 break
+        confirmed(since)
         # 2. shortest holds
+        since = (best, best_div)
         for i in range(len(best.events)):
             if not left() or i >= len(best.events):
                 break
@@ -808,9 +874,11 @@ def shrink(ex: Explorer, script: Script, div: Divergence, budget: int = SHRINK_R
                     events[i] = Event(e.time, e.name, e.value, hold)
                     if accept(Script(tuple(events), best.duration)):
                         break
+        confirmed(since)
         # 3. earliest times: the gap before each action shrunk (the later ones move with it), the
         #    first action to START_S (the PLC has read its inputs once), every gap to 0.3 s, else
-        #    to half
+        #    to half. Moving actions closer is how a difference comes to hang on one scan's
+        #    coincidence, so each move is confirmed robust as it is taken.
         for _ in range(2):
             for i in range(len(best.events)):
                 if not left() or i >= len(best.events):
@@ -823,13 +891,14 @@ def shrink(ex: Explorer, script: Script, div: Divergence, budget: int = SHRINK_R
                     shift = round(gap - new_gap, 2)
                     events = list(best.events[:i]) + [Event(round(e.time - shift, 3), e.name, e.value, e.hold)
                                                        for e in best.events[i:]]
-                    if accept(Script(tuple(events), round(best.duration - shift, 3))):
+                    if accept(Script(tuple(events), round(best.duration - shift, 3)), confirm=True):
                         break
         if (len(best.events), best.duration, sum(e.hold for e in best.events)) == before or not left():
             break
     # 4. 1-minimal: no single action can be removed and the script still show the difference
     #    (shorter holds and earlier times may have made an action unneeded after its removal
-    #    was tried); a budget of its own, so the report never shows a step that does not matter
+    #    was tried); a budget of its own, so the report never shows a step that does not matter.
+    #    Each removal is confirmed robust as it is taken.
     start, budget = ex.plays, MINIMAL_RUNS
     removed = True
     while removed and left():
@@ -837,7 +906,7 @@ def shrink(ex: Explorer, script: Script, div: Divergence, budget: int = SHRINK_R
         for i in reversed(range(len(best.events))):
             if not left():
                 break
-            if i < len(best.events) and accept(without(best, {i})):
+            if i < len(best.events) and accept(without(best, {i}), confirm=True):
                 removed = True
     return best, best_div
 

@@ -34,7 +34,7 @@ from dataclasses import dataclass
 from typing import Any, Callable, Optional, Sequence
 
 from plclab.runtime.retain import MemoryRetainStore
-from plclab.runtime.tracing import WILD, StateReader, StopReplay, Tracer, paths_overlap
+from plclab.runtime.tracing import WILD, StateReader, StopReplay, Tracer, kept_out_of_gc, paths_overlap
 
 MAX_CANDIDATES = 3
 SCRATCH_SHARE = 0.5       # under this share of the starting program's lines kept: rewritten from scratch
@@ -539,8 +539,7 @@ def localize(student: Any, model: Optional[Any], replay: Replay, output: Optiona
     tracer = Tracer(compiled, lambda: student.now, sample=sample, since=t0, stop_at=t_fail)
     _traced(student, tracer, replay)
     if model is not None:
-        _traced(model, Tracer(model.plc.compiled, lambda: model.now, lines=False, since=t0, stop_at=t_fail,
-                              sample=lambda: mlog.record(model.now, model.plc)), replay)
+        _sampled(model, lambda: mlog.record(model.now, model.plc), t0, t_fail, replay)
     if output is not None:
         order = [output]
     else:
@@ -654,6 +653,63 @@ def _traced(session: Any, tracer: Tracer, replay: Replay) -> None:
     session.run(0)          # no scan: the session's trace takes what its stand recorded up to the stop
 
 
+class _SampleFrom:
+    """A probe (Session.probes) that has `sample()` called as each scan at or after `since`
+    begins, once the scan has read its inputs (where the line tracer's sample is taken: at
+    the program's entry), and stops the replay at the first scan to begin after `stop_at`,
+    as the tracer does; a replay that needs no lines so pays no tracer on every Python call.
+    It reaches the scan through the PLC's own `read_inputs` (an instance attribute, as the
+    lab's forces do), set again on the PLC of a restart."""
+
+    def __init__(self, session: Any, sample: Callable[[], Any], since: float, stop_at: float) -> None:
+        self.session, self.sample, self.since, self.stop_at = session, sample, since, stop_at
+        self._plc: Any = None
+
+    def step(self, _dt: float) -> None:
+        plc = self.session.plc
+        if plc is self._plc:
+            return
+        self._plc = plc
+        read, schedule, session = plc.read_inputs, plc._schedule, self.session
+
+        def read_inputs() -> None:
+            read()
+            tick = plc.ticks
+            if not any(period == 1 or tick % period == 0 for period, _run in schedule):
+                return                               # no program runs in this scan: no entry
+            now = session.now
+            if now > self.stop_at + 1e-9:
+                raise StopReplay(now)
+            if now >= self.since - 1e-9:
+                self.sample()
+        plc.read_inputs = read_inputs
+
+    def remove(self) -> None:
+        if self._plc is not None:
+            self._plc.__dict__.pop("read_inputs", None)
+
+
+def _sampled(session: Any, sample: Callable[[], Any], since: float, stop_at: float, replay: Replay) -> None:
+    """`replay` on `session` with `sample()` called as each scan from `since` on begins (after
+    its inputs are read), stopped after `stop_at`: what `_traced` does with a tracer that
+    follows no lines, without the tracer."""
+    hook = _SampleFrom(session, sample, since, stop_at)
+
+    def begin() -> None:
+        if hook not in session.probes:
+            session.add_probe(hook)
+            hook.step(0.0)
+
+    try:
+        replay(session, begin)
+    except StopReplay:
+        pass
+    finally:
+        session.remove_probe(hook)
+        hook.remove()
+    session.run(0)
+
+
 def output_attr(session: Any, label: str) -> Optional[tuple[Any, str]]:
     """The object and attribute of the compiled program that hold output `label` (a console
     or wiring label of the stand's I/O image), None for a label the program does not bind."""
@@ -683,7 +739,8 @@ def candidates(student: Any, model: Optional[Any], replay: Replay, output: Optio
     except Exception:                    # noqa: BLE001 - an installed package without the stand's sources
         start = None
     try:
-        return localize(student, model, replay, output, t_fail, sources, start, hints=hints)
+        with kept_out_of_gc():           # the traces are dropped as localize returns
+            return localize(student, model, replay, output, t_fail, sources, start, hints=hints)
     except Exception:                    # noqa: BLE001 - the row stands without its candidates
         return None
 

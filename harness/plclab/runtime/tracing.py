@@ -18,12 +18,13 @@ A local temporary of one call is `('L', call, name)`, the value a call returns `
 from __future__ import annotations
 
 import ast
+import contextlib
 import gc
 import keyword
 import sys
 from dataclasses import dataclass, field
 from functools import lru_cache
-from typing import Any, Callable, Optional, Sequence
+from typing import Any, Callable, Iterator, Optional, Sequence
 
 from plclab.runtime.gencode import define
 
@@ -343,6 +344,8 @@ class Tracer:
     def stop(self) -> None:
         sys.settrace(self._old)
         if self._gc_was_on:
+            if _KEPT_OUT[0]:
+                gc.freeze()            # the trace out of the collector's walks (kept_out_of_gc)
             gc.enable()
         for st in list(self._frames.values()):
             self._finish(st)
@@ -450,6 +453,28 @@ class Tracer:
             return local
 
         return local
+
+
+_KEPT_OUT = [0]          # kept_out_of_gc blocks open
+
+
+@contextlib.contextmanager
+def kept_out_of_gc() -> Iterator[None]:
+    """Traces stopped inside the block stay out of the cyclic garbage collector's walks until
+    it ends. The first collection after a traced replay walked every event the trace holds
+    (the collector counts them as new objects: a sixth of a row's localization), though they
+    are all freed by their reference counts once the trace is dropped. A tracer stopped here
+    moves every object of the process to the collector's permanent generation (gc.freeze);
+    the block's end, after the caller has dropped its traces, gives back what is still alive
+    (gc.unfreeze), so cyclic garbage made meanwhile is collected late, never lost. Not for a
+    process that freezes objects of its own (none here does)."""
+    _KEPT_OUT[0] += 1
+    try:
+        yield
+    finally:
+        _KEPT_OUT[0] -= 1
+        if not _KEPT_OUT[0]:
+            gc.unfreeze()
 
 
 def matches(written: tuple, wanted: tuple) -> bool:
