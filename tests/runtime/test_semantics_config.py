@@ -125,6 +125,36 @@ def test_slow_program_runs_on_ticks_0_5_10():
     assert ran == [0, 5, 10]
 
 
+def test_a_plc_says_at_which_ticks_a_program_runs():
+    """A stand ticks every 10 ms; a task of 50 ms (and one of 20 ms) runs only at some of the
+    ticks. `runs_a_task_now` says whether the scan about to run enters any program: it is what
+    a grader's sampler of the program's state looks at (plclab.grader.localize)."""
+    src = config("""
+PROGRAM slow
+VAR n : INT; END_VAR
+n := n + 1;
+END_PROGRAM
+PROGRAM middle
+VAR n : INT; END_VAR
+n := n + 1;
+END_PROGRAM
+""", """
+    TASK t_slow(INTERVAL := T#50ms, PRIORITY := 1);
+    TASK t_mid(INTERVAL := T#20ms, PRIORITY := 2);
+    PROGRAM s WITH t_slow : slow;
+    PROGRAM m WITH t_mid : middle;
+""")
+    sim = load(src, tick_ms=10)
+    said, ran = [], []
+    for tick in range(12):
+        said.append(sim.plc.runs_a_task_now())
+        before = (sim.plc.read("s.n"), sim.plc.read("m.n"))
+        sim.step(1)
+        ran.append((sim.plc.read("s.n"), sim.plc.read("m.n")) != before)
+    assert said == ran
+    assert ran == [t % 5 == 0 or t % 2 == 0 for t in range(12)] and not all(ran)
+
+
 def test_programs_run_in_resource_declaration_order():
     # `s` is declared first, so on a tick where both run the slow one runs first, even
     # though its PRIORITY number is different (OpenPLC keeps declaration order)

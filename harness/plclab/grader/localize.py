@@ -670,12 +670,11 @@ class _SampleFrom:
         if plc is self._plc:
             return
         self._plc = plc
-        read, schedule, session = plc.read_inputs, plc._schedule, self.session
+        read, session = plc.read_inputs, self.session
 
         def read_inputs() -> None:
             read()
-            tick = plc.ticks
-            if not any(period == 1 or tick % period == 0 for period, _run in schedule):
+            if not plc.runs_a_task_now():
                 return                               # no program runs in this scan: no entry
             now = session.now
             if now > self.stop_at + 1e-9:

@@ -178,6 +178,7 @@ class PLC:
             if inst.interval_ns:
                 period = max(1, inst.interval_ns // self.tick_ns)
             sched.append((period, inst.obj._run if self.native is None else None))
+        self._periods = tuple(period for period, _run in sched)
         if self.native is not None:
             sched = self.native.schedule(self, sched)     # one C call runs them all
         return sched
@@ -289,6 +290,12 @@ class PLC:
         if self.native is not None:
             self._copy_in, self._copy_out = self.native.io(self, self._copy_in, self._copy_out)
             self._quiet_run = self.native.quiet(self)
+
+    def runs_a_task_now(self) -> bool:
+        """Whether a scan at the current tick runs any task (one of period k runs at every k-th
+        tick): where a program is entered at all."""
+        tick = self.ticks
+        return any(period == 1 or tick % period == 0 for period in self._periods)
 
     def scan(self) -> bool:
         """Run one tick at the current PLC time; returns False if the PLC is (now) faulted."""
