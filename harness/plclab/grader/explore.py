@@ -836,7 +836,8 @@ def shrink(ex: Explorer, script: Script, div: Divergence, budget: int = SHRINK_R
     #    as it is taken: a cap is a move of actions), then the latest start (the first actions
     #    dropped, the rest moved to the start; a binary search)
     for cap in SQUEEZE_GAPS:
-        if best.duration - squeezed(best, cap).duration >= 0.5 and accept(squeezed(best, cap), confirm=True):
+        cand = squeezed(best, cap)
+        if best.duration - cand.duration >= 0.5 and accept(cand, confirm=True):
             break
     since = (best, best_div)
     lo, hi = 0, len(best.events) - 1

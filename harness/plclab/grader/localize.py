@@ -633,24 +633,9 @@ class _TraceFrom:
             self.started = True
             self.tracer.start()
 
-
-def _traced(session: Any, tracer: Tracer, replay: Replay) -> None:
-    hook = _TraceFrom(session, tracer)
-
-    def begin() -> None:
-        if hook not in session.probes:
-            session.add_probe(hook)
-            hook.step(0.0)          # from the start of the replay when its window begins there
-
-    try:
-        replay(session, begin)
-    except StopReplay:
-        pass
-    finally:
-        if hook.started:
-            tracer.stop()
-        session.remove_probe(hook)
-    session.run(0)          # no scan: the session's trace takes what its stand recorded up to the stop
+    def close(self) -> None:
+        if self.started:
+            self.tracer.stop()
 
 
 class _SampleFrom:
@@ -659,7 +644,7 @@ class _SampleFrom:
     the program's entry), and stops the replay at the first scan to begin after `stop_at`,
     as the tracer does; a replay that needs no lines so pays no tracer on every Python call.
     It reaches the scan through the PLC's own `read_inputs` (an instance attribute, as the
-    lab's forces do), set again on the PLC of a restart."""
+    lab's forces do), moved to the PLC of a restart."""
 
     def __init__(self, session: Any, sample: Callable[[], Any], since: float, stop_at: float) -> None:
         self.session, self.sample, self.since, self.stop_at = session, sample, since, stop_at
@@ -669,6 +654,7 @@ class _SampleFrom:
         plc = self.session.plc
         if plc is self._plc:
             return
+        self.close()
         self._plc = plc
         read, session = plc.read_inputs, self.session
 
@@ -683,30 +669,40 @@ class _SampleFrom:
                 self.sample()
         plc.read_inputs = read_inputs
 
-    def remove(self) -> None:
+    def close(self) -> None:
         if self._plc is not None:
             self._plc.__dict__.pop("read_inputs", None)
 
 
-def _sampled(session: Any, sample: Callable[[], Any], since: float, stop_at: float, replay: Replay) -> None:
-    """`replay` on `session` with `sample()` called as each scan from `since` on begins (after
-    its inputs are read), stopped after `stop_at`: what `_traced` does with a tracer that
-    follows no lines, without the tracer."""
-    hook = _SampleFrom(session, sample, since, stop_at)
-
+def _replayed(session: Any, hook: Any, replay: Replay) -> None:
+    """`replay` on `session` with probe `hook` stepped from the replay's start (its `step`
+    starts what it does when its window begins) to the StopReplay it or its tracer raises
+    after the failure; then `hook.close()`."""
     def begin() -> None:
         if hook not in session.probes:
             session.add_probe(hook)
-            hook.step(0.0)
+            hook.step(0.0)          # from the start of the replay when its window begins there
 
     try:
         replay(session, begin)
     except StopReplay:
         pass
     finally:
+        hook.close()
         session.remove_probe(hook)
-        hook.remove()
-    session.run(0)
+    session.run(0)          # no scan: the session's trace takes what its stand recorded up to the stop
+
+
+def _traced(session: Any, tracer: Tracer, replay: Replay) -> None:
+    """`replay` traced by `tracer` from its `since`."""
+    _replayed(session, _TraceFrom(session, tracer), replay)
+
+
+def _sampled(session: Any, sample: Callable[[], Any], since: float, stop_at: float, replay: Replay) -> None:
+    """`replay` on `session` with `sample()` called as each scan from `since` on begins (after
+    its inputs are read), stopped after `stop_at`: what `_traced` does with a tracer that
+    follows no lines, without the tracer."""
+    _replayed(session, _SampleFrom(session, sample, since, stop_at), replay)
 
 
 def output_attr(session: Any, label: str) -> Optional[tuple[Any, str]]:
