@@ -155,6 +155,14 @@ def check_writable(directory: PathLike) -> Path:
     return d
 
 
+def user_cache_dir(*parts: str) -> Path:
+    """This user's cache folder for plclab ($XDG_CACHE_HOME/plclab/..., default
+    ~/.cache/plclab/...): what is worked out once and reused by every later process (native
+    builds, the ST parser's tables). Not created here."""
+    base = os.environ.get("XDG_CACHE_HOME") or os.path.join(os.path.expanduser("~"), ".cache")
+    return Path(base, "plclab", *parts)
+
+
 def temporary_name(path: PathLike) -> Path:
     """A fresh name for the temporary file of `path` (same directory, hidden, tagged with
     this process's id so a later start can tell a stale one from a live one)."""

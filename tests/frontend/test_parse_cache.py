@@ -58,3 +58,41 @@ def test_errors_are_found_each_time_and_the_cache_keeps_within_its_bound(monkeyp
     assert 0 < sum(len(v) for v in P._PARSED.values()) == P._parsed_bytes <= 20_000
     unit, _ = P.parse_source("PROGRAM p39\nVAR x : INT; END_VAR\nx := 39;\nEND_PROGRAM\n", "p39.st")
     assert unit.pous[0].name == "p39"
+
+
+# The parser's LALR tables: built from the grammar by the first process, read from the user's
+# cache by every later one (a CLI command, a lab upload's trial, a class's grading process).
+_TABLES_PROBE = r"""
+from plclab.frontend import parser as P
+from plclab.stands import bundle, get_stand
+unit, diags = P._parse(bundle(get_stand("tur10"), "task2"), "robot.st")
+bad = P._parse("PROGRAM main\nVAR x : INT; END_VAR\nIF x THEN x := 1; END_IF\nx := ;\nEND_PROGRAM\n", "bad.st")[1]
+print(repr((unit is not None and not diags, len(unit.pous), [str(d) for d in bad])))
+"""
+
+
+def _tables_probe(cache) -> str:
+    """A new process's parses of a stand's program and of a wrong one, with `cache` as its
+    XDG_CACHE_HOME."""
+    import os
+    import subprocess
+    import sys
+    env = dict(os.environ, XDG_CACHE_HOME=str(cache))
+    r = subprocess.run([sys.executable, "-c", _TABLES_PROBE], capture_output=True, text=True, env=env, timeout=120)
+    assert r.returncode == 0, r.stderr
+    return r.stdout
+
+
+def test_the_parsers_tables_are_built_once_and_read_back_by_the_next_process(tmp_path):
+    first = _tables_probe(tmp_path)
+    assert "True" in first and "bad.st:4:1: error: missing ';'" in first
+    files = list((tmp_path / "plclab" / "parser").iterdir())
+    assert len(files) == 1 and files[0].stat().st_size > 10_000
+    saved = files[0].read_bytes()
+    assert _tables_probe(tmp_path) == first
+    assert files[0].read_bytes() == saved                 # read back, not built and written again
+    # a damaged file (a process stopped while writing it): the tables are built again and saved
+    files[0].write_bytes(saved[:5000])
+    assert _tables_probe(tmp_path) == first
+    assert files[0].stat().st_size > 10_000
+    assert _tables_probe(tmp_path) == first

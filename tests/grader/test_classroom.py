@@ -66,38 +66,32 @@ def mp9c_class(tmp_path_factory):
 
 
 def test_class_gives_the_verdicts_of_grading_one_by_one(mp9c_class, tmp_path):
+    """Every student of the class gets the rows `plclab grade` gives their files alone: the
+    wrong-solution fixtures (the run's one grading of each, graded.py), carol's folder and
+    bob's program that does not compile (graded here); dave's empty folder fails."""
     folder, out, report, _, _ = mp9c_class
     submissions, _ = find_submissions(folder)
-    by_student = {r.student: r for r in report.results}
-    rows = read_csv(out / "results.csv")
-    assert sorted(by_student) == sorted(s.student for s in submissions)
+    assert sorted(r.student for r in report.results) == sorted(s.student for s in submissions)
+    fixture_names = {Path(name).stem: name for name, task, _ in fixtures("mp9c") if task == "task2"}
+    known = {}
     for sub in submissions:
-        alone = grade("mp9c", "task2", [str(f) for f in sub.files], out_dir=str(tmp_path / sub.student))
-        mine = [r for r in rows if r["student"] == sub.student]
-        assert by_student[sub.student].status == ("PASS" if alone.passed else "FAIL"), alone.text()
-        if not sub.files:            # dave: nothing `plclab grade` could be given
-            assert all(r["result"] == "FAIL" and "no .st file" in r["message"] for r in mine), mine
-            continue
-        if alone.errors:
-            assert all(r["result"] == "FAIL" and alone.errors[0] in r["message"] for r in mine), mine
-            continue
-        assert [(r["requirement"], r["result"]) for r in mine] == [(row.id, row.result) for row in alone.rows]
-        for csv_row, row in zip(mine, alone.rows):
-            if not row.passed:
-                assert f"expected: {row.expected}" in csv_row["message"] or not row.expected
-                assert f"observed: {row.observed}" in csv_row["message"]
-                assert f"scenario '{row.scenario}'" in csv_row["message"]
-            else:
-                assert csv_row["message"] == ""
+        if sub.student in fixture_names:
+            known[sub.student] = graded_fixture("mp9c", "task2", FIXTURES_DIR / "mp9c" / fixture_names[sub.student])
+        elif sub.files:
+            known[sub.student] = grade("mp9c", "task2", [str(f) for f in sub.files], out_dir=str(tmp_path / sub.student))
+    assert {"carol", "bob"} <= set(known) and "dave" not in known
+    assert_class_is_one_by_one("mp9c", "task2", report, read_csv(out / "results.csv"), tmp_path, known)
 
 
-ROBOT_CLASSES = [(stand, task) for stand in ("mp9c", "tur10") for task in sorted({t for _, t, _ in fixtures(stand)})]
+# MP-9C Task 2's fixtures are the class of mp9c_class above
+ROBOT_CLASSES = [(stand, task) for stand in ("mp9c", "tur10") for task in sorted({t for _, t, _ in fixtures(stand)})
+                 if (stand, task) != ("mp9c", "task2")]
 
 
 @pytest.mark.parametrize("stand, task", ROBOT_CLASSES, ids=[f"{s}-{t}" for s, t in ROBOT_CLASSES])
 def test_every_tasks_fixtures_as_a_class_get_the_verdicts_of_grading_one_by_one(stand, task, tmp_path):
     """Every wrong-solution fixture of every task of both robots (whatever fixtures/<stand>/
-    holds: their first lines name the task), graded as a class with 2 jobs, gets exactly the
+    holds: their first lines name the task; MP-9C Task 2's are mp9c_class), graded as a class with 2 jobs, gets exactly the
     rows `plclab grade` gives it alone (the run's one grading of each fixture, graded.py), and
     fails the row its header names."""
     folder = tmp_path / "class"

@@ -8,16 +8,19 @@ from __future__ import annotations
 import hashlib
 import pickle
 import re
+import sys
 import threading
 from collections import OrderedDict
 from functools import lru_cache
 from importlib import resources
 from typing import Any, Iterable
 
+import lark
 from lark import Lark, Token, Transformer
 from lark.exceptions import LarkError, UnexpectedCharacters, UnexpectedEOF, UnexpectedToken
 
 from plclab.errors import Diagnostic
+from plclab.fileio import user_cache_dir
 from plclab.frontend import ast as A
 from plclab.frontend import literals as L
 
@@ -618,8 +621,24 @@ def _builder() -> "_Builder":
 
 @lru_cache(maxsize=1)
 def _lark() -> Lark:
-    return Lark(_grammar(), parser="lalr", lexer="contextual", transformer=_builder(),
-                lexer_callbacks={"IDENT": _keyword_token})
+    """The parser, its LALR tables read from the user's cache where an earlier process saved
+    them: building them from the grammar costs half a second, more than parsing a whole
+    stand's program, and every process that checks ST (a CLI command, a lab upload's trial,
+    a student's grading process in a class) would pay it again. The file is lark's own cache
+    (`cache=`): it starts with the hash of the grammar, the options, lark's version and
+    Python's, and lark builds the tables anew (and writes them again) wherever the file does
+    not match or cannot be read whole, e.g. while another process is still writing it.
+    Without a cache folder the tables are built each time."""
+    grammar = _grammar()
+    options: dict[str, Any] = dict(parser="lalr", lexer="contextual", transformer=_builder(),
+                                   lexer_callbacks={"IDENT": _keyword_token})
+    key = hashlib.sha256(f"{grammar}\0{lark.__version__}\0{sys.version_info[:2]}".encode()).hexdigest()[:20]
+    path = user_cache_dir("parser") / f"st-{key}.lark"
+    try:
+        path.parent.mkdir(parents=True, exist_ok=True)
+    except OSError:
+        return Lark(grammar, **options)
+    return Lark(grammar, cache=str(path), **options)
 
 
 @lru_cache(maxsize=1)

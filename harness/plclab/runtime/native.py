@@ -31,6 +31,7 @@ import threading
 from pathlib import Path
 from typing import Any, Callable, Iterator, Optional, Sequence
 
+from plclab.fileio import user_cache_dir
 from plclab.iec import types as T
 from plclab.runtime.cgen import FAULT_KINDS, CProgram, Layout, Unsupported, emit_c
 from plclab.runtime.faults import PlcFault
@@ -91,8 +92,7 @@ def _inform(key: str, message: str) -> None:
 
 
 def cache_dir() -> Path:
-    base = os.environ.get("XDG_CACHE_HOME") or os.path.join(os.path.expanduser("~"), ".cache")
-    return Path(base) / "plclab" / "native"
+    return user_cache_dir("native")
 
 
 def c_compiler() -> Optional[str]:

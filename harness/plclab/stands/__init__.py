@@ -188,16 +188,21 @@ def gvl_variables(stand: Stand) -> list[GvlVariable]:
     """The stand's located globals in declaration order, read from its GVL files: the one
     source of each stand's I/O map and register contract (plants are tested against it;
     Modbus profiles, scenarios and the grader name I/O by these labels)."""
-    out: list[GvlVariable] = []
-    for stem in stand.gvl:
-        text = _read(PLC_DIR / "GVL" / f"{stem}.st")
-        # comments blanked in place, so a match's end is where its own trailing comment starts
-        code = _COMMENT.sub(lambda m: re.sub(r"[^\n]", " ", m.group()), text)
-        for m in _LOCATED.finditer(code):
-            after = _TRAILING_COMMENT.match(text, m.end())
-            out.append(GvlVariable(m.group(1), m.group(2).upper(), m.group(3).upper(), m.group(4),
-                                   " ".join(after.group(1).split()) if after else ""))
-    return out
+    return [v for stem in stand.gvl for v in _located_in(_read(PLC_DIR / "GVL" / f"{stem}.st"))]
+
+
+@functools.lru_cache(maxsize=64)
+def _located_in(text: str) -> tuple[GvlVariable, ...]:
+    """The located globals of one GVL file's text (worked out once per text: every session of
+    a stand names its I/O by them, and a grading starts thousands)."""
+    # comments blanked in place, so a match's end is where its own trailing comment starts
+    code = _COMMENT.sub(lambda m: re.sub(r"[^\n]", " ", m.group()), text)
+    out = []
+    for m in _LOCATED.finditer(code):
+        after = _TRAILING_COMMENT.match(text, m.end())
+        out.append(GvlVariable(m.group(1), m.group(2).upper(), m.group(3).upper(), m.group(4),
+                               " ".join(after.group(1).split()) if after else ""))
+    return tuple(out)
 
 
 def gvl_labels(stand: Stand) -> dict[str, str]:
