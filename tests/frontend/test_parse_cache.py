@@ -5,6 +5,9 @@ cache stays within its bound."""
 from __future__ import annotations
 
 import dataclasses
+import os
+import subprocess
+import sys
 from typing import Any
 
 from plclab.frontend import check_sources
@@ -74,9 +77,6 @@ print(repr((unit is not None and not diags, len(unit.pous), [str(d) for d in bad
 def _tables_probe(cache) -> str:
     """A new process's parses of a stand's program and of a wrong one, with `cache` as its
     XDG_CACHE_HOME."""
-    import os
-    import subprocess
-    import sys
     env = dict(os.environ, XDG_CACHE_HOME=str(cache))
     r = subprocess.run([sys.executable, "-c", _TABLES_PROBE], capture_output=True, text=True, env=env, timeout=120)
     assert r.returncode == 0, r.stderr

@@ -91,9 +91,9 @@ ROBOT_CLASSES = [(stand, task) for stand in ("mp9c", "tur10") for task in sorted
 @pytest.mark.parametrize("stand, task", ROBOT_CLASSES, ids=[f"{s}-{t}" for s, t in ROBOT_CLASSES])
 def test_every_tasks_fixtures_as_a_class_get_the_verdicts_of_grading_one_by_one(stand, task, tmp_path):
     """Every wrong-solution fixture of every task of both robots (whatever fixtures/<stand>/
-    holds: their first lines name the task; MP-9C Task 2's are mp9c_class), graded as a class with 2 jobs, gets exactly the
-    rows `plclab grade` gives it alone (the run's one grading of each fixture, graded.py), and
-    fails the row its header names."""
+    holds: their first lines name the task; MP-9C Task 2's are mp9c_class), graded as a
+    class with 2 jobs, gets exactly the rows `plclab grade` gives it alone (the run's one
+    grading of each fixture, graded.py), and fails the row its header names."""
     folder = tmp_path / "class"
     folder.mkdir()
     mine = [(name, rid) for name, t, rid in fixtures(stand) if t == task]
