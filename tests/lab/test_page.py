@@ -135,6 +135,29 @@ def test_thermo_power_up_state(lab_page, shots):
 
 # --------------------------------------------------------------------------- MP-9C console
 
+def test_the_page_draws_the_newest_state_at_most_25_times_a_second(lab_page):
+    """The page is drawn with the newest state it has, at most once every 40 ms: drawing at
+    the display's rate cost the browser most of a core for nothing the eye sees. The
+    stand's states keep coming faster (x5: up to 100 a second); each drawing shows the last."""
+    page = lab_page("mp9c").page
+    page.evaluate("""() => {
+        window.__draws = [];
+        const draw = window.render;
+        window.render = (s) => {
+            const at = performance.now();
+            draw(s);
+            window.__draws.push({at, shown: document.querySelector('#clock').textContent,
+                                 newest: `t = ${lab.state.t.toFixed(2)} s`, drawn: s === lab.state});
+        };
+    }""")
+    page.wait_for_function("window.__draws.length >= 12", timeout=WAIT)
+    draws = page.evaluate("window.__draws")
+    gaps = [b["at"] - a["at"] for a, b in zip(draws, draws[1:])]
+    assert min(gaps) >= 39, f"drawn {min(gaps):.1f} ms after the drawing before"
+    assert all(d["drawn"] and d["shown"] == d["newest"] for d in draws), draws
+    assert len({d["shown"] for d in draws}) == len(draws)          # the stand ran on between drawings
+
+
 def test_mp9c_short_press_records_a_frame_and_a_3s_hold_resets(lab_page):
     lp = lab_page("mp9c", speed=2)
     page = lp.page
