@@ -3,6 +3,7 @@ server goes on; the console is applied so the PLC sees every change; the CLI sta
 from __future__ import annotations
 
 import asyncio
+import json
 import re
 import signal
 import subprocess
@@ -149,6 +150,43 @@ def test_a_trended_program_variable_is_in_the_downloads(running):
     assert counts[0].endswith(",0") and counts[-1].endswith(",1"), counts
     vcd = urllib.request.urlopen(url + "trace.vcd", timeout=10).read().decode()
     assert "$var" in vcd and "Count" in vcd
+
+
+async def _states(url: str, count: int, first: list[dict]) -> list[dict]:
+    """The next `count` state messages a page gets after sending the commands `first`."""
+    states = []
+    async with aiohttp.ClientSession() as http:
+        async with http.ws_connect(url + "ws", params={"token": await _token(http, url)}) as ws:
+            for command in first:
+                await ws.send_json(command)
+            async with asyncio.timeout(30):
+                while len(states) < count:
+                    m = json.loads((await ws.receive()).data)
+                    if m.get("type") == "state":
+                        states.append(m)
+    return states
+
+
+COUNTER = ("PROGRAM Counter\nVAR Scans : DINT; END_VAR\nScans := Scans + 1;\nEND_PROGRAM\n"
+           "CONFIGURATION Config0\n RESOURCE Res0 ON PLC\n  TASK t (INTERVAL := T#10ms, PRIORITY := 0);\n"
+           "  PROGRAM Main WITH t : Counter;\n END_RESOURCE\nEND_CONFIGURATION\n")
+
+
+def test_faster_than_real_time_a_page_gets_a_state_every_25_ms_with_every_trend_point(running, tmp_path):
+    """At x5 the lab sends at most 40 states a second (the page draws 25), and what comes
+    between two of them is not lost: the trend points of every scan are in the next one."""
+    program = tmp_path / "counter.st"
+    program.write_text(COUNTER, encoding="utf-8")
+    server, url = running("mp9c", speed=5, program=[str(program)])
+    states = asyncio.run(_states(url, 20, [{"op": "trends", "names": ["Main.Scans"], "id": 1}]))
+    states = states[4:]                     # past the page's history and the command's own state
+    rate = (len(states) - 1) / (states[-1]["wall"] - states[0]["wall"])      # each stamped as it was made
+    assert rate <= 41, rate
+    scans = [round((b["t"] - a["t"]) / a["tick"]) for a, b in zip(states, states[1:])]
+    assert min(scans) >= 2, scans                                   # several scans between two states
+    counted = [v for st in states[1:] for _t, v in st["trends"]["Main.Scans"]]
+    first = states[0]["trends"]["Main.Scans"][-1][1]
+    assert counted[-1] - first >= sum(scans) - 1 and set(range(first + 1, counted[-1] + 1)) <= set(counted), counted
 
 
 def test_cli_refuses_a_program_that_fails_the_check(tmp_path, capsys):
