@@ -13,6 +13,12 @@ from typing import Sequence
 from plclab.grader import GradeReport
 
 FIXTURES_DIR = Path(__file__).resolve().parent / "fixtures"
+
+# A real program's extra file that makes its grading need megabytes more memory than the loaded
+# grader: 2 MB of declared data (the limit is 4 MiB). What an ordinary program needs beyond the
+# grader depends on what the grader process has loaded and freed already (the parser's tables,
+# the program's native library), down to under 1 MiB: a memory limit's test cannot hang on that.
+LARGE_DATA = ("GVL_Samples.st", "VAR_GLOBAL\n    Samples : ARRAY[0..499999] OF DINT;\nEND_VAR\n")
 HEADER = re.compile(r"plclab grader fixture: (task\d), expected to FAIL (\S+)\. Mistake: (.*)")
 TASKS = ("task1", "task2", "task3")
 

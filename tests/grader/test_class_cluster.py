@@ -15,7 +15,7 @@ from lxml import etree
 
 from plclab.grader.classroom import cells, grade_class, grade_on_worker, write_class_outputs
 from plclab.stands import get_stand, sources
-from grader_helpers import FIXTURES_DIR
+from grader_helpers import FIXTURES_DIR, LARGE_DATA
 
 BROKEN = "PROGRAM Broken\nVAR x : INT; END_VAR\nx := ;\nEND_PROGRAM\n"
 HARNESS = Path(__file__).resolve().parents[2] / "harness"
@@ -81,9 +81,21 @@ def test_on_a_worker_each_student_keeps_the_time_limit(tmp_path):
 
 
 def test_on_a_worker_each_student_keeps_the_memory_limit():
-    task1 = sources(get_stand("mp9c"), "task1")
-    kind, value, _ = grade_on_worker("mp9c", "task1", task1, 120.0, 4)    # less than one grading needs
+    task1 = sources(get_stand("mp9c"), "task1") + [LARGE_DATA]
+    kind, value, _ = grade_on_worker("mp9c", "task1", task1, 120.0, 4)    # less than its grading needs
     assert (kind, value) == ("memory", None)
+    kind, value, _ = grade_on_worker("mp9c", "task1", task1, 120.0, None)
+    assert kind == "report" and value.passed, value
+
+
+def test_on_a_worker_a_memory_error_at_the_limit_is_never_a_diagnostic_of_the_program():
+    """Close to the limit, Python's own compiler may fail to allocate while it compiles the
+    program: that is the memory limit (the student's FAIL says so), never "this code nests
+    too deeply", whichever part of the grading the limit stops."""
+    task1 = sources(get_stand("mp9c"), "task1")
+    for mib in range(2, 6):
+        kind, value, _ = grade_on_worker("mp9c", "task1", task1, 120.0, mib)
+        assert kind == "memory" or (kind == "report" and value.passed and not value.errors), (mib, kind, value)
 
 
 def test_an_unreachable_scheduler_is_one_line_before_any_grading(tmp_path):

@@ -26,7 +26,7 @@ from plclab.errors import PlcLabError
 from plclab.grader.classroom import (MAX_MESSAGE_CHARS, grade_class, junit_xml, report_html, results_csv,
                                      write_class_outputs)
 from classroom_faults import grade_or_misbehave
-from grader_helpers import FIXTURES_DIR
+from grader_helpers import FIXTURES_DIR, LARGE_DATA
 
 BROKEN = "PROGRAM Broken\nVAR x : INT; END_VAR\nx := ;\nEND_PROGRAM\n"
 HERE = Path(__file__).resolve().parent
@@ -340,11 +340,14 @@ def test_a_memory_error_inside_a_scenario_is_the_limit_not_a_grader_error(tmp_pa
 
 
 def test_the_memory_limit_holds_the_real_grading_of_a_real_program(tmp_path, own_tmp):
-    """No injected fault: the grading of an ordinary program, allowed 1 MiB beyond the grader,
-    is stopped by the limit and reported as the student's FAIL; with the default it is graded."""
-    folder = tmp_path / "class"
-    folder.mkdir()
+    """No injected fault: the grading of a program with 2 MB of data, allowed 1 MiB beyond the
+    grader, is stopped by the limit and reported as the student's FAIL; with the default it is
+    graded."""
+    folder = tmp_path / "class" / "pia"
+    folder.mkdir(parents=True)
     (folder / "pia.st").write_bytes((FIXTURES_DIR / "mp9c" / "task1_gripper_inverted.st").read_bytes())
+    (folder / LARGE_DATA[0]).write_text(LARGE_DATA[1], encoding="utf-8")
+    folder = folder.parent
     # in a fresh interpreter, as `plclab grade-class` runs: a test process that has already
     # built the ST parser or loaded this program's native library would lend the grading what
     # it would otherwise allocate, and 1 MiB more could then be enough

@@ -61,6 +61,7 @@ from lxml import etree
 from plclab import fileio, limits
 from plclab.errors import CompileError, PlcLabError
 from plclab.frontend import read_sources
+from plclab.runtime.compiler import TOO_COMPLEX
 
 from .engine import grade, grade_sources, requirement_table, task_title
 from .explore import ExploreOptions, _fast_tmp, class_seed
@@ -417,8 +418,13 @@ def _ran_out_of_memory(report: GradeReport) -> bool:
     """A MemoryError the grading turned into a row instead of raising it: the runtime records
     one in a scan as an internal fault ("PLC STOPPED by an internal error of plclab ...:
     MemoryError"), which stops the scenario; the engine records one in a check as a grader
-    error. Under the process limit it is the limit. (Only these two forms: a student's
-    identifier named MemoryError in a compile error is not the limit.)"""
+    error. Under the process limit it is the limit. And at the limit, a MemoryError of
+    Python's own compiler on the generated code, which the runtime reports as code nested too
+    deeply (what Python's parser raises for that, with no message to tell the two apart).
+    (Only these forms: a student's identifier named MemoryError in a compile error is not the
+    limit.)"""
+    if any(e.endswith(TOO_COMPLEX.format(why="MemoryError")) for e in report.errors) and _at_memory_limit():
+        return True
     for r in report.rows:
         if r.passed:
             continue

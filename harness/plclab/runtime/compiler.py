@@ -1046,9 +1046,14 @@ def _too_complex(exc: BaseException, origin: dict[int, LineInfo], cu: CheckedUni
         where = (pou.file, pou.line, 1) if pou is not None else ("", 1, 1)
     else:
         where = (info.file, info.line, 1)
-    return CompileError([Diagnostic(*where, "this code nests too deeply for PLC Lab's compiler (Python refused it: "
-                                            f"{getattr(exc, 'msg', None) or type(exc).__name__}); split the statement "
-                                            "or move parts of it into functions")])
+    return CompileError([Diagnostic(*where, TOO_COMPLEX.format(why=getattr(exc, "msg", None) or type(exc).__name__))])
+
+
+TOO_COMPLEX = ("this code nests too deeply for PLC Lab's compiler (Python refused it: {why}); split the statement "
+               "or move parts of it into functions")
+"""_too_complex's message. With `why` MemoryError it may also be a failed allocation: Python's
+parser raises a MemoryError without a message for code past its stack, so under a process's
+memory limit the grader tells the two apart by how close the process came to the limit."""
 
 
 def compile_unit(checked: CheckedUnit, optimize: bool = True) -> CompiledProgram:
