@@ -457,7 +457,7 @@ function scheduleDraw() {
   const draw = () => { drawScheduled = false; lastDrawn = performance.now(); if (lab.state) render(lab.state); };
   const wait = lastDrawn + DRAW_EVERY_MS - performance.now();
   if (wait <= 0) requestAnimationFrame(draw);
-  else setTimeout(() => requestAnimationFrame(draw), wait);
+  else setTimeout(() => requestAnimationFrame(draw), Math.ceil(wait));   // whole ms: never early
 }
 function onState(s) {
   if (lab.state && s.epoch !== lab.state.epoch) {     // the stand was reset (an input script): start afresh
