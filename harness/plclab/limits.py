@@ -100,6 +100,29 @@ def memory_limited(allowance: Optional[int] = -1) -> Iterator[None]:
             resource.setrlimit(resource.RLIMIT_AS, previous)
 
 
+AT_LIMIT = 16 * 1024 * 1024      # bytes: a process that came this close to its memory limit reached it
+
+
+def at_memory_limit() -> bool:
+    """This process's peak address space came within AT_LIMIT of its RLIMIT_AS: an error it
+    raised is most likely a failed allocation (C code reports one as a SystemError, or as any
+    error of its own; Python's compiler as the MemoryError its parser also raises for code
+    nested too deeply), not a bug of the grader or a fault of the program's text."""
+    try:
+        import resource
+    except ImportError:                    # pragma: no cover - not on the lab's Linux machines
+        return False
+    soft, _hard = resource.getrlimit(resource.RLIMIT_AS)
+    if soft == resource.RLIM_INFINITY:
+        return False
+    try:
+        with open("/proc/self/status", encoding="ascii") as f:
+            peak = next(int(line.split()[1]) * 1024 for line in f if line.startswith("VmPeak:"))
+    except (OSError, ValueError, IndexError, StopIteration):
+        return False
+    return peak >= soft - AT_LIMIT
+
+
 def out_of_memory_message(what: str) -> str:
     """The one line a command prints when its run ran out of the memory limit."""
     allowance = memory_allowance()

@@ -343,11 +343,11 @@ def test_the_memory_limit_holds_the_real_grading_of_a_real_program(tmp_path, own
     """No injected fault: the grading of a program with 2 MB of data, allowed 1 MiB beyond the
     grader, is stopped by the limit and reported as the student's FAIL; with the default it is
     graded."""
-    folder = tmp_path / "class" / "pia"
-    folder.mkdir(parents=True)
-    (folder / "pia.st").write_bytes((FIXTURES_DIR / "mp9c" / "task1_gripper_inverted.st").read_bytes())
-    (folder / LARGE_DATA[0]).write_text(LARGE_DATA[1], encoding="utf-8")
-    folder = folder.parent
+    folder = tmp_path / "class"
+    pia = folder / "pia"                          # a student's folder: the program and its data file
+    pia.mkdir(parents=True)
+    (pia / "pia.st").write_bytes((FIXTURES_DIR / "mp9c" / "task1_gripper_inverted.st").read_bytes())
+    (pia / LARGE_DATA[0]).write_text(LARGE_DATA[1], encoding="utf-8")
     # in a fresh interpreter, as `plclab grade-class` runs: a test process that has already
     # built the ST parser or loaded this program's native library would lend the grading what
     # it would otherwise allocate, and 1 MiB more could then be enough

@@ -138,7 +138,7 @@ def test_thermo_power_up_state(lab_page, shots):
 def test_the_page_draws_the_newest_state_at_most_25_times_a_second(lab_page):
     """The page is drawn with the newest state it has, at most once every 40 ms: drawing at
     the display's rate cost the browser most of a core for nothing the eye sees. The
-    stand's states keep coming faster (x5: up to 100 a second); each drawing shows the last."""
+    stand's states may come faster (40 a second at x5, 100 at x1); each drawing shows the last."""
     page = lab_page("mp9c").page
     page.evaluate("""() => {
         window.__draws = [];

@@ -636,9 +636,10 @@ def _lark() -> Lark:
     path = user_cache_dir("parser") / f"st-{key}.lark"
     try:
         path.parent.mkdir(parents=True, exist_ok=True)
+        cache: bool | str = str(path)
     except OSError:
-        return Lark(grammar, **options)
-    return Lark(grammar, cache=str(path), **options)
+        cache = False
+    return Lark(grammar, cache=cache, **options)
 
 
 @lru_cache(maxsize=1)

@@ -36,7 +36,6 @@ import multiprocessing
 import os
 import pickle
 import re
-import resource
 import shutil
 import signal
 import stat
@@ -61,7 +60,6 @@ from lxml import etree
 from plclab import fileio, limits
 from plclab.errors import CompileError, PlcLabError
 from plclab.frontend import read_sources
-from plclab.runtime.compiler import TOO_COMPLEX
 
 from .engine import grade, grade_sources, requirement_table, task_title
 from .explore import ExploreOptions, _fast_tmp, class_seed
@@ -406,7 +404,7 @@ def _grade_isolated(grade_one: GradeOne, stand: str, task: str, files: list[str]
     except PlcLabError as e:
         return "not graded", f"not graded: {e}"
     except BaseException as e:     # a grader bug: reported in the student's row, never charged to them
-        if _at_memory_limit():     # ... unless C code failed an allocation at the limit (a SystemError)
+        if limits.at_memory_limit():     # ... unless C code failed an allocation at the limit (a SystemError)
             return "memory", None
         last = traceback.extract_tb(e.__traceback__)[-1:] or [None]
         where = f" at {Path(last[0].filename).name}:{last[0].lineno}" if last[0] else ""
@@ -418,39 +416,18 @@ def _ran_out_of_memory(report: GradeReport) -> bool:
     """A MemoryError the grading turned into a row instead of raising it: the runtime records
     one in a scan as an internal fault ("PLC STOPPED by an internal error of plclab ...:
     MemoryError"), which stops the scenario; the engine records one in a check as a grader
-    error. Under the process limit it is the limit. And at the limit, a MemoryError of
-    Python's own compiler on the generated code, which the runtime reports as code nested too
-    deeply (what Python's parser raises for that, with no message to tell the two apart).
-    (Only these forms: a student's identifier named MemoryError in a compile error is not the
-    limit.)"""
-    if any(e.endswith(TOO_COMPLEX.format(why="MemoryError")) for e in report.errors) and _at_memory_limit():
-        return True
+    error. Under the process limit it is the limit. (Only these two forms: a student's
+    identifier named MemoryError in a compile error is not the limit.)"""
     for r in report.rows:
         if r.passed:
             continue
-        if r.internal and ("(MemoryError" in r.observed or _at_memory_limit()):
+        if r.internal and ("(MemoryError" in r.observed or limits.at_memory_limit()):
             return True
-        if "internal error of plclab" in r.observed and (" s: MemoryError" in r.observed or _at_memory_limit()):
+        if "internal error of plclab" in r.observed and (" s: MemoryError" in r.observed or limits.at_memory_limit()):
             return True
     return False
 
 
-AT_LIMIT = 16 * 1024 * 1024      # bytes: a process that came this close to its memory limit reached it
-
-
-def _at_memory_limit() -> bool:
-    """This process's peak address space came within AT_LIMIT of its RLIMIT_AS: an error it
-    raised is most likely a failed allocation (C code reports one as a SystemError, or as any
-    error of its own), not a bug of the grader."""
-    soft, _hard = resource.getrlimit(resource.RLIMIT_AS)
-    if soft == resource.RLIM_INFINITY:
-        return False
-    try:
-        status = Path("/proc/self/status").read_text()
-        peak = next(int(line.split()[1]) * 1024 for line in status.splitlines() if line.startswith("VmPeak:"))
-    except (OSError, ValueError, StopIteration):
-        return False
-    return peak >= soft - AT_LIMIT
 
 
 def _grade_in_child(conn, grade_one: GradeOne, stand: str, task: str, files: list[str],

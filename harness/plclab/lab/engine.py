@@ -32,8 +32,8 @@ from plclab.stands.scripts import fault_params
 from plclab.trace import Trace
 
 SPEEDS = (1, 2, 5, 10, 20, 50)
-MIN_BATCH_S = 0.01          # wall seconds between batches of a cycle shorter than that (the CNC's 1 ms) at x1
-FAST_BATCH_S = 0.025        # ... faster than real time: 40 snapshots/s at most (a page draws 25 a second)
+MIN_BATCH_S = 0.01          # wall seconds between batches at x1 where a cycle is shorter (the CNC's 1 ms)
+FAST_BATCH_S = 0.025        # wall seconds between batches faster than real time (40 snapshots/s; a page draws 25)
 MAX_BEHIND_S = 0.25         # wall seconds of backlog after which the engine stops catching up
 TRACE_KEEP_S = 30 * 60.0    # plant seconds the lab's trace keeps (a ring: older changes are dropped)
 TRIM_EVERY_S = 60.0         # plant seconds between two trims of the ring

@@ -38,6 +38,7 @@ from plclab.frontend import ast as A
 from plclab.frontend.checked import CheckedUnit, EnumValue, LiteralType
 from plclab.frontend.stdsigs import FBSig
 from plclab.iec import types as T
+from plclab.limits import at_memory_limit
 from plclab.runtime import stdfb, stdlib
 from plclab.runtime.faults import PlcFault
 from plclab.runtime.ranges import Range, RangeOf, concrete as _concrete, ring_type, type_range, \
@@ -250,7 +251,11 @@ class Compiler:
         source = "\n".join(out.lines) + "\n"
         try:
             code = compile(source, result.filename, "exec")
-        except (SyntaxError, RecursionError, MemoryError) as e:
+        except MemoryError as e:
+            if at_memory_limit():            # a failed allocation at the process's memory limit, not the code
+                raise
+            raise _too_complex(e, out.origin, cu) from None
+        except (SyntaxError, RecursionError) as e:
             raise _too_complex(e, out.origin, cu) from None
         exec(code, self.ns)
         result.source = source
@@ -1046,14 +1051,9 @@ def _too_complex(exc: BaseException, origin: dict[int, LineInfo], cu: CheckedUni
         where = (pou.file, pou.line, 1) if pou is not None else ("", 1, 1)
     else:
         where = (info.file, info.line, 1)
-    return CompileError([Diagnostic(*where, TOO_COMPLEX.format(why=getattr(exc, "msg", None) or type(exc).__name__))])
-
-
-TOO_COMPLEX = ("this code nests too deeply for PLC Lab's compiler (Python refused it: {why}); split the statement "
-               "or move parts of it into functions")
-"""_too_complex's message. With `why` MemoryError it may also be a failed allocation: Python's
-parser raises a MemoryError without a message for code past its stack, so under a process's
-memory limit the grader tells the two apart by how close the process came to the limit."""
+    return CompileError([Diagnostic(*where, "this code nests too deeply for PLC Lab's compiler (Python refused it: "
+                                            f"{getattr(exc, 'msg', None) or type(exc).__name__}); split the statement "
+                                            "or move parts of it into functions")])
 
 
 def compile_unit(checked: CheckedUnit, optimize: bool = True) -> CompiledProgram:
