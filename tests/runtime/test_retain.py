@@ -128,6 +128,8 @@ def test_kill_9_at_random_moments_never_corrupts_the_file(tmp_path):
         proc.wait(timeout=10)
         printed = [int(x) for x in out.split()]           # values known to be saved
         values = RetainStore(store_path).load(sig)
+        if values is None and previous == 0 and not printed and not store_path.exists():
+            continue                                      # killed before its first save: no file yet
         assert values is not None, "retain file unreadable after kill -9"
         if printed:                                       # the last saved one, or the save under way
             assert values["INST.COUNT"] in (printed[-1], printed[-1] + 1)
