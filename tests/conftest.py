@@ -87,3 +87,33 @@ HEAVY_FIRST = (
 def pytest_collection_modifyitems(config, items):
     rank = {path: n for n, path in enumerate(HEAVY_FIRST)}
     items.sort(key=lambda item: rank.get(item.nodeid.split("::", 1)[0], len(HEAVY_FIRST)))
+
+
+@pytest.fixture(autouse=True, scope="session")
+def _stall_dumps(tmp_path_factory):
+    """Grading processes (grade-class's, a Dask worker's) write their Python stacks here when
+    they are still running at 90 % of their time limit (plclab.grader.classroom.STALL_DUMP_ENV):
+    a test that fails on "not graded: ... time limit" then shows where the grading was."""
+    folder = tmp_path_factory.mktemp("stalls")
+    os.environ["PLCLAB_STALL_DUMP"] = str(folder)
+    yield
+    os.environ.pop("PLCLAB_STALL_DUMP", None)
+
+
+@pytest.hookimpl(hookwrapper=True)
+def pytest_runtest_makereport(item, call):
+    """The stacks grading processes dumped during this test, as a section of its report
+    (printed with a failure), then removed (the next test starts with none)."""
+    outcome = yield
+    folder = os.environ.get("PLCLAB_STALL_DUMP")
+    if call.when != "call" or not folder or not os.path.isdir(folder):
+        return
+    dumps = []
+    for path in sorted(Path(folder).glob("stall-*.txt")):
+        text = path.read_text(encoding="utf-8", errors="replace")
+        if text.count("\n") > 1:                # more than the header: the watchdog fired
+            dumps.append(text)
+        path.unlink(missing_ok=True)
+    if dumps:
+        outcome.get_result().sections.append(("grading processes that ran near their time limit",
+                                              "\n".join(dumps)))

@@ -118,6 +118,8 @@ def at_memory_limit() -> bool:
     try:
         with open("/proc/self/status", encoding="ascii") as f:
             peak = next(int(line.split()[1]) * 1024 for line in f if line.startswith("VmPeak:"))
+    except MemoryError:                    # even reading the file failed to allocate: at the limit
+        return True
     except (OSError, ValueError, IndexError, StopIteration):
         return False
     return peak >= soft - AT_LIMIT

@@ -325,6 +325,21 @@ def test_a_student_past_the_memory_limit_fails_with_that_reason_and_the_others_a
         ("FAIL", "not checked: the program was stopped: " + by["max"].report.errors[0])}
 
 
+def test_a_failed_allocation_with_no_memory_left_is_the_limit_not_a_dead_grader(tmp_path, own_tmp):
+    """C code that fails an allocation at the limit raises a SystemError; deciding that it was
+    the limit (reading the process's size) then has no memory either. That MemoryError is the
+    limit too: the student's FAIL, not "the grading process died"."""
+    folder = tmp_path / "class"
+    folder.mkdir()
+    (folder / "max.st").write_text("(* classroom test: exhausted *)\n" + BROKEN, encoding="utf-8")
+    report = grade_class("mp9c", "task1", folder, tmp_path / "out", jobs=1, memory_limit_mib=64,
+                         grade_one=grade_or_misbehave)
+    (max_,) = report.results
+    assert (max_.status, max_.not_graded) == ("FAIL", ""), max_.not_graded
+    assert max_.report.errors == ["memory limit of 64 MiB exceeded (the program declares or uses more memory than "
+                                  "a program may here; see docs/grading.md, --memory-limit)"]
+
+
 def test_a_memory_error_inside_a_scenario_is_the_limit_not_a_grader_error(tmp_path, own_tmp):
     """However deep the MemoryError (the engine would call a scenario's exception a grader bug,
     the runtime turns one into an internal fault), under the limit it is the student's FAIL.

@@ -8,6 +8,7 @@ import csv
 import dataclasses
 import io
 import multiprocessing
+import os
 import re
 import shutil
 from urllib.parse import unquote
@@ -446,6 +447,10 @@ def test_a_crash_a_hang_and_a_grader_bug_stop_nobody_else(tmp_path):
     write_class_outputs(report, out)
     status = {r.student: (r.status, r.not_graded) for r in report.results}
     assert status["a_hang"][0] == "ERROR" and "time limit of 2 s" in status["a_hang"][1]
+    # before it was stopped, the hanging process wrote where it was (the suite's stall folder)
+    stalls = [p.read_text(encoding="utf-8") for p in Path(os.environ["PLCLAB_STALL_DUMP"]).glob("stall-*.txt")]
+    assert [s for s in stalls if "classroom_faults.py" in s and "in grade_or_misbehave" in s
+            and "1 s into its time limit of 2 s" in s], stalls
     assert status["b_crash"][0] == "ERROR" and "killed by signal 9" in status["b_crash"][1]
     assert status["c_bug"][0] == "ERROR" and "KeyError" in status["c_bug"][1]
     assert "not a verdict on the program" in status["c_bug"][1]

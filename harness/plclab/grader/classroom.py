@@ -362,7 +362,7 @@ def _stop_signals_raise() -> Iterator[list[int]]:
 
 
 # ----------------------------------------------------------------- inside a grading process
-def _isolate(scratch: str, memory_limit_mib: Optional[int], parent: int) -> None:
+def _isolate(scratch: str, memory_limit_mib: Optional[int], parent: int, time_limit_s: float) -> None:
     """First thing in a grading process: its own process group (the parent stops the group),
     killed if the parent (process `parent`) dies (Linux), default signal handlers (not the
     parent's), temporary files in `scratch` (removed by the parent whatever happens here), and
@@ -375,6 +375,7 @@ def _isolate(scratch: str, memory_limit_mib: Optional[int], parent: int) -> None
         signal.signal(s, signal.SIG_DFL)
     os.environ["TMPDIR"] = scratch
     tempfile.tempdir = scratch
+    _dump_stack_if_stalled(time_limit_s)
     if memory_limit_mib is not None:
         limits.limit_memory(memory_limit_mib * 1024 * 1024)
 
@@ -392,10 +393,48 @@ def _die_with_parent(parent: int) -> None:
         os._exit(1)
 
 
+STALL_DUMP_ENV = "PLCLAB_STALL_DUMP"
+"""A folder: a grading process still running near the end of its time limit (stall_after)
+writes every thread's Python stack there (stall-PID.txt), for finding out where a grading that
+ran out of time was (the test suite sets it and shows the file with the failing test)."""
+_stall_file = None
+
+
+def stall_after(time_limit_s: float) -> float:
+    """When a grading process dumps its stack: a second before its time limit (90 % of a limit
+    under 10 s, half of one under 2 s), so the dump is written before the parent stops it."""
+    return max(time_limit_s * 0.5, min(time_limit_s * 0.9, time_limit_s - 1.0))
+
+
+def _dump_stack_if_stalled(time_limit_s: float) -> None:
+    """Arm faulthandler's watchdog (a C thread: it writes even while the main thread holds the
+    GIL in C code) when STALL_DUMP_ENV names a folder. Before the memory limit: the thread's
+    stack is the grader's, not the student's share."""
+    global _stall_file
+    folder = os.environ.get(STALL_DUMP_ENV)
+    if not folder or time_limit_s <= 0:
+        return
+    import faulthandler
+    with contextlib.suppress(OSError):
+        _stall_file = open(os.path.join(folder, f"stall-{os.getpid()}.txt"), "w", encoding="utf-8")
+        after = stall_after(time_limit_s)
+        _stall_file.write(f"a grading process (pid {os.getpid()}) still running {after:g} s into its time limit "
+                          f"of {time_limit_s:g} s:\n")
+        _stall_file.flush()
+        faulthandler.dump_traceback_later(after, file=_stall_file)
+
+
 def _grade_isolated(grade_one: GradeOne, stand: str, task: str, files: list[str],
                     out_dir: str) -> tuple[str, object]:
     """The grading itself, in the submission's own process: ("report", report), ("memory",
     None) when the memory limit was reached, or ("not graded", why)."""
+    try:
+        return _outcome(grade_one, stand, task, files, out_dir)
+    except MemoryError:      # at the limit, telling what went wrong ran out of memory too
+        return "memory", None
+
+
+def _outcome(grade_one: GradeOne, stand: str, task: str, files: list[str], out_dir: str) -> tuple[str, object]:
     try:
         report = grade_one(stand, task, files, out_dir)
         return ("memory", None) if _ran_out_of_memory(report) else ("report", report)
@@ -431,9 +470,10 @@ def _ran_out_of_memory(report: GradeReport) -> bool:
 
 
 def _grade_in_child(conn, grade_one: GradeOne, stand: str, task: str, files: list[str],
-                    out_dir: str, scratch: str, memory_limit_mib: Optional[int], parent: int) -> None:
+                    out_dir: str, scratch: str, memory_limit_mib: Optional[int], parent: int,
+                    time_limit_s: float) -> None:
     """Runs in the submission's own (forked) process: the outcome down the pipe."""
-    _isolate(scratch, memory_limit_mib, parent)
+    _isolate(scratch, memory_limit_mib, parent, time_limit_s)
     try:
         conn.send(_grade_isolated(grade_one, stand, task, files, out_dir))
     finally:
@@ -509,7 +549,8 @@ def _run_parallel(stand: str, task: str, submissions: list[Submission], out: Pat
                 receive, send = ctx.Pipe(duplex=False)
                 p = ctx.Process(target=_grade_in_child, name=f"grade-{sub.student}", daemon=True,
                                 args=(send, grade_one, stand, task, [str(f) for f in sub.files],
-                                      str(work / "traces"), str(work / "tmp"), limits.memory_mib, os.getpid()))
+                                      str(work / "traces"), str(work / "tmp"), limits.memory_mib, os.getpid(),
+                                      limits.time_s))
                 p.start()
                 running.append(_Running(sub, p, receive, time.monotonic(), work))   # at once: stopped if we are
                 send.close()
@@ -694,7 +735,7 @@ def grade_on_worker(stand: str, task: str, sources: list[tuple[str, str]], time_
     try:
         (work / "tmp").mkdir()
         payload = pickle.dumps((stand, task, sources, str(work / "traces"), str(work / "tmp"), memory_limit_mib,
-                                os.getpid(), explore, reference, seed))
+                                time_limit_s, os.getpid(), explore, reference, seed))
         env = {**os.environ, "PYTHONPATH": os.pathsep.join(p for p in sys.path if p), "TMPDIR": str(work / "tmp")}
         child = subprocess.Popen([sys.executable, "-c", "from plclab.grader.classroom import _worker_child; "
                                   "_worker_child()"], stdin=subprocess.PIPE, stdout=subprocess.PIPE,
@@ -724,10 +765,10 @@ def grade_on_worker(stand: str, task: str, sources: list[tuple[str, str]], time_
 def _worker_child() -> None:
     """The grading process a Dask worker starts: the arguments pickled on stdin, the outcome
     pickled on stdout (a report of our own grader: trusted data between our processes)."""
-    (stand, task, sources, traces, scratch, memory_limit_mib, parent, explore,
+    (stand, task, sources, traces, scratch, memory_limit_mib, time_limit_s, parent, explore,
      reference, seed) = pickle.loads(sys.stdin.buffer.read())
     out = sys.stdout.buffer
-    _isolate(scratch, memory_limit_mib, parent)
+    _isolate(scratch, memory_limit_mib, parent, time_limit_s)
     reference_files = _write_reference(reference, Path(scratch) / "reference") if reference else None
 
     def grade_read(stand: str, task: str, _files, out_dir) -> GradeReport:
@@ -736,6 +777,9 @@ def _worker_child() -> None:
     result = _grade_isolated(grade_read, stand, task, [name for name, _ in sources], traces)
     out.write(pickle.dumps(result))
     out.flush()
+    # the parent takes the outcome at this process's end: no interpreter teardown to wait for
+    # (nothing is left to clean up here; the parent removes the scratch folder)
+    os._exit(0)
 
 
 # ---------------------------------------------------------------------------- one row per requirement
