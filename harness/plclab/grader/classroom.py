@@ -451,6 +451,15 @@ def _outcome(grade_one: GradeOne, stand: str, task: str, files: list[str], out_d
                               f"this is a harness problem, not a verdict on the program")
 
 
+def _pickled(outcome: tuple[str, object]) -> bytes:
+    """The outcome as the parent receives it; at the limit, where even that takes more memory
+    than is left, the limit."""
+    try:
+        return pickle.dumps(outcome)
+    except MemoryError:
+        return pickle.dumps(("memory", None))
+
+
 def _ran_out_of_memory(report: GradeReport) -> bool:
     """A MemoryError the grading turned into a row instead of raising it: the runtime records
     one in a scan as an internal fault ("PLC STOPPED by an internal error of plclab ...:
@@ -475,7 +484,7 @@ def _grade_in_child(conn, grade_one: GradeOne, stand: str, task: str, files: lis
     """Runs in the submission's own (forked) process: the outcome down the pipe."""
     _isolate(scratch, memory_limit_mib, parent, time_limit_s)
     try:
-        conn.send(_grade_isolated(grade_one, stand, task, files, out_dir))
+        conn.send_bytes(_pickled(_grade_isolated(grade_one, stand, task, files, out_dir)))
     finally:
         conn.close()
 
@@ -775,7 +784,7 @@ def _worker_child() -> None:
         return grade_sources(stand, task, sources, out_dir, reference_files, explore, ExploreOptions(seed=seed))
 
     result = _grade_isolated(grade_read, stand, task, [name for name, _ in sources], traces)
-    out.write(pickle.dumps(result))
+    out.write(_pickled(result))
     out.flush()
     # the parent takes the outcome at this process's end: no interpreter teardown to wait for
     # (nothing is left to clean up here; the parent removes the scratch folder)
