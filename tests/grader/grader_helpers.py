@@ -19,6 +19,12 @@ FIXTURES_DIR = Path(__file__).resolve().parent / "fixtures"
 # grader depends on what the grader process has loaded and freed already (the parser's tables,
 # the program's native library), down to under 1 MiB: a memory limit's test cannot hang on that.
 LARGE_DATA = ("GVL_Samples.st", "VAR_GLOBAL\n    Samples : ARRAY[0..499999] OF DINT;\nEND_VAR\n")
+# A function block of 300 statements beside a program (declared, never called): the generated
+# Python is large enough that compiling it needs a few MiB, where a grading's other steps need
+# less than one beyond the grader (its parser's tables are loaded before the limit is set).
+LARGE_CODE = ("FB_Large.st", "FUNCTION_BLOCK FB_Large\nVAR\n" + "".join(f"    x{i} : DINT;\n" for i in range(50))
+              + "END_VAR\n" + "".join(f"    x{i % 50} := x{(i * 7) % 50} + {i};\n" for i in range(300))
+              + "END_FUNCTION_BLOCK\n")
 HEADER = re.compile(r"plclab grader fixture: (task\d), expected to FAIL (\S+)\. Mistake: (.*)")
 TASKS = ("task1", "task2", "task3")
 

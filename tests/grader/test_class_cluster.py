@@ -15,7 +15,7 @@ from lxml import etree
 
 from plclab.grader.classroom import cells, grade_class, grade_on_worker, write_class_outputs
 from plclab.stands import get_stand, sources
-from grader_helpers import FIXTURES_DIR, LARGE_DATA
+from grader_helpers import FIXTURES_DIR, LARGE_CODE, LARGE_DATA
 
 BROKEN = "PROGRAM Broken\nVAR x : INT; END_VAR\nx := ;\nEND_PROGRAM\n"
 HARNESS = Path(__file__).resolve().parents[2] / "harness"
@@ -88,12 +88,22 @@ def test_on_a_worker_each_student_keeps_the_memory_limit():
     assert kind == "report" and value.passed, value
 
 
+def test_on_a_worker_the_parsers_tables_are_not_the_students_memory():
+    """The grading process loads the ST parser's tables (several MiB of lark's objects) before
+    it sets the memory limit: a small limit is the program's own. With them loaded under it,
+    2 MiB ran out before the model answer's check."""
+    task1 = sources(get_stand("mp9c"), "task1")
+    kind, value, _ = grade_on_worker("mp9c", "task1", task1, 120.0, 2)
+    assert kind == "report" and value.passed and not value.errors, (kind, value)
+
+
 def test_on_a_worker_a_memory_error_at_the_limit_is_never_a_diagnostic_of_the_program():
     """Close to the limit, Python's own compiler may fail to allocate while it compiles the
     program: that is the memory limit (the student's FAIL says so), never "this code nests
-    too deeply", whichever part of the grading the limit stops."""
-    task1 = sources(get_stand("mp9c"), "task1")
-    for mib in range(2, 6):
+    too deeply", whichever part of the grading the limit stops. (Below 5 MiB the limit stops
+    this program's compilation: without the compiler's check, "this code nests too deeply".)"""
+    task1 = sources(get_stand("mp9c"), "task1") + [LARGE_CODE]
+    for mib in range(1, 7):
         kind, value, _ = grade_on_worker("mp9c", "task1", task1, 120.0, mib)
         assert kind == "memory" or (kind == "report" and value.passed and not value.errors), (mib, kind, value)
 

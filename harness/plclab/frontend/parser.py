@@ -642,6 +642,14 @@ def _lark() -> Lark:
     return Lark(grammar, cache=cache, **options)
 
 
+def load_parser() -> None:
+    """Load (or build) the parser's tables now, once per process: a process that will hold a
+    student's program to a memory limit loads them before setting it, so the harness's tables
+    are not the student's share, and never loaded at the limit (lark takes a failed load from
+    its cache as a reason to build the tables anew, allocation after allocation at the limit)."""
+    _lark()
+
+
 @lru_cache(maxsize=1)
 def _keywords() -> frozenset[str]:
     """Every word the grammar uses as a keyword (never an identifier). Elementary type names

@@ -60,6 +60,7 @@ from lxml import etree
 from plclab import fileio, limits
 from plclab.errors import CompileError, PlcLabError
 from plclab.frontend import read_sources
+from plclab.frontend.parser import load_parser
 
 from .engine import grade, grade_sources, requirement_table, task_title
 from .explore import ExploreOptions, _fast_tmp, class_seed
@@ -367,7 +368,7 @@ def _isolate(scratch: str, memory_limit_mib: Optional[int], parent: int, time_li
     killed if the parent (process `parent`) dies (Linux), default signal handlers (not the
     parent's), temporary files in `scratch` (removed by the parent whatever happens here), and
     the memory limit: `memory_limit_mib` more address space than the process has now (the
-    grader, loaded: a parent's size must not eat a student's share)."""
+    grader, loaded, its parser's tables too: a parent's size must not eat a student's share)."""
     with contextlib.suppress(OSError):
         os.setsid()
     _die_with_parent(parent)
@@ -377,6 +378,7 @@ def _isolate(scratch: str, memory_limit_mib: Optional[int], parent: int, time_li
     tempfile.tempdir = scratch
     _dump_stack_if_stalled(time_limit_s)
     if memory_limit_mib is not None:
+        load_parser()                    # the harness's tables: not the student's share
         limits.limit_memory(memory_limit_mib * 1024 * 1024)
 
 

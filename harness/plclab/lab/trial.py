@@ -17,8 +17,10 @@ def main() -> int:
     from plclab.lab.engine import _why
     from plclab.limits import limit_memory
     from plclab.runtime.compiler import compile_unit
+    from plclab.frontend.parser import load_parser
     from plclab.runtime.plc import PLC
-    limit_memory()                        # imports first: the allowance is the program's
+    load_parser()
+    limit_memory()                        # imports and the parser's tables first: the allowance is the program's
     stage = "checked"
     try:
         sources = [(str(n), str(t)) for n, t in json.loads(data)]
