@@ -92,7 +92,7 @@ def pytest_collection_modifyitems(config, items):
 @pytest.fixture(autouse=True, scope="session")
 def _stall_dumps(tmp_path_factory):
     """Grading processes (grade-class's, a Dask worker's) write their Python stacks here when
-    they are still running at 90 % of their time limit (plclab.grader.classroom.STALL_DUMP_ENV):
+    they are still running shortly before their time limit (plclab.grader.classroom.STALL_DUMP_ENV):
     a test that fails on "not graded: ... time limit" then shows where the grading was."""
     folder = tmp_path_factory.mktemp("stalls")
     os.environ["PLCLAB_STALL_DUMP"] = str(folder)

@@ -396,13 +396,13 @@ def _die_with_parent(parent: int) -> None:
 
 
 STALL_DUMP_ENV = "PLCLAB_STALL_DUMP"
-"""A folder: a grading process still running near the end of its time limit (stall_after)
+"""A folder: a grading process still running near the end of its time limit (_stall_after)
 writes every thread's Python stack there (stall-PID.txt), for finding out where a grading that
 ran out of time was (the test suite sets it and shows the file with the failing test)."""
-_stall_file = None
+_stall_file = None               # kept open for faulthandler's watchdog, which writes to it
 
 
-def stall_after(time_limit_s: float) -> float:
+def _stall_after(time_limit_s: float) -> float:
     """When a grading process dumps its stack: a second before its time limit (90 % of a limit
     under 10 s, half of one under 2 s), so the dump is written before the parent stops it."""
     return max(time_limit_s * 0.5, min(time_limit_s * 0.9, time_limit_s - 1.0))
@@ -419,7 +419,7 @@ def _dump_stack_if_stalled(time_limit_s: float) -> None:
     import faulthandler
     with contextlib.suppress(OSError):
         _stall_file = open(os.path.join(folder, f"stall-{os.getpid()}.txt"), "w", encoding="utf-8")
-        after = stall_after(time_limit_s)
+        after = _stall_after(time_limit_s)
         _stall_file.write(f"a grading process (pid {os.getpid()}) still running {after:g} s into its time limit "
                           f"of {time_limit_s:g} s:\n")
         _stall_file.flush()
@@ -476,8 +476,6 @@ def _ran_out_of_memory(report: GradeReport) -> bool:
         if "internal error of plclab" in r.observed and (" s: MemoryError" in r.observed or limits.at_memory_limit()):
             return True
     return False
-
-
 
 
 def _grade_in_child(conn, grade_one: GradeOne, stand: str, task: str, files: list[str],

@@ -14,10 +14,10 @@ def main() -> int:
     data = sys.stdin.read()
     from plclab.errors import CompileError
     from plclab.frontend import check_sources
+    from plclab.frontend.parser import load_parser
     from plclab.lab.engine import _why
     from plclab.limits import limit_memory
     from plclab.runtime.compiler import compile_unit
-    from plclab.frontend.parser import load_parser
     from plclab.runtime.plc import PLC
     load_parser()
     limit_memory()                        # imports and the parser's tables first: the allowance is the program's
