@@ -6,9 +6,12 @@ as the Editor's generator writes its ST (plcxml; its LD / FBD bodies through gra
 """
 from __future__ import annotations
 
+import hashlib
 import os
+import threading
+from collections import OrderedDict
 from pathlib import Path
-from typing import Iterable
+from typing import Iterable, Optional
 
 from plclab import fileio
 from plclab.errors import CompileError, Diagnostic
@@ -31,12 +34,66 @@ def read_source(path: str | Path) -> tuple[str, list[Diagnostic]]:
     return data.decode("utf-8", errors="replace").replace("\ufffd", "\x00" if b"\x00" in data else "\ufffd"), []
 
 
+CHECKED_CHARS = 256 * 1024            # the checked units kept, by their files' characters all together
+CHECKED_MAX_CHARS = 128 * 1024        # a unit whose files are longer together is checked each time
+_CHECKED: "OrderedDict[bytes, tuple[CheckedUnit, int]]" = OrderedDict()
+_CHECKED_LOCK = threading.Lock()
+_checked_chars = 0
+
+
 def check_sources(sources: Iterable[tuple[str, str]]) -> CheckedUnit:
-    """Parse and check (name, text) pairs as one compilation unit; raises CompileError."""
+    """Parse and check (name, text) pairs as one compilation unit; raises CompileError.
+
+    The same files (names and texts) checked again under the same limits give the same
+    CheckedUnit, which is read-only from here on: the compiler, the native path and every
+    session of a program only read it (the grader's sessions of one submission always shared
+    one). A stand's session, a test's, a lab reload check one shipped program over and over;
+    the checker's walk of it (a tenth of a second for the CNC stand) is done once. Kept: the
+    units checked last, of CHECKED_CHARS characters together (a unit takes some 50 bytes a
+    character: about 12 MiB in all); a unit longer than CHECKED_MAX_CHARS, a program drawn
+    in a plc.xml, or one that fails, is checked each time."""
+    global _checked_chars
+    sources_seen = list(sources)
+    key = _checked_key(sources_seen)
+    if key is not None:
+        with _CHECKED_LOCK:
+            known = _CHECKED.get(key)
+            if known is not None:
+                _CHECKED.move_to_end(key)
+                return known[0]
+    checked = _check(sources_seen)
+    if key is not None:
+        chars = sum(len(text) for _name, text in sources_seen)
+        with _CHECKED_LOCK:
+            if key not in _CHECKED:
+                _CHECKED[key] = (checked, chars)
+                _checked_chars += chars
+                while _checked_chars > CHECKED_CHARS:
+                    _key, (_unit, dropped) = _CHECKED.popitem(last=False)
+                    _checked_chars -= dropped
+    return checked
+
+
+def _checked_key(sources: list[tuple[str, str]]) -> Optional[bytes]:
+    """The cache key of a unit: its files' names and texts and the checker's limits (a test
+    may lower one); None for a unit that is not kept."""
+    from plclab.frontend import check_limits
+    if any(type(text) is not str or type(name) is not str for name, text in sources) \
+            or sum(len(text) for _name, text in sources) > CHECKED_MAX_CHARS:
+        return None              # a drawn program's text (frontend.graphical) names its drawing per check
+    h = hashlib.blake2b(digest_size=20)
+    limits = sorted((k, v) for k, v in vars(check_limits).items() if k.isupper() and isinstance(v, int))
+    h.update(repr((limits, MAX_SOURCE_BYTES)).encode())
+    for name, text in sources:
+        h.update(f"\0{len(name)}\0{name}\0{len(text)}\0".encode("utf-8", "surrogatepass"))
+        h.update(text.encode("utf-8", "surrogatepass"))
+    return h.digest()
+
+
+def _check(sources_seen: list[tuple[str, str]]) -> CheckedUnit:
     merged = A.Unit(line=1, col=1, file="")
     diags: list[Diagnostic] = []
     names: list[str] = []
-    sources_seen = list(sources)
     for name, text in sources_seen:
         names.append(name)
         unit, errs = parse_source(text, name)

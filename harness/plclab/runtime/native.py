@@ -28,6 +28,7 @@ import sys
 import sysconfig
 import tempfile
 import threading
+import weakref
 from pathlib import Path
 from typing import Any, Callable, Iterator, Optional, Sequence
 
@@ -271,7 +272,7 @@ def program_for(compiled: Any, wait: bool = False) -> Optional["NativeProgram"]:
         cprog = cached
     else:
         try:
-            cprog = emit_c(compiled.checked)
+            cprog = _emitted(compiled.checked)
         except Unsupported as e:
             _inform(f"unsupported:{e}", f"the native scan path does not cover {e}")
             _remember(compiled, _FAILED)
@@ -288,6 +289,26 @@ def program_for(compiled: Any, wait: bool = False) -> Optional["NativeProgram"]:
 
 
 _SEEN: dict[str, int] = {}
+# id(checked unit) -> its C (or the Unsupported emit_c raised), while the unit lives
+_EMITTED: dict[int, Any] = {}
+
+
+def _emitted(checked: Any) -> CProgram:
+    """emit_c(checked), once per checked unit: every session and restart of one program
+    compiles it to Python anew (its own state), but its C, what keys the library, is the
+    same (the front end gives the same CheckedUnit for the same files)."""
+    key = id(checked)
+    got = _EMITTED.get(key)
+    if got is None:
+        try:
+            got = emit_c(checked)
+        except Unsupported as e:
+            got = e
+        _EMITTED[key] = got
+        weakref.finalize(checked, _EMITTED.pop, key, None)
+    if isinstance(got, Unsupported):
+        raise Unsupported(*got.args)      # a new one each time: a raised one keeps its frames
+    return got
 
 
 def _remember(compiled: Any, value: Any) -> None:
