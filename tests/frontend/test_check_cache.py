@@ -47,15 +47,14 @@ def test_a_program_that_fails_is_checked_each_time_and_a_lowered_limit_is_obeyed
 
 def test_the_units_kept_stay_within_their_bound(monkeypatch):
     monkeypatch.setattr(F, "_CHECKED", type(F._CHECKED)())
-    monkeypatch.setattr(F, "_checked_chars", 0)
     monkeypatch.setattr(F, "CHECKED_CHARS", 3 * len(SMALL) + 10)
     units = [check_sources([(f"p{n}.st", SMALL)]) for n in range(6)]
-    assert len(F._CHECKED) == 3 and F._checked_chars == 3 * len(SMALL)
+    assert len(F._CHECKED) == 3 and sum(n for _unit, n in F._CHECKED.values()) == 3 * len(SMALL)
     assert check_sources([("p5.st", SMALL)]) is units[5]               # the last ones kept
     assert check_sources([("p0.st", SMALL)]) is not units[0]           # the first dropped: checked anew
     big = SMALL + "(*" + "x" * F.CHECKED_MAX_CHARS + "*)\n"
     assert check_sources([("big.st", big)]) is not check_sources([("big.st", big)])
-    assert F._checked_chars <= F.CHECKED_CHARS
+    assert sum(n for _unit, n in F._CHECKED.values()) <= F.CHECKED_CHARS
 
 
 def test_a_drawn_program_is_checked_each_time():

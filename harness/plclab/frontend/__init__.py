@@ -16,6 +16,7 @@ from typing import Iterable, Optional
 from plclab import fileio
 from plclab.errors import CompileError, Diagnostic
 from plclab.frontend import ast as A
+from plclab.frontend import check_limits
 from plclab.frontend.checked import CheckedUnit
 from plclab.frontend.checker import check_unit
 from plclab.frontend.parser import MAX_SOURCE_BYTES, parse_source
@@ -38,7 +39,6 @@ CHECKED_CHARS = 256 * 1024            # the checked units kept, by their files' 
 CHECKED_MAX_CHARS = 128 * 1024        # a unit whose files are longer together is checked each time
 _CHECKED: "OrderedDict[bytes, tuple[CheckedUnit, int]]" = OrderedDict()
 _CHECKED_LOCK = threading.Lock()
-_checked_chars = 0
 
 
 def check_sources(sources: Iterable[tuple[str, str]]) -> CheckedUnit:
@@ -52,7 +52,6 @@ def check_sources(sources: Iterable[tuple[str, str]]) -> CheckedUnit:
     units checked last, of CHECKED_CHARS characters together (a unit takes some 50 bytes a
     character: about 12 MiB in all); a unit longer than CHECKED_MAX_CHARS, a program drawn
     in a plc.xml, or one that fails, is checked each time."""
-    global _checked_chars
     sources_seen = list(sources)
     key = _checked_key(sources_seen)
     if key is not None:
@@ -65,19 +64,15 @@ def check_sources(sources: Iterable[tuple[str, str]]) -> CheckedUnit:
     if key is not None:
         chars = sum(len(text) for _name, text in sources_seen)
         with _CHECKED_LOCK:
-            if key not in _CHECKED:
-                _CHECKED[key] = (checked, chars)
-                _checked_chars += chars
-                while _checked_chars > CHECKED_CHARS:
-                    _key, (_unit, dropped) = _CHECKED.popitem(last=False)
-                    _checked_chars -= dropped
+            _CHECKED[key] = (checked, chars)
+            while sum(n for _unit, n in _CHECKED.values()) > CHECKED_CHARS:    # a short sum: few units
+                _CHECKED.popitem(last=False)
     return checked
 
 
 def _checked_key(sources: list[tuple[str, str]]) -> Optional[bytes]:
     """The cache key of a unit: its files' names and texts and the checker's limits (a test
     may lower one); None for a unit that is not kept."""
-    from plclab.frontend import check_limits
     if any(type(text) is not str or type(name) is not str for name, text in sources) \
             or sum(len(text) for _name, text in sources) > CHECKED_MAX_CHARS:
         return None              # a drawn program's text (frontend.graphical) names its drawing per check
