@@ -269,6 +269,30 @@ def test_the_tracer_leaves_the_garbage_collector_as_it_found_it():
     finally:
         gc.enable()
 
+def test_a_dropped_trace_is_freed_at_once_without_the_cyclic_collector():
+    """A trace is hundreds of thousands of events; a grading that localizes several rows, or
+    a process that grades many programs (grade-class, the lab), must get them back as each
+    replay is dropped. The line tracer of a traced call once named itself (a reference cycle
+    holding the whole trace): every trace then waited for a full collection, and a process
+    grading one program after another grew by about 85 MB per program."""
+    import gc
+    import weakref
+
+    sim = _sim(CALLS)                       # calls of an FC and an FB: a line tracer per call
+    gc.disable()
+    try:
+        tr = Tracer(sim.plc.compiled, lambda: sim.plc.now_ns / 1e9)
+        tr.start()
+        sim.step(3)
+        tr.stop()
+        assert len(tr.events) > 10
+        gone = weakref.ref(tr)
+        del tr
+        assert gone() is None, "the trace is held by a reference cycle"
+    finally:
+        gc.enable()
+
+
 def test_a_trace_stopped_in_kept_out_of_gc_is_not_walked_and_the_block_gives_everything_back():
     """A row's localization keeps its traces out of the collector's walks (issue 30: the
     first collection after a replay walked every event): a tracer stopped in the block leaves

@@ -425,7 +425,7 @@ class Tracer:
                 lineno = frame.f_lineno
                 shape = shapes.get(lineno)
                 if shape is None:
-                    return local
+                    return frame.f_trace
                 eid = self._next
                 self._next = eid + 1
                 g = frame.f_globals.get("G")
@@ -450,7 +450,11 @@ class Tracer:
             elif event == "return":
                 self._finish(st)
                 self._frames.pop(id(frame), None)
-            return local
+            # the frame's own tracer (this function), not the name `local`: a closure that names
+            # itself is a reference cycle, and through it every trace would wait for the cyclic
+            # collector (hundreds of MB of events between full collections) instead of being
+            # freed as its replay is dropped
+            return frame.f_trace
 
         return local
 
