@@ -1,8 +1,8 @@
 """Setup shared by the whole suite: the helper modules that live beside the tests
-(runtime/st_helpers.py, grader/grader_helpers.py, stands/golden.py, modbus/modbus_support.py,
-cnc/cnc_st.py)
-import by their plain names, with pytest's assertion rewriting so their asserts report like
-the tests' own. One place instead of a sys.path line in each test file."""
+(runtime/st_helpers.py, grader/grader_helpers.py, grader/explore_cases.py, stands/golden.py,
+modbus/modbus_support.py, cnc/cnc_st.py) import by their plain names, with pytest's assertion
+rewriting so their asserts report like the tests' own. One place instead of a sys.path line in
+each test file."""
 from __future__ import annotations
 
 import sys
@@ -14,7 +14,8 @@ TESTS = Path(__file__).resolve().parent
 for folder in ("runtime", "grader", "stands", "modbus", "cnc", "ladder"):
     if str(TESTS / folder) not in sys.path:
         sys.path.insert(0, str(TESTS / folder))
-pytest.register_assert_rewrite("st_helpers", "grader_helpers", "golden", "modbus_support", "cnc_st", "drawing")
+pytest.register_assert_rewrite("st_helpers", "grader_helpers", "explore_cases", "golden", "modbus_support", "cnc_st",
+                              "drawing")
 
 # CI is deterministic: under CI=true every property test draws the same examples each run
 # (a failure found there reproduces on the next run); a developer's run still explores anew.
@@ -69,6 +70,8 @@ HEAVY_FIRST = (
     "tests/grader/test_grader_tur10.py",
     "tests/runtime/test_native.py",
     "tests/grader/test_grader_mp9c.py",
+    "tests/grader/test_explore_rates.py",
+    "tests/grader/test_explore_alternatives.py",
     "tests/lab/test_page_console.py",
     "tests/grader/test_explore_engine.py",
     "tests/grader/test_localize.py",

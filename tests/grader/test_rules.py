@@ -207,7 +207,7 @@ from plclab.grader import engine  # noqa: E402
 
 HERE = Path(__file__).resolve().parent
 RULES = sorted((HERE / "fixtures" / "rules").glob("*/*.st"))
-EPISODES = {"mp9c": 20, "tur10": 10}        # as test_explore's correct alternatives
+EPISODES = {"mp9c": 20, "tur10": 10}        # as test_explore_alternatives' programs
 
 
 @pytest.mark.parametrize("path", RULES, ids=lambda p: f"{p.parent.name}-{p.stem}")
