@@ -261,13 +261,11 @@ def test_the_tracer_leaves_the_garbage_collector_as_it_found_it():
     assert len(tr.scan_times) == 3 and tr.events
     gc.disable()
     try:
-        tr2 = Tracer(sim.plc.compiled, lambda: sim.plc.now_ns / 1e9)
-        tr2.start()
-        sim.step(1)
-        tr2.stop()
+        _traced(sim, 1)
         assert not gc.isenabled()
     finally:
         gc.enable()
+
 
 def test_a_dropped_trace_is_freed_at_once_without_the_cyclic_collector():
     """A trace is hundreds of thousands of events; a grading that localizes several rows, or
@@ -281,10 +279,7 @@ def test_a_dropped_trace_is_freed_at_once_without_the_cyclic_collector():
     sim = _sim(CALLS)                       # calls of an FC and an FB: a line tracer per call
     gc.disable()
     try:
-        tr = Tracer(sim.plc.compiled, lambda: sim.plc.now_ns / 1e9)
-        tr.start()
-        sim.step(3)
-        tr.stop()
+        tr = _traced(sim, 3)
         assert len(tr.events) > 10
         gone = weakref.ref(tr)
         del tr
