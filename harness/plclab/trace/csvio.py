@@ -19,7 +19,8 @@ import io
 import os
 import re
 from dataclasses import dataclass
-from typing import Any, Iterator, Mapping, Optional, Sequence, TextIO, Union
+from operator import itemgetter
+from typing import Any, Callable, Iterator, Mapping, Optional, Sequence, TextIO, Union
 
 from plclab.errors import PlcLabError, quoted
 from plclab.fileio import open_atomic
@@ -69,8 +70,11 @@ def iter_rows(trace: Trace, names: Optional[Sequence[str]] = None) -> list[tuple
     for name in wanted:
         info = trace.info(name)
         rows.extend((t, info.index, info.name, v) for t, v in trace.changes(name))
-    rows.sort(key=lambda r: (r[0], r[1]))
+    rows.sort(key=_FILE_ORDER)
     return rows
+
+
+_FILE_ORDER = itemgetter(0, 1)      # by time, then declaration index (a stable sort: as listed)
 
 
 def write_csv(trace: Trace, dest: Source, names: Optional[Sequence[str]] = None) -> None:
@@ -90,13 +94,32 @@ def csv_text(trace: Trace, names: Optional[Sequence[str]] = None) -> str:
 
 
 def _write(trace: Trace, f: TextIO, names: Optional[Sequence[str]]) -> None:
-    kinds = {name: trace.info(name).kind for name in trace.signals()}
+    # a trace of a robot's scenario is tens of thousands of rows: what depends on the signal
+    # alone (its name's field, how its values are written) is worked out once per signal, and
+    # a time's text once per instant; the text is what format_value and _field give
     out = [",".join(HEADER) + "\n"]
-    for t, _i, name, value in iter_rows(trace, names):
-        kind = kinds[name]
-        out.append(f"{format_seconds(t)},{_field(name)},"
-                   f"{_field(format_value(kind, value), quote=(kind == 'str'))}\n")
+    prefixes: dict[int, str] = {}
+    values: dict[int, Callable[[Any], str]] = {}
+    for name in (trace.signals() if names is None else names):
+        info = trace.info(name)
+        prefixes[info.index] = "," + _field(info.name) + ","
+        values[info.index] = _VALUE_FIELD.get(info.kind) or (lambda v, k=info.kind: _field(format_value(k, v)))
+    last_t, time_text = None, ""
+    for t, i, _name, value in iter_rows(trace, names):
+        if t != last_t:
+            last_t, time_text = t, format_seconds(t)
+        out.append(f"{time_text}{prefixes[i]}{values[i](value)}\n")
     f.write("".join(out))
+
+
+# a value's field by its signal's kind, where no value of the kind can need quotes (BOOL 0/1,
+# an integer, a REAL's repr) or every value has them (STRING)
+_VALUE_FIELD: dict[str, Callable[[Any], str]] = {
+    "bool": lambda v: "1" if v else "0",
+    "int": str,
+    "real": lambda v: repr(float(v)),
+    "str": lambda v: _field(str(v), quote=True),
+}
 
 
 # ---------------------------------------------------------------------------- reading

@@ -19,6 +19,7 @@ from __future__ import annotations
 
 import os
 import re
+from operator import itemgetter
 from typing import Any, Optional, Sequence, TextIO, Union
 
 from vcd import VCDWriter
@@ -124,7 +125,7 @@ def _write(trace: Trace, f: TextIO, names: Optional[Sequence[str]], timescale: s
     for alias, target in aliases.items():
         scope, ref = alias_refs[f"{ALIAS_SCOPE}.{alias}"].rsplit(".", 1)
         writer.register_alias(scope, ref, variables[target])
-    rows.sort(key=lambda r: (r[0], r[1]))
+    rows.sort(key=itemgetter(0, 1))                     # by time, then declaration index
     for t, _i, var, value in rows:
         writer.change(var, t // scale, value)
     writer.close(trace.end_ns // scale)
