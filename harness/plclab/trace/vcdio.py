@@ -112,9 +112,9 @@ def _write(trace: Trace, f: TextIO, names: Optional[Sequence[str]], timescale: s
         elif info.kind == "int":
             values = [v for _t, v in changes]
             width = info.width or _int_width(values)
-            for v in values:
-                if not -(1 << (width - 1)) <= v < (1 << width):
-                    raise ValueError(f"{name}: value {v} does not fit in {width} bits")
+            if not -(1 << (width - 1)) <= min(values) <= max(values) < (1 << width):
+                v = next(v for v in values if not -(1 << (width - 1)) <= v < (1 << width))
+                raise ValueError(f"{name}: value {v} does not fit in {width} bits")
             var = writer.register_var(scope, ref, "reg", size=width, init=init)
         elif info.kind == "real":
             var = writer.register_var(scope, ref, "real", init=init)
