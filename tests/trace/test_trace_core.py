@@ -4,6 +4,8 @@ from __future__ import annotations
 import math
 
 import pytest
+from hypothesis import given, settings
+from hypothesis import strategies as st
 
 from plclab.trace import NotFound, Trace, UnknownSignal
 
@@ -139,6 +141,41 @@ def test_first_raises_with_the_window_or_returns_default():
     assert t.first(lambda io: io.L2 and not io.SQ2, default=None) is None
     with pytest.raises(NotFound, match="L3 was never true between t=0 s and t=5 s"):
         t.first("L3", until=5.0)
+
+
+@settings(max_examples=200, deadline=None)
+@given(st.data())
+def test_first_values_answers_as_first_does(data):
+    """`first_values` (one pass over the changes of the signals its predicate reads) is `first`
+    for such a predicate: the same instant, or the same NotFound line, over any window; a
+    signal declared later reads None before (the TUR-10's contention check uses it)."""
+    t = Trace()
+    names = ["a", "b", "c"]
+    for n in names:
+        t.declare(n, "bool", data.draw(st.booleans()), time_ns=data.draw(st.sampled_from([0, 0, 3 * MS])))
+    for when in sorted(data.draw(st.lists(st.integers(3 * MS, 2 * S), max_size=30))):
+        t.change(when, data.draw(st.sampled_from(names)), data.draw(st.booleans()))
+    t.advance(2 * S)
+    need = data.draw(st.integers(1, 3))
+    chosen = data.draw(st.lists(st.sampled_from(names), min_size=1, max_size=3, unique=True))
+    after = data.draw(st.sampled_from([0.0, 0.001, 0.5, 1.0, 3.0]))
+    until = data.draw(st.sampled_from([None, 0.0, 0.7, 1.5]))
+
+    def by_state(io):
+        return sum(not io[n] for n in chosen) >= need
+
+    def by_values(values):
+        return sum(not v for v in values) >= need
+    by_values.__name__ = by_state.__name__ = "two_off"
+    try:
+        expected = t.first(by_state, after=after, until=until)
+    except NotFound as e:
+        with pytest.raises(NotFound) as got:
+            t.first_values(chosen, by_values, after=after, until=until)
+        assert str(got.value) == str(e)
+        assert t.first_values(chosen, by_values, after=after, until=until, default=None) is None
+    else:
+        assert t.first_values(chosen, by_values, after=after, until=until) == expected
 
 
 def test_first_only_evaluates_where_a_read_signal_changes():

@@ -355,7 +355,7 @@ def no_overvoltage(s: Session, c: Checks) -> None:
 
 def no_contention(s: Session, c: Checks) -> None:
     with c.requirement(G3) as rid:
-        t = s.trace.first(lambda st: sum(not st[e] for e in ENABLES) >= 2, default=None)
+        t = s.trace.first_values(ENABLES, lambda enables: sum(not e for e in enables) >= 2, default=None)
         if t is not None:
             off = [e for e in ENABLES if not s.trace.value_at(e, t)]
             c.fail(rid, "at most one read enable OFF at a time (one sensor on the bus)",

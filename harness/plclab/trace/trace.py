@@ -13,10 +13,11 @@ a change back to the value before that time cancels it (a zero-width glitch is n
 from __future__ import annotations
 
 import difflib
+import itertools
 import operator
 from bisect import bisect_left, bisect_right
 from dataclasses import dataclass
-from typing import Any, Callable, Iterable, Literal, Optional, Union
+from typing import Any, Callable, Iterable, Literal, Optional, Sequence, Union
 
 from .times import format_seconds, ns_to_s, s_to_ns
 
@@ -276,6 +277,39 @@ class Trace:
                 if k < len(times) and times[k] < nxt:
                     nxt = times[k]
             t = nxt
+        return self._not_found(default, f"{what} {self._window_text(after, until)}")
+
+    def first_values(self, names: Sequence[str], pred: Callable[[tuple], Any], after: float = 0.0,
+                     until: Optional[float] = None, default: Any = _RAISE) -> Any:
+        """`first` for a predicate of the values of `names` alone, given to it as a tuple in
+        that order (None before a signal's declaration, as a State reads it): the same answer,
+        found in one pass over the signals' changes instead of a State and a look-up per name
+        at each instant (a check that holds over a whole run, of signals that change at most
+        scans: the TUR-10's read enables)."""
+        idx = [self._resolve(n) for n in names]
+        t = s_to_ns(after)
+        end = self._window_end(until)
+        current = [self._value(i, t) for i in idx]
+        changes = []
+        for j, i in enumerate(idx):
+            times, values = self._times[i], self._values[i]
+            k = bisect_right(times, t)
+            last = bisect_right(times, end)
+            changes.extend(zip(times[k:last], itertools.repeat(j), values[k:last]))
+        changes.sort(key=operator.itemgetter(0, 1))
+        n = len(changes)
+        k = 0
+        while t <= end:
+            while k < n and changes[k][0] == t:
+                current[changes[k][1]] = changes[k][2]
+                k += 1
+            if pred(tuple(current)):
+                return ns_to_s(t)
+            if k == n:
+                break
+            t = changes[k][0]
+        name = getattr(pred, "__name__", "<lambda>")
+        what = ("the condition" if name == "<lambda>" else name) + " never held"
         return self._not_found(default, f"{what} {self._window_text(after, until)}")
 
     def next_change(self, names: Union[str, Iterable[str]], after: float = 0.0,
