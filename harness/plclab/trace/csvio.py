@@ -50,11 +50,17 @@ class TraceFormatError(PlcLabError, ValueError):
 
 def format_value(kind: str, value: Any) -> str:
     """One value as the CSV shows it (also used by diff messages): BOOL 0/1, REAL by repr."""
-    if kind == "bool":
-        return "1" if value else "0"
-    if kind == "real":
-        return repr(float(value))
-    return str(value)
+    return _VALUE_TEXT.get(kind, str)(value)
+
+
+# a value's text by its signal's kind; none of them can need quotes but a STRING's, which
+# always has them (a quoted value reads back as a string)
+_VALUE_TEXT: dict[str, Callable[[Any], str]] = {
+    "bool": lambda v: "1" if v else "0",
+    "int": str,
+    "real": lambda v: repr(float(v)),
+    "str": str,
+}
 
 
 def _field(text: str, quote: bool = False) -> str:
@@ -103,7 +109,7 @@ def _write(trace: Trace, f: TextIO, names: Optional[Sequence[str]]) -> None:
     for name in (trace.signals() if names is None else names):
         info = trace.info(name)
         prefixes[info.index] = "," + _field(info.name) + ","
-        values[info.index] = _VALUE_FIELD.get(info.kind) or (lambda v, k=info.kind: _field(format_value(k, v)))
+        values[info.index] = _quoted_text if info.kind == "str" else _VALUE_TEXT[info.kind]
     last_t, time_text = None, ""
     for t, i, _name, value in iter_rows(trace, names):
         if t != last_t:
@@ -112,14 +118,8 @@ def _write(trace: Trace, f: TextIO, names: Optional[Sequence[str]]) -> None:
     f.write("".join(out))
 
 
-# a value's field by its signal's kind, where no value of the kind can need quotes (BOOL 0/1,
-# an integer, a REAL's repr) or every value has them (STRING)
-_VALUE_FIELD: dict[str, Callable[[Any], str]] = {
-    "bool": lambda v: "1" if v else "0",
-    "int": str,
-    "real": lambda v: repr(float(v)),
-    "str": lambda v: _field(str(v), quote=True),
-}
+def _quoted_text(value: Any) -> str:
+    return _field(str(value), quote=True)
 
 
 # ---------------------------------------------------------------------------- reading

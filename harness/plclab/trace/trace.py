@@ -61,6 +61,12 @@ _CONVERTERS: dict[str, Callable[[Any], Any]] = {"bool": bool, "int": _to_int, "r
 Condition = Union[str, Callable[["State"], Any]]
 
 
+def _never_held(pred: Callable[..., Any]) -> str:
+    """How a query's NotFound names a predicate that never held: by its name, if it has one."""
+    name = getattr(pred, "__name__", "<lambda>")
+    return ("the condition" if name == "<lambda>" else name) + " never held"
+
+
 class Trace:
     """Changes of named signals over virtual time (integer ns inside, seconds in queries)."""
 
@@ -262,8 +268,7 @@ class Trace:
             what = f"{cond} was never true"
         else:
             pred = cond
-            name = getattr(cond, "__name__", "<lambda>")
-            what = ("the condition" if name == "<lambda>" else name) + " never held"
+            what = _never_held(cond)
         t = s_to_ns(after)
         end = self._window_end(until)
         while t <= end:
@@ -308,9 +313,7 @@ class Trace:
             if k == n:
                 break
             t = changes[k][0]
-        name = getattr(pred, "__name__", "<lambda>")
-        what = ("the condition" if name == "<lambda>" else name) + " never held"
-        return self._not_found(default, f"{what} {self._window_text(after, until)}")
+        return self._not_found(default, f"{_never_held(pred)} {self._window_text(after, until)}")
 
     def next_change(self, names: Union[str, Iterable[str]], after: float = 0.0,
                     until: Optional[float] = None, default: Any = _RAISE) -> Any:
