@@ -253,7 +253,6 @@ class Tracer:
     def __post_init__(self) -> None:
         self.shapes = line_shapes(self.compiled.source)
         self._filename = self.compiled.filename
-        self._next = 0
         self._calls = 0
         self._frames: dict[int, _Call] = {}            # id(frame) -> its call
         self._old: Any = None
@@ -380,7 +379,7 @@ class Tracer:
             keys = self._line_keys[id(me)] = {}
         st = _Call(self._calls, caller.pending if caller else None, caller, me, keys)
         self._frames[id(frame)] = st
-        return self._local_for(st)
+        return self._local_for(st, frame.f_globals.get("G"))
 
     CACHE_LINES = True     # False: every line's keys worked out anew (the tests compare both)
 
@@ -407,15 +406,18 @@ class Tracer:
                 writes.append(((k[0], WILD), False))
         return tuple(reads), tuple(writes), all(hows), PER_CALL in hows
 
-    def _local_for(self, st: "_Call") -> Callable[[Any, str, Any], Any]:
+    def _local_for(self, st: "_Call", g: Any = None) -> Callable[[Any, str, Any], Any]:
         """The line tracer of one call (sys.settrace's local function): it holds its call's
         state, so that each line costs no look-up of it. Each executed statement line becomes
         an Event: its storage keys (from the per-object cache where they are stable), the
-        scan, and the test line or call it ran under."""
+        scan, and the test line or call it ran under. What holds for the whole call is worked
+        out once, not per line: its scan (a call of the compiled code begins and ends inside
+        one scan) and its globals `g` (a frame's globals never change)."""
         shapes, events, order = self.shapes, self.events, self.order
-        scan_times, keys_of_me, headers = self.scan_times, st.keys, st.headers
+        keys_of_me, headers = st.keys, st.headers
         cache = self.CACHE_LINES
         me, call = st.me, st.call
+        scan = len(self.scan_times) - 1
 
         def local(frame: Any, event: str, _arg: Any) -> Any:
             if event == "line":
@@ -426,9 +428,7 @@ class Tracer:
                 shape = shapes.get(lineno)
                 if shape is None:
                     return frame.f_trace
-                eid = self._next
-                self._next = eid + 1
-                g = frame.f_globals.get("G")
+                eid = len(events)                   # ids in execution order from 0: none is removed
                 known = keys_of_me.get(lineno) if cache else None
                 if known is not None and known.me is me and known.g is g:
                     reads, writes = known.in_call(call) if known.per_call else (known.reads, known.writes)
@@ -443,7 +443,7 @@ class Tracer:
                     if caller is not None and caller.pending is not None:
                         ce = events[caller.pending]
                         ce.reads = ce.reads + (("R", call),)
-                events[eid] = Event(lineno, len(scan_times) - 1, reads, writes,
+                events[eid] = Event(lineno, scan, reads, writes,
                                     headers.get(header) if header is not None else st.parent, call)
                 st.pending = eid
                 headers[lineno] = eid
