@@ -1,7 +1,8 @@
 """The virtual lab in a real headless Chromium (Debian's `chromium`, driven by playwright).
 
-`scripts/setup` installs chromium where it is missing; without it these tests fail with
-that instruction (they are never skipped). Labs run in-process on an ephemeral loopback port,
+`scripts/setup` installs chromium where it is missing (`scripts/test`: while the tests run,
+and these wait for it); without it these tests fail with that instruction (they are never
+skipped). Labs run in-process on an ephemeral loopback port,
 faster than real time; tests wait on states the page shows, never on wall-clock durations.
 Screenshots go to `tmp_path`, or to $PLCLAB_LAB_SHOTS (scripts/lab-screenshots: docs/img).
 """
@@ -9,6 +10,7 @@ from __future__ import annotations
 
 import os
 import shutil
+import time
 from pathlib import Path
 from typing import Iterator, Optional
 
@@ -16,7 +18,42 @@ import pytest
 
 from plclab.lab import LabThread, open_lab
 
-CHROMIUM = os.environ.get("PLCLAB_CHROMIUM") or shutil.which("chromium") or "/usr/bin/chromium"
+# where scripts/setup installs chromium in the background (scripts/test: while the tests run)
+INSTALL = Path(__file__).resolve().parents[2] / ".venv" / "chromium-install"
+INSTALL_WAIT_S = 900
+
+
+def chromium() -> str:
+    """The Chromium the browser tests drive; fails the test with what to do where there is
+    none. An install scripts/test started (scripts/setup, PLCLAB_SETUP_CHROMIUM=background) is
+    waited for: its status file appears when apt-get is done."""
+    found = os.environ.get("PLCLAB_CHROMIUM") or shutil.which("chromium")
+    status, log = INSTALL.with_suffix(".status"), INSTALL.with_suffix(".log")
+    if not found and log.exists():
+        deadline = time.monotonic() + INSTALL_WAIT_S
+        while not status.exists() and _installing() and time.monotonic() < deadline:
+            time.sleep(0.5)
+        found = shutil.which("chromium")
+        if not found:
+            tail = log.read_text(encoding="utf-8", errors="replace").strip().splitlines()[-3:]
+            why = (f"exit status {status.read_text().strip()}" if status.exists()
+                   else "stopped before it was done" if not _installing() else f"not done after {INSTALL_WAIT_S} s")
+            pytest.fail(f"the lab's browser tests need Debian's chromium: scripts/setup's apt-get install "
+                        f"chromium failed ({why}): {' | '.join(tail)}")
+    path = found or "/usr/bin/chromium"
+    if not Path(path).exists():
+        pytest.fail(f"the lab's browser tests need Debian's chromium at {path}: run `bash scripts/setup` "
+                    f"as root (it runs apt-get install chromium) or set PLCLAB_CHROMIUM")
+    return path
+
+
+def _installing() -> bool:
+    """Whether the background install's process (its pid in INSTALL.pid) still runs."""
+    try:
+        os.kill(int(INSTALL.with_suffix(".pid").read_text().strip()), 0)
+    except (OSError, ValueError):
+        return False
+    return True
 
 
 @pytest.fixture(scope="module")
@@ -25,11 +62,9 @@ def browser() -> Iterator:
     event loop running in this thread, which other tests' asyncio.run must not meet)."""
     from playwright.sync_api import sync_playwright
 
-    if not Path(CHROMIUM).exists():
-        pytest.fail(f"the lab's browser tests need Debian's chromium at {CHROMIUM}: run `bash scripts/setup` "
-                    f"as root (it runs apt-get install chromium) or set PLCLAB_CHROMIUM")
+    path = chromium()
     with sync_playwright() as p:
-        b = p.chromium.launch(executable_path=CHROMIUM, args=["--no-sandbox", "--disable-gpu"])
+        b = p.chromium.launch(executable_path=path, args=["--no-sandbox", "--disable-gpu"])
         yield b
         b.close()
 
@@ -40,10 +75,9 @@ def rebinding_browser() -> Iterator:
     attacker's DNS would (a hostile page, a DNS-rebinding name)."""
     from playwright.sync_api import sync_playwright
 
-    if not Path(CHROMIUM).exists():
-        pytest.fail(f"the lab's browser tests need Debian's chromium at {CHROMIUM}: run `bash scripts/setup`")
+    path = chromium()
     with sync_playwright() as p:
-        b = p.chromium.launch(executable_path=CHROMIUM, args=[
+        b = p.chromium.launch(executable_path=path, args=[
             "--no-sandbox", "--disable-gpu",
             "--host-resolver-rules=MAP evil.example 127.0.0.1, MAP attacker.example 127.0.0.1"])
         yield b
