@@ -2,8 +2,8 @@
 
 `scripts/setup` installs chromium where it is missing (`scripts/test`: while the tests run,
 and these wait for it); without it these tests fail with that instruction (they are never
-skipped). Labs run in-process on an ephemeral loopback port,
-faster than real time; tests wait on states the page shows, never on wall-clock durations.
+skipped). Labs run in-process on an ephemeral loopback port, faster than real time; tests
+wait on states the page shows, never on wall-clock durations.
 Screenshots go to `tmp_path`, or to $PLCLAB_LAB_SHOTS (scripts/lab-screenshots: docs/img).
 """
 from __future__ import annotations

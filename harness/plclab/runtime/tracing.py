@@ -406,7 +406,7 @@ class Tracer:
                 writes.append(((k[0], WILD), False))
         return tuple(reads), tuple(writes), all(hows), PER_CALL in hows
 
-    def _local_for(self, st: "_Call", g: Any = None) -> Callable[[Any, str, Any], Any]:
+    def _local_for(self, st: "_Call", g: Any) -> Callable[[Any, str, Any], Any]:
         """The line tracer of one call (sys.settrace's local function): it holds its call's
         state, so that each line costs no look-up of it. Each executed statement line becomes
         an Event: its storage keys (from the per-object cache where they are stable), the
