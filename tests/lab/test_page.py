@@ -10,6 +10,7 @@ import csv
 import io
 import re
 
+import pytest
 from playwright.sync_api import expect
 
 from plclab.modbus.rawclient import RawModbusClient
@@ -361,3 +362,24 @@ def test_two_pages_see_the_same_stand_and_a_closed_page_lets_go(lab_page, shots)
     expect(second.locator("#actions")).to_contain_text("SB1 released", timeout=WAIT)
     let_time_pass(second, 0.5)
     assert lp.lab.session.value("SB1") is False
+
+
+@pytest.mark.parametrize("stand", ["mp9c", "tur10", "thermo"])
+def test_drawing_the_same_state_again_writes_nothing_into_the_page(lab_page, stand):
+    """The page is drawn 25 times a second and most of what it shows stays as it was: what is
+    unchanged is not written again (an unchanged text or attribute written still has the
+    browser restyle and repaint it, a sixth of an open page's CPU). So the state drawn once
+    more changes nothing in the document. (The CNC page is left out: each of its states
+    carries the path cut since the one before, which the drawing adds to its path.)"""
+    page = lab_page(stand).page
+    written = page.evaluate("""() => {
+        render(lab.state);                          // now the page shows this very state
+        const seen = new MutationObserver(() => {});
+        seen.observe(document.documentElement, { subtree: true, childList: true, attributes: true, characterData: true });
+        render(lab.state);
+        render(lab.state);
+        const records = seen.takeRecords();
+        seen.disconnect();
+        return records.map((r) => `${r.type} ${r.attributeName || ""} of ${r.target.id || r.target.nodeName}`);
+    }""")
+    assert written == []

@@ -482,13 +482,13 @@ function onState(s) {
 function render(s) {
   const badge = $("#plc-state");
   const pausedRun = s.paused && s.plc.state === "RUN";      // the PLC in RUN, the lab's clock stopped
-  badge.textContent = pausedRun ? "RUN, paused" : s.plc.state;
-  badge.dataset.state = pausedRun ? "PAUSED" : s.plc.state;
-  badge.title = pausedRun ? "the PLC is in RUN mode but the lab's clock is paused: no scan runs until Run (or Single scan)"
-    : s.plc.state === "FAULT" ? "the PLC stopped on a fault: see the line below" : "";
+  setText(badge, pausedRun ? "RUN, paused" : s.plc.state);
+  setAttr(badge, "data-state", pausedRun ? "PAUSED" : s.plc.state);
+  setAttr(badge, "title", pausedRun ? "the PLC is in RUN mode but the lab's clock is paused: no scan runs until Run (or Single scan)"
+    : s.plc.state === "FAULT" ? "the PLC stopped on a fault: see the line below" : "");
   const fd = $("#fault-detail");
   if (s.plc.fault) {
-    fd.hidden = false;
+    if (fd.hidden) fd.hidden = false;
     if (fd.dataset.fault !== s.plc.fault) {          // the fault, a way to its statement, and what to do next
       fd.dataset.fault = s.plc.fault;
       const where = s.plc.file ? `${s.plc.file.split("/").pop()}:${s.plc.line}` : null;
@@ -497,25 +497,25 @@ function render(s) {
         el("span", { class: "fault-next", text: " Next: correct the program and load it again, or Restart PLC " +
           "to run it once more (the PLC stays in FAULT, every output off, until one of them)." }));
     }
-  } else { fd.hidden = true; delete fd.dataset.fault; }
-  $("#clock").textContent = `t = ${s.t.toFixed(2)} s`;
+  } else if (!fd.hidden || fd.dataset.fault !== undefined) { fd.hidden = true; delete fd.dataset.fault; }
+  setText($("#clock"), `t = ${s.t.toFixed(2)} s`);
   const held = s.held_labels || [];
-  $("#speed-shown").textContent = s.paused ? "paused"
+  setText($("#speed-shown"), s.paused ? "paused"
     : held.length && s.speed !== 1 ? `x1 while ${held.join(", ")} held (then x${s.speed})`
-    : `x${s.speed}` + (!held.length && s.actual_speed && s.actual_speed < s.speed * 0.9 ? ` (reaching x${s.actual_speed})` : "");
-  $("#pause").textContent = s.paused ? "Run" : "Pause";
-  $("#pause").setAttribute("aria-pressed", s.paused ? "true" : "false");
-  $("#scan").disabled = !s.paused;
+    : `x${s.speed}` + (!held.length && s.actual_speed && s.actual_speed < s.speed * 0.9 ? ` (reaching x${s.actual_speed})` : ""));
+  setText($("#pause"), s.paused ? "Run" : "Pause");
+  setAttr($("#pause"), "aria-pressed", s.paused ? "true" : "false");
+  if ($("#scan").disabled !== !s.paused) $("#scan").disabled = !s.paused;
   const speed = $("#speed");
   if (document.activeElement !== speed) {
     if (![...speed.options].some((o) => o.value === String(s.speed)))      // --speed 0.5: shown too
       speed.append(el("option", { value: String(s.speed), text: `x${s.speed}` }));
-    speed.value = String(s.speed);
+    if (speed.value !== String(s.speed)) speed.value = String(s.speed);
   }
-  $("#program-name").textContent = s.program;
+  setText($("#program-name"), s.program);
   const refused = $("#start-refused");
-  refused.hidden = !s.start_refused;
-  if (refused.textContent !== (s.start_refused || "")) refused.textContent = s.start_refused || "";
+  if (refused.hidden !== !s.start_refused) refused.hidden = !s.start_refused;
+  setText(refused, s.start_refused || "");
   renderScript(s.script);
   if (s.loads !== lab.loads) {               // another program: the online listing is read again
     const shown = lab.pous !== null && lab.pous !== undefined;
@@ -523,8 +523,8 @@ function render(s) {
     buildOnline();
     if (shown) loadSource().catch((e) => notice(e.message));
   }
-  $("#trace-window").textContent = `The trace downloads hold t = ${s.trace_from.toFixed(0)} .. ${s.t.toFixed(0)} s ` +
-    `(the lab keeps the last ${Math.round(s.trace_keep / 60)} min of plant time).`;
+  setText($("#trace-window"), `The trace downloads hold t = ${s.trace_from.toFixed(0)} .. ${s.t.toFixed(0)} s ` +
+    `(the lab keeps the last ${Math.round(s.trace_keep / 60)} min of plant time).`);
   for (const [label, v] of Object.entries(s.io)) {
     for (const node of document.querySelectorAll(`[aria-label="${CSS.escape(label)}"]`)) {
       if (node.dataset.knob !== undefined) {
@@ -532,7 +532,7 @@ function render(s) {
       } else if (node.getAttribute("role") === "switch" || node.classList.contains("push")) {
         showControl(node, label, v, (s.forced_labels || []).includes(label));
       }
-      else if (node.dataset.state !== undefined) node.dataset.state = v ? "on" : "off";
+      else if (node.dataset.state !== undefined) setAttr(node, "data-state", v ? "on" : "off");
     }
   }
   Mimic.update(s);
@@ -574,7 +574,7 @@ function renderScript(sc) {
     text = `${lab.scriptShown}: finished (the console log lists each step)`;
     lab.scriptShown = null;
   }
-  $("#script-stop").disabled = !sc;
+  if ($("#script-stop").disabled !== !sc) $("#script-stop").disabled = !sc;
   if (text !== null && $("#script-status").textContent !== text) say("#script-status", text, true);
 }
 
@@ -971,8 +971,8 @@ function markForced(s) {
     if (forced !== (v.dataset.forced === "true")) { if (forced) v.dataset.forced = "true"; else delete v.dataset.forced; }
   }
   const n = Object.keys(s.forced || {}).length;
-  $("#unforce-all").disabled = n === 0;
-  $("#forces").textContent = n ? `${n} forced` : "";
+  if ($("#unforce-all").disabled !== (n === 0)) $("#unforce-all").disabled = n === 0;
+  setText($("#forces"), n ? `${n} forced` : "");
 }
 
 // ------------------------------------------------------------------ the recorded program
@@ -1171,7 +1171,7 @@ function renderRegisters(regs) {
   for (const r of regs) {
     const cell = body.querySelector(`[data-register="${r.address}"]`);
     const named = r.choices && r.choices.find(([v]) => v === r.value);
-    if (cell) cell.textContent = named ? `${r.value} (${named[1]})` : String(r.value);
+    if (cell) setText(cell, named ? `${r.value} (${named[1]})` : String(r.value));
   }
 }
 

@@ -2,6 +2,17 @@
 // Limit switches and valve coils drawn here carry aria-label = their label and data-state.
 "use strict";
 
+// Written only where it changed: most of the page stays as it was from one frame to the next
+// (25 a second), and an unchanged write still has the browser restyle and repaint what it
+// touched (measured: about a sixth of an open page's CPU). lab.js draws with these too.
+function setAttr(e, name, value) {
+  const v = String(value);
+  if (e.getAttribute(name) !== v) e.setAttribute(name, v);
+}
+function setText(e, text) {
+  if (e.textContent !== text) e.textContent = text;
+}
+
 const Mimic = (() => {
   const NS = "http://www.w3.org/2000/svg";
   let svg = null, stand = null, parts = {}, placedLabels = new Set(), fanAngle = 0, lastT = null;
@@ -34,7 +45,7 @@ const Mimic = (() => {
     svg.replaceChildren();
     const hints = {};
     for (const l of panel.lamps) hints[l.label] = l.hint;
-    svg.setAttribute("viewBox", stand === "tur10" ? "0 0 640 545" : "0 0 640 320");
+    setAttr(svg, "viewBox", stand === "tur10" ? "0 0 640 545" : "0 0 640 320");
     if (stand === "mp9c") buildMp9c(hints);
     else if (stand === "tur10") buildTur10();
     else if (stand === "thermo") buildThermo();
@@ -84,22 +95,22 @@ const Mimic = (() => {
   function updateMp9c(m) {
     const y = 92 + m.lift * 120;                    // 0 up .. 1 down
     const ext = m.extension * 60;                   // rod out
-    parts.carriage.setAttribute("transform", `translate(0,${y})`);
-    parts.rod.setAttribute("width", String(30 + ext));
-    parts.hand.setAttribute("transform", `translate(${252 + ext},0)`);
+    setAttr(parts.carriage, "transform", `translate(0,${y})`);
+    setAttr(parts.rod, "width", String(30 + ext));
+    setAttr(parts.hand, "transform", `translate(${252 + ext},0)`);
     const open = 1 - m.gripper;
-    parts.jawTop.setAttribute("y", String(-9 - 6 * open));
-    parts.jawBottom.setAttribute("y", String(4 + 6 * open));
-    parts.sq3.setAttribute("transform", `translate(${290 + ext},${y - 26})`);
+    setAttr(parts.jawTop, "y", String(-9 - 6 * open));
+    setAttr(parts.jawBottom, "y", String(4 + 6 * open));
+    setAttr(parts.sq3, "transform", `translate(${290 + ext},${y - 26})`);
     const angle = -30 + 60 * m.rotation;           // 0 left .. 1 right
-    parts.topArm.setAttribute("transform", `translate(480,170) rotate(${angle})`);
-    parts.topRod.setAttribute("y", String(-110 - 10 - ext * 0.6));
-    parts.topRod.setAttribute("height", String(10 + ext * 0.6));
+    setAttr(parts.topArm, "transform", `translate(480,170) rotate(${angle})`);
+    setAttr(parts.topRod, "y", String(-110 - 10 - ext * 0.6));
+    setAttr(parts.topRod, "height", String(10 + ext * 0.6));
     const conflict = new Set(m.conflict);
     parts.column.classList.toggle("link-conflict", conflict.has("lift"));
     parts.extBarrel.classList.toggle("link-conflict", conflict.has("extension"));
     parts.topArm.firstChild.classList.toggle("link-conflict", conflict.has("rotation"));
-    parts.conflict.textContent = m.conflict.length ? `valve conflict: ${m.conflict.join(", ")}` : "";
+    setText(parts.conflict, m.conflict.length ? `valve conflict: ${m.conflict.join(", ")}` : "");
   }
 
   // ---------------------------------------------------------------- TUR-10
@@ -166,13 +177,13 @@ const Mimic = (() => {
     s("text", { class: "mimic-text", x: 10, y: 342, text: "robot: side view, target dashed" });
     s("rect", { class: "metal", x: 360, y: 522, width: 80, height: 12 });                 // base
     parts.robotTarget = arm("robot-target", true);
-    parts.robotTarget.g.setAttribute("id", "robot-target");
-    parts.robotTarget.g.setAttribute("visibility", "hidden");
+    setAttr(parts.robotTarget.g, "id", "robot-target");
+    setAttr(parts.robotTarget.g, "visibility", "hidden");
     parts.robot = arm("robot", false);
-    parts.robot.shoulder.setAttribute("id", "robot-shoulder");
-    parts.robot.elbow.setAttribute("id", "robot-elbow");
-    parts.robot.rollMark.setAttribute("id", "robot-roll");
-    parts.robot.jawL.setAttribute("id", "robot-hand");
+    setAttr(parts.robot.shoulder, "id", "robot-shoulder");
+    setAttr(parts.robot.elbow, "id", "robot-elbow");
+    setAttr(parts.robot.rollMark, "id", "robot-roll");
+    setAttr(parts.robot.jawL, "id", "robot-hand");
     s("text", { class: "mimic-small", x: 30, y: 370, text: "platform rotation (4)" });
     s("circle", { cx: 80, cy: 440, r: 44, fill: "#f1f5f9", stroke: "#94a3b8" });
     parts.dialTarget = s("line", { x1: 80, y1: 440, x2: 80, y2: 400, stroke: "#7c3aed", "stroke-width": 2, "stroke-dasharray": "4 3", visibility: "hidden" });
@@ -182,23 +193,23 @@ const Mimic = (() => {
   function angle(axis, code, lo, hi) { const [a, b] = JOINTS[axis]; return a + (b - a) * frac(code, lo, hi); }
   function pose(p, codes, lo, hi) {
     const a1 = angle(1, codes[0], lo, hi), a3 = angle(3, codes[2], lo, hi), a2 = angle(2, codes[1], lo, hi);
-    p.shoulder.setAttribute("transform", `rotate(${a1.toFixed(2)})`);
-    p.shoulder.dataset.angle = a1.toFixed(2);
-    p.elbow.setAttribute("transform", `translate(0,-80) rotate(${a3.toFixed(2)})`);
-    p.elbow.dataset.angle = a3.toFixed(2);
+    setAttr(p.shoulder, "transform", `rotate(${a1.toFixed(2)})`);
+    setAttr(p.shoulder, "data-angle", a1.toFixed(2));
+    setAttr(p.elbow, "transform", `translate(0,-80) rotate(${a3.toFixed(2)})`);
+    setAttr(p.elbow, "data-angle", a3.toFixed(2));
     const c = Math.cos((a2 * Math.PI) / 180);         // a roll seen from the side: the mark swings
-    p.rollMark.setAttribute("x2", (12 * c).toFixed(2));
-    p.rollMark.dataset.angle = a2.toFixed(2);
+    setAttr(p.rollMark, "x2", (12 * c).toFixed(2));
+    setAttr(p.rollMark, "data-angle", a2.toFixed(2));
     const open = 4 + 10 * frac(codes[4], lo, hi);     // hand: the jaws open with its code
-    p.jawL.setAttribute("x", (-open - 5).toFixed(2));
-    p.jawR.setAttribute("x", open.toFixed(2));
-    p.jawL.dataset.open = frac(codes[4], lo, hi).toFixed(3);
+    setAttr(p.jawL, "x", (-open - 5).toFixed(2));
+    setAttr(p.jawR, "x", open.toFixed(2));
+    setAttr(p.jawL, "data-open", frac(codes[4], lo, hi).toFixed(3));
   }
   function dial(line, code, lo, hi) {
     const a = (angle(4, code, lo, hi) * Math.PI) / 180;
-    line.setAttribute("x2", (80 + 40 * Math.sin(a)).toFixed(2));
-    line.setAttribute("y2", (440 - 40 * Math.cos(a)).toFixed(2));
-    line.dataset.angle = angle(4, code, lo, hi).toFixed(2);
+    setAttr(line, "x2", (80 + 40 * Math.sin(a)).toFixed(2));
+    setAttr(line, "y2", (440 - 40 * Math.cos(a)).toFixed(2));
+    setAttr(line, "data-angle", angle(4, code, lo, hi).toFixed(2));
   }
   function updateRobot(m) {
     const [lo, hi] = m.stops;
@@ -207,8 +218,8 @@ const Mimic = (() => {
     dial(parts.dial, codes[3], lo, hi);
     const targets = m.links.map((l) => l.target);
     const shown = targets.every((t) => t !== null && t !== undefined && t >= lo && t <= hi);
-    parts.robotTarget.g.setAttribute("visibility", shown ? "visible" : "hidden");
-    parts.dialTarget.setAttribute("visibility", shown ? "visible" : "hidden");
+    setAttr(parts.robotTarget.g, "visibility", shown ? "visible" : "hidden");
+    setAttr(parts.dialTarget, "visibility", shown ? "visible" : "hidden");
     if (shown) { pose(parts.robotTarget, targets, lo, hi); dial(parts.dialTarget, targets[3], lo, hi); }
   }
 
@@ -217,30 +228,30 @@ const Mimic = (() => {
     const sx = (v) => 150 + ((v - lo) / (hi - lo)) * 360;
     m.links.forEach((l, i) => {
       const p = parts.links[i];
-      p.working.setAttribute("x", String(sx(m.working[0])));
-      p.working.setAttribute("width", String(sx(m.working[1]) - sx(m.working[0])));
-      p.marker.setAttribute("x", String(sx(l.position) - 2));
-      p.marker.setAttribute("fill", l.at_stop ? "#b91c1c" : "#1d4ed8");
+      setAttr(p.working, "x", String(sx(m.working[0])));
+      setAttr(p.working, "width", String(sx(m.working[1]) - sx(m.working[0])));
+      setAttr(p.marker, "x", String(sx(l.position) - 2));
+      setAttr(p.marker, "fill", l.at_stop ? "#b91c1c" : "#1d4ed8");
       // no target (the program has none, or none set yet: outside the travel)
-      if (l.target === null || l.target === undefined || l.target < lo || l.target > hi) p.target.setAttribute("visibility", "hidden");
+      if (l.target === null || l.target === undefined || l.target < lo || l.target > hi) setAttr(p.target, "visibility", "hidden");
       else {
-        p.target.setAttribute("visibility", "visible");
-        p.target.setAttribute("transform", `translate(${sx(l.target)},4)`);
+        setAttr(p.target, "visibility", "visible");
+        setAttr(p.target, "transform", `translate(${sx(l.target)},4)`);
       }
       const full = 2 * m.dac_limit;
       const w = Math.max(-180, Math.min(180, (l.reference / full) * 180));
-      p.ref.setAttribute("x", String(w < 0 ? 330 + w : 330));
-      p.ref.setAttribute("width", String(Math.abs(w)));
-      p.ref.setAttribute("fill", l.tripped || Math.abs(l.reference) > m.dac_limit ? "#b91c1c" : "#f59e0b");
+      setAttr(p.ref, "x", String(w < 0 ? 330 + w : 330));
+      setAttr(p.ref, "width", String(Math.abs(w)));
+      setAttr(p.ref, "fill", l.tripped || Math.abs(l.reference) > m.dac_limit ? "#b91c1c" : "#f59e0b");
       const onBus = m.selected.includes(l.axis);
-      p.code.textContent = `code ${l.code}` + (l.at_stop ? " COLLISION" : "");
-      p.refText.textContent = `DAC ${l.reference}` + (l.tripped ? " TRIPPED" : "");
-      p.bus.textContent = onBus ? `sensor ${l.axis} on the bus` : "";
-      p.track.setAttribute("stroke", onBus ? "#16a34a" : "#9ca3af");
-      p.track.setAttribute("stroke-width", onBus ? "3" : "1");
+      setText(p.code, `code ${l.code}` + (l.at_stop ? " COLLISION" : ""));
+      setText(p.refText, `DAC ${l.reference}` + (l.tripped ? " TRIPPED" : ""));
+      setText(p.bus, onBus ? `sensor ${l.axis} on the bus` : "");
+      setAttr(p.track, "stroke", onBus ? "#16a34a" : "#9ca3af");
+      setAttr(p.track, "stroke-width", onBus ? "3" : "1");
     });
     const sel = m.selected.length ? m.selected.join(", ") : "none";
-    parts.busLine.textContent = `sensor bus: ${m.bus} (enabled: ${sel})` + (m.selected.length > 1 ? "  BUS CONTENTION" : "");
+    setText(parts.busLine, `sensor bus: ${m.bus} (enabled: ${sel})` + (m.selected.length > 1 ? "  BUS CONTENTION" : ""));
     updateRobot(m);
   }
 
@@ -270,17 +281,17 @@ const Mimic = (() => {
   function updateThermo(m, t) {
     const frac = Math.max(0, Math.min(1, (m.temperature - 20) / 60));
     const r = Math.round(80 + 175 * frac), b = Math.round(200 - 170 * frac);
-    parts.sinkBody.setAttribute("fill", `rgb(${r},120,${b})`);
-    parts.heater.setAttribute("fill-opacity", String(0.25 + 0.75 * (m.heater_w / m.heater_max_w)));
-    parts.heaterText.textContent = `${m.heater_w.toFixed(1)} W (command ${m.heater_command})` + (m.faults.includes("heater_dead") ? " DEAD" : "");
-    parts.temp.textContent = `${m.temperature.toFixed(1)} \u00b0C`;
-    parts.sensorFault.textContent = m.faults.includes("sensor_open") ? "sensor open circuit" : "";
+    setAttr(parts.sinkBody, "fill", `rgb(${r},120,${b})`);
+    setAttr(parts.heater, "fill-opacity", String(0.25 + 0.75 * (m.heater_w / m.heater_max_w)));
+    setText(parts.heaterText, `${m.heater_w.toFixed(1)} W (command ${m.heater_command})` + (m.faults.includes("heater_dead") ? " DEAD" : ""));
+    setText(parts.temp, `${m.temperature.toFixed(1)} \u00b0C`);
+    setText(parts.sensorFault, m.faults.includes("sensor_open") ? "sensor open circuit" : "");
     if (lastT !== null && t > lastT) fanAngle = (fanAngle + (m.fan_rpm / 60) * 360 * Math.min(t - lastT, 0.05)) % 360;
-    parts.blades.setAttribute("transform", `rotate(${fanAngle})`);
-    parts.fanText.textContent = `fan ${Math.round(m.fan_rpm)} rpm (command ${m.fan_command})` + (m.faults.includes("fan_stalled") ? " STALLED" : "");
-    parts.mode.textContent = m.mode_name === null || m.mode_name === undefined ? ""
-      : `mode %MW0 = ${m.mode}, ${MODE_WORDS[m.mode_name] || m.mode_name}`;
-    parts.setpoint.textContent = m.setpoint === null || m.setpoint === undefined ? "" : `setpoint ${m.setpoint} \u00b0C`;
+    setAttr(parts.blades, "transform", `rotate(${fanAngle})`);
+    setText(parts.fanText, `fan ${Math.round(m.fan_rpm)} rpm (command ${m.fan_command})` + (m.faults.includes("fan_stalled") ? " STALLED" : ""));
+    setText(parts.mode, m.mode_name === null || m.mode_name === undefined ? ""
+      : `mode %MW0 = ${m.mode}, ${MODE_WORDS[m.mode_name] || m.mode_name}`);
+    setText(parts.setpoint, m.setpoint === null || m.setpoint === undefined ? "" : `setpoint ${m.setpoint} \u00b0C`);
   }
 
   // ---------------------------------------------------------------- CNC
@@ -321,12 +332,12 @@ const Mimic = (() => {
     parts.contourId = c.contour_id;
     parts.view = cncView(c.contour);
     const v = parts.view;
-    parts.contour.setAttribute("points", c.contour.map(([x, y]) => `${v.x(x).toFixed(1)},${v.y(y).toFixed(1)}`).join(" "));
-    parts.contour.dataset.points = String(c.contour.length);
+    setAttr(parts.contour, "points", c.contour.map(([x, y]) => `${v.x(x).toFixed(1)},${v.y(y).toFixed(1)}`).join(" "));
+    setAttr(parts.contour, "data-points", String(c.contour.length));
     // the path cut so far (a page opened or reloaded mid-part draws it again)
     parts.pathPts = (c.path || []).map(([x, y]) => `${v.x(x).toFixed(1)},${v.y(y).toFixed(1)}`);
-    parts.path.setAttribute("points", parts.pathPts.join(" "));
-    parts.path.dataset.points = String(parts.pathPts.length);
+    setAttr(parts.path, "points", parts.pathPts.join(" "));
+    setAttr(parts.path, "data-points", String(parts.pathPts.length));
   }
   function updateCnc(m) {
     if (m.contour_id !== parts.contourId && !parts.asking) {        // a new part (or its executed form)
@@ -337,28 +348,28 @@ const Mimic = (() => {
     if (m.path.length) {
       for (const p of m.path) parts.pathPts.push(`${v.x(p[0]).toFixed(1)},${v.y(p[1]).toFixed(1)}`);
       if (parts.pathPts.length > 20000) parts.pathPts.splice(0, parts.pathPts.length - 20000);
-      parts.path.setAttribute("points", parts.pathPts.join(" "));
-      parts.path.dataset.points = String(parts.pathPts.length);
+      setAttr(parts.path, "points", parts.pathPts.join(" "));
+      setAttr(parts.path, "data-points", String(parts.pathPts.length));
     }
-    parts.tool.setAttribute("cx", v.x(m.x).toFixed(1));
-    parts.tool.setAttribute("cy", v.y(m.y).toFixed(1));
+    setAttr(parts.tool, "cx", v.x(m.x).toFixed(1));
+    setAttr(parts.tool, "cy", v.y(m.y).toFixed(1));
     const t = parts.cncText;
     // a frame number beyond this part's (the PLC still counts the last one's) is no frame of it
     const frame = m.frame >= 1 && m.frame <= m.frames ? String(m.frame) : m.end ? String(m.frames) : "0";
-    t.frame.textContent = m.part ? `frame ${frame} of ${m.frames} (${m.part}, ${m.method})` : "no part program loaded";
+    setText(t.frame, m.part ? `frame ${frame} of ${m.frames} (${m.part}, ${m.method})` : "no part program loaded");
     const over = m.bound_mm !== null && m.error_mm > m.bound_mm + 1e-9;
-    t.error.textContent = `contour error ${m.error_now_mm === null ? "-" : m.error_now_mm.toFixed(4)} mm, max ${m.error_mm.toFixed(4)} mm`;
-    t.error.setAttribute("fill", over ? "#b91c1c" : "#111");
-    t.bound.textContent = m.bound_mm === null ? "bound: -" : `bound ${m.bound_mm.toFixed(4)} mm (frame ${m.error_frame})`;
-    t.verdict.textContent = m.bound_mm === null ? "" : over ? "OUT OF BOUND" : "within the bound: ok";
-    t.verdict.setAttribute("fill", over ? "#b91c1c" : "#15803d");
-    t.verdict.setAttribute("font-weight", over ? "bold" : "normal");
-    t.steps.textContent = `steps X ${m.steps.X}  Y ${m.steps.Y}  Z ${m.steps.Z}`;
+    setText(t.error, `contour error ${m.error_now_mm === null ? "-" : m.error_now_mm.toFixed(4)} mm, max ${m.error_mm.toFixed(4)} mm`);
+    setAttr(t.error, "fill", over ? "#b91c1c" : "#111");
+    setText(t.bound, m.bound_mm === null ? "bound: -" : `bound ${m.bound_mm.toFixed(4)} mm (frame ${m.error_frame})`);
+    setText(t.verdict, m.bound_mm === null ? "" : over ? "OUT OF BOUND" : "within the bound: ok");
+    setAttr(t.verdict, "fill", over ? "#b91c1c" : "#15803d");
+    setAttr(t.verdict, "font-weight", over ? "bold" : "normal");
+    setText(t.steps, `steps X ${m.steps.X}  Y ${m.steps.Y}  Z ${m.steps.Z}`);
     const missed = m.missed.X + m.missed.Y + m.missed.Z;
-    t.missed.textContent = `missed steps X ${m.missed.X}  Y ${m.missed.Y}  Z ${m.missed.Z}`;
-    t.missed.setAttribute("fill", missed ? "#b91c1c" : "#111");
-    t.override.textContent = `feed override ${m.override} %`;
-    t.state.textContent = m.end ? "program end" : m.cycle && m.cycle !== "idle" ? m.cycle : m.frame && m.cycle !== "idle" ? "running" : "";
+    setText(t.missed, `missed steps X ${m.missed.X}  Y ${m.missed.Y}  Z ${m.missed.Z}`);
+    setAttr(t.missed, "fill", missed ? "#b91c1c" : "#111");
+    setText(t.override, `feed override ${m.override} %`);
+    setText(t.state, m.end ? "program end" : m.cycle && m.cycle !== "idle" ? m.cycle : m.frame && m.cycle !== "idle" ? "running" : "");
   }
 
   function update(state) {
@@ -369,7 +380,7 @@ const Mimic = (() => {
     else if (stand === "thermo") updateThermo(m, state.t);
     else if (stand === "cnc") updateCnc(m);
     lastT = state.t;
-    parts.faults.textContent = m.faults && m.faults.length ? `injected: ${m.faults.join(", ")}` : "";
+    setText(parts.faults, m.faults && m.faults.length ? `injected: ${m.faults.join(", ")}` : "");
   }
 
   const api = { build, update, placed: () => placedLabels, askContour: () => Promise.reject(new Error("no lab")) };
