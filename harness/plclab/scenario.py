@@ -117,6 +117,23 @@ def compiled_once(checked: Any, share: Optional[list] = None) -> Iterator[None]:
         _ONE_COMPILE.reset(token)
 
 
+_UNRECORDED: contextvars.ContextVar[bool] = contextvars.ContextVar("plclab_unrecorded", default=False)
+
+
+@contextlib.contextmanager
+def unrecorded_sessions(on: bool = True) -> Iterator[None]:
+    """Inside the block (with `on`), a Session starts without recording its I/O: its
+    simulation samples no signal. For a session whose recording would be dropped at once
+    (exploration's search, plclab.grader.explore.unrecorded): building the recorder is a sixth
+    of making a session, and an exploration makes thousands. A PLC restart later records as
+    usual."""
+    token = _UNRECORDED.set(on)
+    try:
+        yield
+    finally:
+        _UNRECORDED.reset(token)
+
+
 def _compiled(checked: Any) -> CompiledProgram:
     shared = _ONE_COMPILE.get()
     if shared is None or shared[0] is not checked:
@@ -168,8 +185,11 @@ class Session:
             paths = [p for p in paths if self._has(p)]
         # every labelled I/O point is traced, also one the program does not declare: a
         # student may drop an unused global, the trace still shows the console
-        self.sim = Simulation(self.plc, plants=[self.plant], watch=paths,
-                              extra_addresses=list(self.labels.values()))
+        if _UNRECORDED.get():
+            self.sim = Simulation(self.plc, plants=[self.plant], record_located=False)
+        else:
+            self.sim = Simulation(self.plc, plants=[self.plant], watch=paths,
+                                  extra_addresses=list(self.labels.values()))
         self.sim.plants.extend(self.probes)
         self._merge_pending = True
 

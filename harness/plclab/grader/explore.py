@@ -44,7 +44,7 @@ from typing import Any, Callable, Iterator, Optional, Sequence
 from plclab.errors import PlcLabError
 from plclab.runtime.retain import MemoryRetainStore
 from plclab.runtime.tracing import pair_reader
-from plclab.scenario import Session, compiled_once
+from plclab.scenario import Session, compiled_once, unrecorded_sessions
 from plclab.stands.operators import (BLINK_END_TOL, BLINK_HALF_MAX, BLINKING, START_S, Exploration, Observed,
                                      blink_spans)
 from plclab.stands.scripts import FAULT, POWER, Event, Script, fault_params, read_script, without
@@ -685,7 +685,8 @@ class Explorer:
     def run(self, p: Program, name: str, script: Script, until: Optional[float] = None,
             expl: bool = True, record: bool = True, inner: Sequence[str] = ()) -> tuple[Session, Optional[_Probe]]:
         with compiled_once(p.checked, share=p.cache):
-            s = self.session(p, name)
+            with unrecorded_sessions(not record):     # play() drops the recording at once
+                s = self.session(p, name)
             probe = play(s, script, self.expl if expl else None, until, record=record, inner=inner)
         return s, probe
 

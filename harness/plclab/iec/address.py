@@ -13,6 +13,7 @@ OpenPLC. A malformed address is an `AddressError`, one line that names it.
 """
 from __future__ import annotations
 
+import functools
 import re
 from dataclasses import dataclass
 
@@ -55,6 +56,7 @@ class Address:
         return f"%{self.area}{self.number}" + (f".{self.bit}" if self.bit is not None else "")
 
 
+@functools.lru_cache(maxsize=4096)      # an Address is immutable; every PLC binds its I/O by them
 def parse_address(text: str, *, percent: bool = True) -> Address:
     """`'%IX1.6'` -> Address('I', 'X', 1, 6). `percent=False` also takes the plants' spelling
     without the `%` ('QW3'). A bit address needs `byte.bit` with bit 0..7, the others take no

@@ -324,6 +324,7 @@ class NativeProgram:
     def __init__(self, cprog: CProgram, ffi: Any, lib: Any):
         self.cprog, self.ffi, self.lib = cprog, ffi, lib
         self._classes: dict[tuple[str, Any], type] = {}
+        self._exposed: dict[tuple[str, type], tuple[frozenset[str], tuple[str, ...]]] = {}
 
     def attach(self, plc: Any) -> Any:
         """Fresh C state for `plc`: every variable takes the value the Python path just
@@ -422,6 +423,19 @@ class NativeProgram:
 
     def view(self, layout: Layout, cdata: Any) -> Any:
         return self.mirror(layout, cdata, None, [])
+
+    def exposed(self, layout: Layout, pyobj: Any) -> tuple[frozenset[str], tuple[str, ...]]:
+        """The variables a mirror of `layout` shows for a twin like `pyobj` (`_exposed`), and
+        those of them it copies (all but VAR_IN_OUT references): worked out once per layout
+        and twin type, as its mirror class is (`_class`). Every PLC of a program mirrors the
+        same blocks anew, and an exploration starts thousands of PLCs."""
+        key = (layout.cname, type(pyobj))
+        got = self._exposed.get(key)
+        if got is None:
+            names = frozenset(_exposed(layout, pyobj))
+            got = self._exposed[key] = (names, tuple(f.name for f in layout.fields
+                                                     if f.name in names and f.kind != "ref"))
+        return got
 
     def _class(self, layout: Layout, pytype: type, pyobj: Any) -> type:
         key = (layout.cname, pytype)
@@ -686,9 +700,8 @@ def _ref(obj: Any, name: str) -> Any:
 
 def _init_proxy(np: NativeProgram, proxy: Any, layout: Layout, cdata: Any, pyobj: Any, keep: list) -> None:
     """Point `proxy` at `cdata`; with a Python twin `pyobj`, copy its values into the C."""
-    names = _exposed(layout, pyobj)
+    names, proxy._names = np.exposed(layout, pyobj)
     proxy._p = cdata
-    proxy._names = [f.name for f in layout.fields if f.name in names and f.kind != "ref"]
     kids: dict[str, Any] = {}
     proxy._k = kids
     for f in layout.fields:

@@ -188,7 +188,26 @@ def gvl_variables(stand: Stand) -> list[GvlVariable]:
     """The stand's located globals in declaration order, read from its GVL files: the one
     source of each stand's I/O map and register contract (plants are tested against it;
     Modbus profiles, scenarios and the grader name I/O by these labels)."""
-    return [v for stem in stand.gvl for v in _located_in(_read(PLC_DIR / "GVL" / f"{stem}.st"))]
+    return [v for stem in stand.gvl for v in _located_in(_gvl_text(PLC_DIR / "GVL" / f"{stem}.st"))]
+
+
+_GVL_TEXTS: dict[Path, tuple[tuple[int, int], str]] = {}
+
+
+def _gvl_text(path: Path) -> str:
+    """A GVL file's text, read again only when the file changed (its size or time): every
+    session of a stand names its I/O by it, and an exploration starts thousands."""
+    try:
+        st = path.stat()
+    except FileNotFoundError:
+        raise PlcLabError(f"{path}: missing ST source") from None
+    stamp = (st.st_mtime_ns, st.st_size)
+    known = _GVL_TEXTS.get(path)
+    if known is not None and known[0] == stamp:
+        return known[1]
+    text = _read(path)
+    _GVL_TEXTS[path] = (stamp, text)
+    return text
 
 
 @functools.lru_cache(maxsize=64)
