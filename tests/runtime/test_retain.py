@@ -266,3 +266,24 @@ def test_a_memory_store_keeps_what_a_file_would_across_restarts_and_no_file_is_w
     refused = PLC(compile_unit(check_sources([("retain.st", other)])), retain=memory)
     assert refused.read("inst.count") == 0 and "different program" in memory.last_problem
     assert sorted(p.name for p in tmp_path.iterdir()) == ["retain.json"]   # the file store's own only
+
+
+@pytest.mark.parametrize("native", [False, True], ids=["python", "native"])
+def test_a_restart_finds_the_last_save_of_a_memory_store_not_what_the_plc_held_at_the_end(native):
+    """A grading's memory store gives a restart what the last periodic save held (the native
+    path keeps the retained variables' memory then and makes the values of it only when a
+    restart asks), not the values the PLC went on to hold; the same where the PLC restarted
+    is the very one that saved (the lab's Restart PLC builds its variables anew in place)."""
+    from plclab.runtime.retain import MemoryRetainStore
+    unit = compile_unit(check_sources([("retain.st", COUNTER)]))
+    memory = MemoryRetainStore()
+    plc = PLC(unit, retain=memory, retain_period_ns=100_000_000, native=native)
+    assert (plc.native is not None) == native
+    run_scans(plc, 35)
+    plc.enter_fault("internal", "power cut: no flush at stop")
+    plc.restart()
+    assert plc.read("inst.count") == 31 and plc.read("inst.frames")[0] == 31
+    run_scans(plc, 12)                     # saved again at 37, 100 ms of PLC time after the last
+    assert PLC(unit, retain=memory, native=native).read("inst.count") == 37
+    assert plc.read("inst.count") == 43    # reading the store changed nothing the PLC holds
+

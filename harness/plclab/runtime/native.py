@@ -479,11 +479,30 @@ class Watch:
         return Watch(ffi, places)
 
 
+class RetainMemory:
+    """The retained variables of a native PLC as memory: called, the bytes (and elementary
+    values) that are equal only where they hold equal values; `put_back` makes them hold
+    what such a call gave."""
+
+    def __init__(self, parts: list[Any]):
+        self.parts = parts            # a C buffer, or (owner, attribute) of an elementary one
+
+    def __call__(self) -> tuple:
+        return tuple(p[:] if not isinstance(p, tuple) else getattr(*p) for p in self.parts)
+
+    def put_back(self, fingerprint: tuple) -> None:
+        for p, v in zip(self.parts, fingerprint):
+            if isinstance(p, tuple):
+                setattr(p[0], p[1], v)
+            else:
+                p[:] = v
+
+
 def retain_fingerprint(plc: Any) -> Any:
-    """A function giving bytes that are equal only where the retained variables of `plc`
-    (a native PLC) hold equal values: the C memory of each (an FB instance, a structure or an
-    array with no VAR_IN_OUT pointer inside, whose target could change unseen) or the value of
-    an elementary one; a function giving None where one of them is none of these."""
+    """A RetainMemory of the retained variables of `plc` (a native PLC): the C memory of each
+    (an FB instance, a structure or an array with no VAR_IN_OUT pointer inside, whose target
+    could change unseen) or the value of an elementary one; a function giving None where one
+    of them is none of these."""
     np = plc.native
     buffer = np.ffi.buffer
     parts: list[Any] = []
@@ -498,10 +517,7 @@ def retain_fingerprint(plc: Any) -> Any:
             parts.append((owner, attr))
         else:
             return lambda: None
-
-    def fingerprint() -> tuple:
-        return tuple(p[:] if not isinstance(p, tuple) else getattr(*p) for p in parts)
-    return fingerprint
+    return RetainMemory(parts)
 
 
 def _memory_of(np: NativeProgram, value: Any) -> Any:

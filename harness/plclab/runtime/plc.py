@@ -9,6 +9,7 @@ This is OpenPLC's scan cycle; the clock that timers read advances by one base ti
 """
 from __future__ import annotations
 
+import functools
 import math
 import re
 import struct
@@ -86,6 +87,24 @@ class ProgramInstance:
     def __init__(self, name: str, obj: Any, task: Optional[str], interval_ns: Optional[int], decl: Any):
         self.name, self.obj, self.task, self.interval_ns, self.decl = name, obj, task, interval_ns, decl
 
+
+
+def _snapshot(retained: list[tuple[str, Any, str, T.Type]]) -> dict[str, Any]:
+    """The retain snapshot (path -> JSON value) of the variables `retained` (PLC.retained)."""
+    from plclab.runtime.retain import to_json_value
+    return {path: to_json_value(getattr(owner, attr)) for path, owner, attr, _t in retained}
+
+
+def _snapshot_of(retained: list[tuple[str, Any, str, T.Type]], memory: Any, fingerprint: tuple) -> dict[str, Any]:
+    """The retain snapshot of the moment `memory` (a native.RetainMemory of the variables
+    `retained`, of one cold start of a PLC) gave `fingerprint`: they are made to hold it for
+    the snapshot, then what they held is put back (that PLC may still be running)."""
+    now = memory()
+    memory.put_back(fingerprint)
+    try:
+        return _snapshot(retained)
+    finally:
+        memory.put_back(now)
 
 class PLC:
     """A loaded program, ready to scan. Time is in nanoseconds of PLC time."""
@@ -436,8 +455,7 @@ class PLC:
         return out
 
     def retain_snapshot(self) -> dict[str, Any]:
-        from plclab.runtime.retain import to_json_value
-        return {path: to_json_value(getattr(owner, attr)) for path, owner, attr, _t in self.retained()}
+        return _snapshot(self.retained())
 
     def retain_signature(self) -> str:
         from plclab.runtime.retain import signature
@@ -452,7 +470,9 @@ class PLC:
         A store that only this PLC writes (`exclusive`: a grading's memory) is not written
         again with what it already holds: the native path tells that by the retained
         variables' C memory (a few bytes compared, where building the snapshot reads every
-        value, each second of plant time of every play of a grading)."""
+        value, each second of plant time of every play of a grading). Such a store keeps that
+        memory, and the snapshot is made of it only when a restart loads it (most plays end
+        without one)."""
         store = self.retain_store
         if store is None or not self.retained():
             return True
@@ -463,7 +483,11 @@ class PLC:
             fp = self._retain_fp()
             if fp is not None and fp == self._flushed_fp:
                 return True
-        ok = store.flush(self.retain_signature(), self.retain_snapshot())
+        if fp is not None and hasattr(store, "flush_later"):
+            ok = store.flush_later(self.retain_signature(),
+                                   functools.partial(_snapshot_of, self.retained(), self._retain_fp, fp))
+        else:
+            ok = store.flush(self.retain_signature(), self.retain_snapshot())
         self._flushed_fp = fp if ok else None
         return ok
 

@@ -23,7 +23,7 @@ import re
 import stat
 import time
 from pathlib import Path
-from typing import Any, Iterable, Optional
+from typing import Any, Callable, Iterable, Optional
 
 from plclab.errors import PlcLabError, quoted
 from plclab.fileio import existing_kind, process_alive, remove_stale_temporaries, write_text
@@ -295,6 +295,12 @@ class MemoryRetainStore:
         self._saved = (sig, values)       # a fresh snapshot (to_json_value builds new objects)
         return True
 
+    def flush_later(self, sig: str, snapshot: Callable[[], dict[str, Any]]) -> bool:
+        """`flush` with the snapshot made only if it is loaded: `snapshot()` gives it as it
+        was at this flush (PLC.persist_retain keeps the retained variables' memory for it)."""
+        self._saved = (sig, snapshot)
+        return True
+
     def load(self, sig: str) -> Optional[dict[str, Any]]:
         if self._saved is None:
             return None
@@ -302,6 +308,9 @@ class MemoryRetainStore:
         if saved_sig != sig:
             self.reject("it was written by a different program (retained variables differ)")
             return None
+        if callable(values):
+            values = values()
+            self._saved = (saved_sig, values)
         return values
 
     def reject(self, reason: str) -> None:
