@@ -287,3 +287,30 @@ def test_a_restart_finds_the_last_save_of_a_memory_store_not_what_the_plc_held_a
     assert PLC(unit, retain=memory, native=native).read("inst.count") == 37
     assert plc.read("inst.count") == 43    # reading the store changed nothing the PLC holds
 
+
+def test_a_memory_store_keeps_what_it_saved_after_the_plc_that_saved_it_is_gone():
+    """The native path's save keeps the retained variables' C memory in the store, not a
+    copy of their values: the store keeps that memory alive after its PLC is dropped and other
+    PLCs have taken memory of their own (perhaps where the first one's was)."""
+    import gc
+    import weakref
+
+    from plclab.runtime.retain import MemoryRetainStore
+    unit = compile_unit(check_sources([("retain.st", COUNTER)]))
+    memory = MemoryRetainStore()
+    plc = PLC(unit, retain=memory, retain_period_ns=100_000_000, native=True)
+    assert plc.native is not None
+    run_scans(plc, 35)
+    plc.enter_fault("internal", "power cut: no flush at stop")
+    state = weakref.ref(plc._native_state)
+    del plc
+    others = [PLC(unit, native=True) for _ in range(50)]
+    for other in others:
+        run_scans(other, 3)
+    gc.collect()
+    assert state() is not None                 # what the store will read is still there
+    back = PLC(unit, retain=memory, native=True)
+    assert back.read("inst.count") == 31 and back.read("inst.frames")[0] == 31
+    gc.collect()
+    assert state() is None                     # read: the store holds the values, not the memory
+

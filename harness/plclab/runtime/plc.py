@@ -88,23 +88,27 @@ class ProgramInstance:
         self.name, self.obj, self.task, self.interval_ns, self.decl = name, obj, task, interval_ns, decl
 
 
-
 def _snapshot(retained: list[tuple[str, Any, str, T.Type]]) -> dict[str, Any]:
     """The retain snapshot (path -> JSON value) of the variables `retained` (PLC.retained)."""
     from plclab.runtime.retain import to_json_value
     return {path: to_json_value(getattr(owner, attr)) for path, owner, attr, _t in retained}
 
 
-def _snapshot_of(retained: list[tuple[str, Any, str, T.Type]], memory: Any, fingerprint: tuple) -> dict[str, Any]:
+def _snapshot_of(retained: list[tuple[str, Any, str, T.Type]], memory: Any, fingerprint: tuple,
+                 _state: Any) -> dict[str, Any]:
     """The retain snapshot of the moment `memory` (a native.RetainMemory of the variables
     `retained`, of one cold start of a PLC) gave `fingerprint`: they are made to hold it for
-    the snapshot, then what they held is put back (that PLC may still be running)."""
+    the snapshot, then what they held is put back (that PLC may still be running). `_state`
+    is what owns their C memory (PLC._native_keep): held here, that memory outlives a restart
+    of the PLC (which makes new memory) and the PLC itself, for as long as the store keeps
+    this snapshot to be made."""
     now = memory()
     memory.put_back(fingerprint)
     try:
         return _snapshot(retained)
     finally:
         memory.put_back(now)
+
 
 class PLC:
     """A loaded program, ready to scan. Time is in nanoseconds of PLC time."""
@@ -485,7 +489,8 @@ class PLC:
                 return True
         if fp is not None and hasattr(store, "flush_later"):
             ok = store.flush_later(self.retain_signature(),
-                                   functools.partial(_snapshot_of, self.retained(), self._retain_fp, fp))
+                                   functools.partial(_snapshot_of, self.retained(), self._retain_fp, fp,
+                                                     self._native_keep))
         else:
             ok = store.flush(self.retain_signature(), self.retain_snapshot())
         self._flushed_fp = fp if ok else None
