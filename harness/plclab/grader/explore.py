@@ -163,9 +163,10 @@ def unrecorded(s: Session) -> None:
     report's traces come from a replay of the failing script with full recording. Called again
     after each PLC restart (which builds a recording simulation anew)."""
     from plclab.runtime.sim import Simulation
-    extra = [p for p in s.sim.plants[1:]]              # probes attached after the plant's binding
-    s.sim = Simulation(s.plc, plants=[s.plant], record_located=False)
-    s.sim.plants.extend(extra)
+    if s.sim.recording:                                # (a session made in unrecorded_sessions is not)
+        extra = [p for p in s.sim.plants[1:]]          # probes attached after the plant's binding
+        s.sim = Simulation(s.plc, plants=[s.plant], record_located=False)
+        s.sim.plants.extend(extra)
     if getattr(s.plant, "trace", None) is s.trace:
         s.plant.trace = None
 

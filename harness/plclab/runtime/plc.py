@@ -487,7 +487,7 @@ class PLC:
             fp = self._retain_fp()
             if fp is not None and fp == self._flushed_fp:
                 return True
-        if fp is not None and hasattr(store, "flush_later"):
+        if fp is not None:
             ok = store.flush_later(self.retain_signature(),
                                    functools.partial(_snapshot_of, self.retained(), self._retain_fp, fp,
                                                      self._native_keep))

@@ -283,7 +283,9 @@ class MemoryRetainStore:
     time, thousands of times per program; a file (written and fsynced each time) added
     nothing there but wall time, as nobody reads it after the session."""
 
-    exclusive = True     # written by one PLC at a time only: a flush of what it holds changes nothing
+    # written by one PLC at a time only: a flush of what it holds changes nothing, and a native
+    # PLC flushes its retained memory for a snapshot made when loaded (flush_later)
+    exclusive = True
 
     def __init__(self) -> None:
         self.last_problem: Optional[str] = None

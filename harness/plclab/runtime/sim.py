@@ -82,6 +82,11 @@ class Simulation:
         self._sample = self._compile_sampler()
         self.recorder = Recorder(self.trace, names=self._names)
 
+    @property
+    def recording(self) -> bool:
+        """Whether this simulation samples any signal into its trace."""
+        return bool(self._names)
+
     def _compile_sampler(self) -> Callable[[], list]:
         """One generated function reading every recorded signal (once per scan, on the hot path)."""
         ns: dict[str, Any] = {}

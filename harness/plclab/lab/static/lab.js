@@ -488,7 +488,7 @@ function render(s) {
     : s.plc.state === "FAULT" ? "the PLC stopped on a fault: see the line below" : "");
   const fd = $("#fault-detail");
   if (s.plc.fault) {
-    if (fd.hidden) fd.hidden = false;
+    setProp(fd, "hidden", false);
     if (fd.dataset.fault !== s.plc.fault) {          // the fault, a way to its statement, and what to do next
       fd.dataset.fault = s.plc.fault;
       const where = s.plc.file ? `${s.plc.file.split("/").pop()}:${s.plc.line}` : null;
@@ -505,16 +505,16 @@ function render(s) {
     : `x${s.speed}` + (!held.length && s.actual_speed && s.actual_speed < s.speed * 0.9 ? ` (reaching x${s.actual_speed})` : ""));
   setText($("#pause"), s.paused ? "Run" : "Pause");
   setAttr($("#pause"), "aria-pressed", s.paused ? "true" : "false");
-  if ($("#scan").disabled !== !s.paused) $("#scan").disabled = !s.paused;
+  setProp($("#scan"), "disabled", !s.paused);
   const speed = $("#speed");
   if (document.activeElement !== speed) {
     if (![...speed.options].some((o) => o.value === String(s.speed)))      // --speed 0.5: shown too
       speed.append(el("option", { value: String(s.speed), text: `x${s.speed}` }));
-    if (speed.value !== String(s.speed)) speed.value = String(s.speed);
+    setProp(speed, "value", String(s.speed));
   }
   setText($("#program-name"), s.program);
   const refused = $("#start-refused");
-  if (refused.hidden !== !s.start_refused) refused.hidden = !s.start_refused;
+  setProp(refused, "hidden", !s.start_refused);
   setText(refused, s.start_refused || "");
   renderScript(s.script);
   if (s.loads !== lab.loads) {               // another program: the online listing is read again
@@ -574,7 +574,7 @@ function renderScript(sc) {
     text = `${lab.scriptShown}: finished (the console log lists each step)`;
     lab.scriptShown = null;
   }
-  if ($("#script-stop").disabled !== !sc) $("#script-stop").disabled = !sc;
+  setProp($("#script-stop"), "disabled", !sc);
   if (text !== null && $("#script-status").textContent !== text) say("#script-status", text, true);
 }
 
@@ -971,7 +971,7 @@ function markForced(s) {
     if (forced !== (v.dataset.forced === "true")) { if (forced) v.dataset.forced = "true"; else delete v.dataset.forced; }
   }
   const n = Object.keys(s.forced || {}).length;
-  if ($("#unforce-all").disabled !== (n === 0)) $("#unforce-all").disabled = n === 0;
+  setProp($("#unforce-all"), "disabled", n === 0);
   setText($("#forces"), n ? `${n} forced` : "");
 }
 

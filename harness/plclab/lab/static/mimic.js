@@ -12,6 +12,9 @@ function setAttr(e, name, value) {
 function setText(e, text) {
   if (e.textContent !== text) e.textContent = text;
 }
+function setProp(e, name, value) {       // a property: hidden, disabled, a box's value
+  if (e[name] !== value) e[name] = value;
+}
 
 const Mimic = (() => {
   const NS = "http://www.w3.org/2000/svg";
