@@ -232,6 +232,45 @@ def test_overflow_rounding_and_timers_scan_for_scan():
     assert na.read("main.s") != 120 and isinstance(na.read("main.r"), float)
 
 
+def test_typed_literals_keep_their_type_and_abs_of_the_least_value_wraps_on_both_paths():
+    """matiec writes `UDINT#0` as the cast `(UDINT)0`, so an expression of typed 32- and
+    64-bit literals computes in that C type (`UDINT#0 - 1` is 4294967295, not -1); ABS of a
+    type's least value is that value again (two's complement, as the Python path wraps), also
+    where gcc would take its abs as never negative; and `-INT#-5` builds (it was C's `--5`, a
+    build error, so the program ran on the Python path). All found by random programs
+    (tests/runtime/test_native_random_programs.py); each assertion failed before."""
+    py, na = _pair("""
+    PROGRAM main
+    VAR r : ARRAY[1..5] OF BOOL; least : LINT := LINT#-9223372036854775808; a : LINT; neg : BOOL; m : INT; END_VAR
+    m := -INT#-5;
+    a := ABS(least);
+    neg := ABS(least) < 0;
+    r[1] := UDINT#0 - 1 > 0;
+    r[2] := ULINT#0 - 1 > 0;
+    r[3] := NOT LWORD#2 > LWORD#1;
+    r[4] := NOT DWORD#5 > DWORD#0;
+    r[5] := LINT#2147483647 + 1 > 0;
+    END_PROGRAM
+    """)
+    _scan_both(py, na)
+    assert py.read("main.r") == na.read("main.r") == [True] * 5
+    assert py.read("main.a") == na.read("main.a") == -(1 << 63) and py.read("main.neg") == na.read("main.neg") is True
+    assert py.read("main.m") == na.read("main.m") == 5      # C's `- -5`, not the decrement `--5`
+    # the shape the fuzz found (gcc's folding depends on it): ABS(1) > ABS(least) is 1 > least
+    py, na = _pair("""
+    PROGRAM main
+    VAR
+      least : LINT := LINT#-9223372036854775808; one : LINT := LINT#-9223372036854775808;
+      b0 : BOOL := TRUE; b1 : BOOL := FALSE; b2 : BOOL := TRUE;
+    END_VAR
+    IF (NOT b0) XOR b0 THEN one := LINT#1; END_IF;
+    b0 := SEL(SEL(b1 AND b2, b1, b0), ABS(one) > ABS(least), SEL(FALSE, b2, DINT#7 < DINT#1));
+    END_PROGRAM
+    """)
+    _scan_both(py, na)
+    assert py.read("main.b0") is na.read("main.b0") is True
+
+
 def test_writes_by_name_and_retain_go_through_the_c_memory(tmp_path):
     """Writing a variable (as forcing and the lab do) changes what the C computes with; a
     retained variable saved by the native path is restored into the Python path and back."""

@@ -871,6 +871,9 @@ class CGen:
                 return "1" if v else "0"
             if isinstance(v, float):
                 return self.const(v, T.LREAL)
+            if isinstance(tb, T.ElementaryType) and tb.kind in ("sint", "uint", "bits") and tb.bits >= 32:
+                # matiec writes a typed literal as `(UDINT)5`: `UDINT#0 - 1 > 0` is TRUE
+                return f"(({_CTYPE[tb.name]}){self.const(v, tb)})"
             return self.const(v, tb)
         if isinstance(e, (A.Name, A.Member, A.Index)):
             if isinstance(e, A.Name) and isinstance(e.sym, EnumValue):
@@ -884,7 +887,7 @@ class CGen:
             b = _b(e.ty)
             if e.op == "NOT":
                 return f"(!{inner})" if b is T.BOOL else f"(~{inner})"
-            return f"(-{inner})"
+            return f"(- {inner})" if inner.startswith("-") else f"(-{inner})"    # `-INT#-5`: not C's `--`
         if isinstance(e, A.Binary):
             return self.binary(e)
         if isinstance(e, A.Call):
@@ -1019,9 +1022,15 @@ class CGen:
             k = types[0].kind
             if k == "uint":
                 return codes[0]
-            if k in ("sint", "real"):
-                t = _CTYPE[types[0].name]
-                x = self.fresh("x")
+            t = _CTYPE[types[0].name]
+            x = self.fresh("x")
+            if k == "sint":
+                # negated as unsigned: gcc turns `x < 0 ? -x : x` into its abs, which it takes
+                # as never negative even under -fwrapv (ABS(b) > ABS(LINT's least) came out
+                # FALSE); the Python path wraps the least value to itself
+                u = "uint64_t" if types[0].bits == 64 else "uint32_t"
+                return f"({{ {t} {x} = {codes[0]}; ({t})({x} < 0 ? ({u})0 - ({u}){x} : ({u}){x}); }})"
+            if k == "real":
                 return f"({{ {t} {x} = {codes[0]}; ({t})({x} < 0 ? -{x} : {x}); }})"
             raise Unsupported(f"ABS of {types[0].name}")
         if name in ("MIN", "MAX", "LIMIT", "SEL"):
