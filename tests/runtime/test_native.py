@@ -349,6 +349,42 @@ def test_concurrent_builds_of_one_program_share_one_cache_entry(tmp_path):
     assert len(files) == 1 and files[0].startswith("_plclab_native_"), files
 
 
+def test_the_cache_stays_within_its_bound_dropping_the_libraries_loaded_least_recently(tmp_path, monkeypatch):
+    """Every new program adds a library (a class graded term after term, a test suite run
+    day after day): past CACHE_MAX_BYTES the one loaded least recently goes, never the one
+    just built; a program whose library went is built again; a dead build's folder goes."""
+    monkeypatch.setenv("XDG_CACHE_HOME", str(tmp_path))
+    monkeypatch.setattr(native, "PREFER_API", False)
+    monkeypatch.setattr(native, "_LOADED", {})
+    cache = tmp_path / "plclab" / "native"
+    units = [check_sources([("t.st", f"PROGRAM main\nVAR n : DINT; END_VAR\nn := n + {k};\nEND_PROGRAM\n")])
+             for k in (101, 202, 303)]
+
+    def run(cu: Any) -> Path:
+        """Run the program natively; its library's path."""
+        plc = PLC(compile_unit(cu), native=True)
+        assert plc.native is not None
+        plc.scan()
+        modname, _api, _include, ext = native._key(native._emitted(cu), native.c_compiler())
+        return cache / f"{modname}{ext}"
+
+    a, b = run(units[0]), run(units[1])
+    os.utime(a, (1_000_000, 1_000_000))           # A loaded long ago...
+    native._LOADED.clear()
+    run(units[0])                                 # ...and now again: it is the recent one
+    assert a.stat().st_mtime > 2_000_000
+    os.utime(b, (1_500_000, 1_500_000))
+    dead, live = cache / "build-dead", cache / "build-live"
+    dead.mkdir(), live.mkdir()
+    os.utime(dead, (1_000_000, 1_000_000))
+    monkeypatch.setattr(native, "CACHE_MAX_BYTES", a.stat().st_size + b.stat().st_size + 100)
+    c = run(units[2])                             # a third library: over the bound
+    assert sorted(p.name for p in cache.iterdir()) == sorted([a.name, c.name, live.name])
+    native._LOADED.clear()
+    assert run(units[1]) == b and b.exists()      # B is built again when needed
+    assert not a.exists() and c.exists()          # A was the least recent now
+
+
 def test_a_program_loaded_again_is_built_in_the_background(tmp_path, monkeypatch):
     monkeypatch.setenv("XDG_CACHE_HOME", str(tmp_path))
     monkeypatch.delenv(native.ENV, raising=False)

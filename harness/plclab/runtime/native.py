@@ -13,8 +13,9 @@ asked for native).
 Turning it off: PLCLAB_NATIVE=0 in the environment, `PLC(..., native=False)`, or
 `python_only()` around the code that must see Python frames (the grader's line tracer).
 Built libraries are cached by the hash of their C in $XDG_CACHE_HOME/plclab/native (default
-~/.cache/plclab/native); a build writes a temporary file and renames it, so concurrent
-processes never load a half-written library. User-facing: docs/runtime.md.
+~/.cache/plclab/native), at most CACHE_MAX_BYTES of them (least recently used go first); a
+build writes a temporary file and renames it, so concurrent processes never load a
+half-written library. User-facing: docs/runtime.md.
 """
 from __future__ import annotations
 
@@ -28,6 +29,7 @@ import sys
 import sysconfig
 import tempfile
 import threading
+import time
 import weakref
 from pathlib import Path
 from typing import Any, Callable, Iterator, Optional, Sequence
@@ -43,6 +45,11 @@ CFLAGS = ("-O1", "-shared", "-fPIC", "-fwrapv", "-ffp-contract=off", "-fno-fast-
 """-fwrapv: signed overflow wraps (as the Python path wraps); -ffp-contract=off: no fused
 multiply-add, every float operation rounds once."""
 BUILD_TIMEOUT_S = 120
+CACHE_MAX_BYTES = 256 * 1024 * 1024
+"""What the built libraries may take together: a class graded term after term, or a test
+suite run day after day, builds new programs every time. Past it, the libraries used least
+recently go (a load marks a library used); a program whose library went is built again."""
+STALE_BUILD_S = 3600      # a build folder this old belongs to a build that died
 
 _PYTHON_ONLY: contextvars.ContextVar[bool] = contextvars.ContextVar("plclab_python_only", default=False)
 _told: set[str] = set()
@@ -152,7 +159,8 @@ def build(cprog: CProgram, wait: bool = True, later: bool = True) -> Optional[tu
                 return None
     try:
         loaded = _load(cprog, api, modname, lib_path)
-    except Exception as e:       # a damaged cache file: built again once
+        _mark_used(lib_path)
+    except Exception as e:       # a damaged cache file (or one pruned meanwhile): built again once
         try:
             lib_path.unlink()
         except OSError:
@@ -234,12 +242,59 @@ def _compile(cprog: CProgram, cc: str, api: bool, include: str, modname: str, ou
             _inform("build", f"the native build failed ({first})")
             return False
         os.replace(tmp_lib, lib_path)          # atomic: another process sees all of it or nothing
+        prune(out_dir, keep=lib_path)
         return True
     except (OSError, subprocess.SubprocessError) as e:
         _inform("build", f"the native build failed ({e})")
         return False
     finally:
         shutil.rmtree(work, ignore_errors=True)
+
+
+def _mark_used(lib_path: Path) -> None:
+    """A library's time is when it was last loaded: what pruning goes by."""
+    try:
+        os.utime(lib_path)
+    except OSError:
+        pass
+
+
+def prune(out_dir: Path, keep: Optional[Path] = None) -> list[str]:
+    """Bound the cache after a build: the libraries loaded least recently go until the rest
+    take at most CACHE_MAX_BYTES, never `keep` (the one just built); the
+    folders of builds that died long ago go too. Safe beside other processes: a library
+    removed under another's load is built again there (build()). The names removed."""
+    now = time.time()
+    libs: list[tuple[float, int, str]] = []
+    removed: list[str] = []
+    try:
+        with os.scandir(out_dir) as entries:
+            for entry in entries:
+                try:
+                    st = entry.stat(follow_symlinks=False)
+                    if entry.name.startswith("_plclab_native_") and entry.is_file(follow_symlinks=False):
+                        libs.append((st.st_mtime, st.st_size, entry.name))
+                    elif entry.name.startswith("build-") and entry.is_dir(follow_symlinks=False) \
+                            and now - st.st_mtime > STALE_BUILD_S:
+                        shutil.rmtree(entry.path, ignore_errors=True)
+                        removed.append(entry.name)
+                except OSError:
+                    continue
+    except OSError:
+        return removed
+    total = sum(size for _t, size, _n in libs)
+    for _t, size, name in sorted(libs):
+        if total <= CACHE_MAX_BYTES:
+            break
+        if keep is not None and name == keep.name:
+            continue
+        try:
+            os.unlink(os.path.join(out_dir, name))
+        except OSError:
+            continue
+        total -= size
+        removed.append(name)
+    return removed
 
 
 def _load(cprog: CProgram, api: bool, modname: str, lib_path: Path) -> tuple[Any, Any]:
@@ -744,4 +799,4 @@ def _init_proxy(np: NativeProgram, proxy: Any, layout: Layout, cdata: Any, pyobj
             kids[f.name] = m
 
 
-__all__ = ["ENV", "NativeProgram", "build", "cache_dir", "program_for", "python_only", "setting", "wanted"]
+__all__ = ["ENV", "NativeProgram", "build", "cache_dir", "program_for", "prune", "python_only", "setting", "wanted"]
