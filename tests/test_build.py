@@ -29,13 +29,11 @@ NS = {"ppx": "http://www.plcopen.org/xml/tc6_0201", "xhtml": "http://www.w3.org/
 CASES = Path(__file__).parent / "frontend" / "cases" / "valid"
 # valid ST that TC6 v2.01 has no element or attribute for: refused with one clear line
 NO_TC6_FORM = {"config_program_without_task.st": "RETAIN of program instance",
-               "config_single_resource.st": "named RESOURCE",
                "var_located_anonymous.st": "unnamed located variable",
+               "var_direct_addresses_in_code.st": "unnamed located variable",
                # forms OpenPLC Editor reads as another program (docs/ladder.md, the Editor's rules)
                "pou_fb_instance_init.st": "variable t: TON instance with an initial value: OpenPLC Editor drops it",
-               "type_anonymous_enum_var.st": "variable state: an inline <enum> type",
                "type_strings.st": "variable short: STRING[10]: OpenPLC Editor drops the length",
-               "type_struct_initial_values.st": "field dir: an inline <enum> type",
                "type_subrange.st": "variable level: an inline <subrangeUnsigned> type"}
 
 
@@ -219,7 +217,7 @@ VAR_TEMP
 END_VAR
 VAR
     Delay : TON;                      (* no initial value: OpenPLC Editor would drop it *)
-    Where : ST_Point := (X := 2.0, Mode := FAULT);
+    Where : ST_Point := (X := 2.0);   (* an enumerated value here stops OpenPLC's compiler *)
 END_VAR
 Scratch := 1;
 Delay(IN := Set, PT := T#2s);
@@ -433,8 +431,8 @@ IF t1.Q THEN lamp := NOT lamp; END_IF;
   </types>
   <instances>
     <configurations>
-      <configuration name="config">
-        <resource name="resource1">
+      <configuration name="Config0">
+        <resource name="Res0">
           <task name="task0" priority="0" interval="PT0.02S">
             <pouInstance name="instance0" typeName="blink"/>
           </task>
@@ -454,6 +452,10 @@ def test_st_from_xml_reads_a_file_written_by_the_editor(tmp_path):
     assert [p.name for p in unit.unit.pous] == ["blink"]
     assert unit.config.resources[0].tasks[0].interval_ns == 20_000_000
     assert "PROGRAM instance0 WITH task0 : blink;" in text
+    # Beremiz's own default names: OpenPLC's build looks for Config0.c and Res0.c
+    path.write_bytes(BEREMIZ_STYLE.replace(b'"Config0"', b'"config"'))
+    with pytest.raises(CompileError, match="OpenPLC builds a CONFIGURATION named Config0"):
+        check_sources([("plc.xml (as ST)", plcxml.st_from_xml(path))])
 
 
 def test_interval_literals():

@@ -17,7 +17,7 @@ import plclab
 from plclab.stands import bundle
 from plclab.stands.mp9c import STAND
 
-CONFIG = ("CONFIGURATION C RESOURCE R ON PLC TASK t(INTERVAL := T#10ms, PRIORITY := 0); "
+CONFIG = ("CONFIGURATION Config0 RESOURCE Res0 ON PLC TASK t(INTERVAL := T#10ms, PRIORITY := 0); "
           "PROGRAM i WITH t : Prog; END_RESOURCE END_CONFIGURATION\n")
 BIG_DECLS = "".join(f"    big{i} : ARRAY[1..1000000] OF BOOL;\n" for i in range(4))   # 4 MB: accepted by check
 

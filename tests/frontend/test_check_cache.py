@@ -14,7 +14,7 @@ from plclab.stands import bundle, cnc, get_stand
 from plclab.stands.base import stand_spec
 
 SMALL = ("PROGRAM PCount\nVAR n : INT; END_VAR\nn := n + 1;\nEND_PROGRAM\n"
-         "CONFIGURATION C RESOURCE R ON PLC TASK t(INTERVAL := T#10ms, PRIORITY := 1); "
+         "CONFIGURATION Config0 RESOURCE Res0 ON PLC TASK t(INTERVAL := T#10ms, PRIORITY := 1); "
          "PROGRAM i WITH t : PCount; END_RESOURCE END_CONFIGURATION\n")
 
 

@@ -32,6 +32,7 @@ WIDTH = {t: 8 << (i % 4) for i, t in enumerate(SIGNED + UNSIGNED + BITS)}
 ARRAYS = ["INT", "DINT", "UDINT", "REAL", "BOOL", "WORD"]
 REAL_LITERALS = ["0.0", "1.5", "-2.25", "0.1", "2.5", "-3.5", "0.5", "1.0E10", "3.0E-5", "3.4E38", "-0.0",
                  "1.0E-40", "4294967296.0", "9.3E18", "-2147483648.5"]
+LREAL_LITERALS = [x for x in REAL_LITERALS if x != "1.0E-40"]   # OpenPLC reads it in single precision
 
 LIBRARY = """
 FUNCTION FC_Mix : DINT
@@ -68,11 +69,11 @@ class Generator:
         if t == "TIME":
             return f"T#{r.randint(0, 5000)}ms"
         if t in REALS:
-            return f"{t}#{r.choice(REAL_LITERALS)}"
+            return f"{t}#{r.choice(REAL_LITERALS if t == 'REAL' else LREAL_LITERALS)}"
         bits = WIDTH[t]
         if t in SIGNED:
             v = r.choice([0, 1, -1, 7, -(1 << (bits - 1)), (1 << (bits - 1)) - 1, r.randint(-100, 100)])
-            return f"{t}#{v}" if v >= 0 or v == -(1 << (bits - 1)) else f"(-{t}#{-v})"
+            return f"{t}#{v}"
         v = r.choice([0, 1, 2, (1 << bits) - 1, r.randrange(1 << bits)])
         return f"{t}#16#{v:X}" if t in BITS and r.random() < 0.5 else f"{t}#{v}"
 
@@ -116,12 +117,14 @@ class Generator:
                 return f"{r.choice(['SHL', 'SHR'])}({sub()}, {r.choice([0, 1, 7, 8, 15, 16, 31, 32, 63, 64, 70])})"
             return f"SEL({self.expr('BOOL', depth - 1)}, {sub()}, {sub()})"
         if c < 0.55:
+            # a variable on one side: OpenPLC's compiler folds an operation on two literals
+            # and refuses it where the value leaves the type (INT#32767 + 1)
             op = r.choice(["+", "-", "*", "/", "MOD"] if t in INTEGERS else ["+", "-", "*", "/"])
             if op in ("/", "MOD") and r.random() < 0.97:    # mostly a divisor that cannot be 0
                 low = f"{t}#0.5" if t in REALS else f"{t}#1"
-                return f"({sub()} {op} MAX({sub()}, {low}))" if t not in SIGNED \
-                    else f"({sub()} {op} LIMIT({low}, {sub()}, {t}#100))"
-            return f"({sub()} {op} {sub()})"
+                return f"({self.var(t)} {op} MAX({sub()}, {low}))" if t not in SIGNED \
+                    else f"({sub()} {op} LIMIT({low}, {self.var(t)}, {t}#100))"
+            return f"({self.var(t)} {op} {sub()})" if r.random() < 0.5 else f"({sub()} {op} {self.var(t)})"
         if c < 0.7 and t not in UNSIGNED:
             return f"(-{sub()})" if c < 0.62 else f"ABS({sub()})"
         if c < 0.78:

@@ -151,14 +151,13 @@ def test_real_division_by_zero_is_infinite_not_a_fault():
     assert sim.plc.state == "RUN"
 
 
-def test_power_and_unary_minus_precedence():
-    # matiec: unary minus binds tighter than ** (unary_expression under power_expression), and
-    # `-2.0` is a signed literal, so both are (-2) ** 2 = 4 (IEC's table would give -4)
-    sim = once("VAR a, b, c : REAL; x : REAL := 2.0; END_VAR",
-               "a := -2.0 ** 2.0; b := -x ** 2.0; c := 2.0 ** 3.0 ** 2.0;")
+def test_expt_of_negative_bases_and_nested():
+    # `**` does not build in OpenPLC (tests/frontend: sem_power_operator); EXPT is its form
+    sim = once("VAR a, b, c : LREAL; x : LREAL := 2.0; END_VAR",
+               "a := EXPT(-2.0, 2.0); b := EXPT(-x, 3.0); c := EXPT(EXPT(2.0, 3.0), 2.0);")
     assert val(sim, "a") == 4.0
-    assert val(sim, "b") == 4.0
-    assert val(sim, "c") == 64.0               # left-associative: (2 ** 3) ** 2
+    assert val(sim, "b") == -8.0
+    assert val(sim, "c") == 64.0
 
 
 def test_real_to_int_of_expression():

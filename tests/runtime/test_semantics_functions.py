@@ -178,7 +178,7 @@ def test_string_equality_compares_only_the_common_prefix():
 def test_expt_and_numeric_functions():
     sim = once("VAR e1, e2, a, q, l : REAL; i : INT := -7; ai : INT; x : REAL := 2.0; END_VAR",
                "e1 := EXPT(x, 10); e2 := EXPT(x, -1.0); a := ABS(-2.5); ai := ABS(i);"
-               " q := SQRT(16.0); l := x ** 0.5;")
+               " q := SQRT(16.0); l := EXPT(x, 0.5);")
     assert val(sim, "e1") == 1024.0
     assert val(sim, "e2") == 0.5
     assert val(sim, "a") == 2.5

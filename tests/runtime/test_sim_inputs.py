@@ -10,9 +10,10 @@ from plclab.cli import main
 from plclab.trace import read_csv
 
 PROGRAM = """
+TYPE E_Mode : (IDLE, RUNNING); END_TYPE
 PROGRAM main
 VAR level AT %IW0 : INT; raw AT %IW1 : WORD; start AT %IX0.0 : BOOL; END_VAR
-VAR r : REAL; n : DINT; mode : (IDLE, RUNNING); END_VAR
+VAR r : REAL; n : DINT; mode : E_Mode; END_VAR
 VAR out AT %QW0 : INT; END_VAR
 out := level;
 END_PROGRAM

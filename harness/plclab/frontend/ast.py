@@ -44,6 +44,7 @@ class Literal(Expr):
     type_name: Optional[str] = None   # the `INT#` prefix, upper case, if any
     text: str = ""
     ty: Any = None
+    parenthesized: bool = False       # `(5)`: a value, but not the literal an initial value must be
 
 
 @dataclass(eq=False)
@@ -319,6 +320,7 @@ class VarDecl(Node):
     global_decl: Any = None          # VAR_EXTERNAL: the VarDecl of the VAR_GLOBAL it names
     fb_init: Optional[dict] = None   # checker: a FB instance's initial values, by member path
     group_size: int = 1              # how many names its declaration line declares (`a, b : INT`)
+    constant_in_openplc: bool = False  # checker: a FUNCTION's VAR after VAR CONSTANT (iec2c: constant)
 
     def __post_init__(self) -> None:
         self.key = self.name.upper()

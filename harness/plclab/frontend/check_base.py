@@ -2,6 +2,7 @@
 and the checker's state and error reporting (plclab.frontend.checker assembles the parts)."""
 from __future__ import annotations
 
+import math
 from typing import Any, Optional
 
 from plclab.errors import Diagnostic
@@ -61,6 +62,8 @@ class CheckerBase:
         self.types: dict[str, T.Type] = {}
         self.type_decls: dict[str, A.TypeDecl] = {}
         self.enum_values: dict[str, list[EnumValue]] = {}
+        # POU key -> address -> the named variable located there (its address is not a name in C)
+        self.named_at: dict[str, dict[str, Any]] = {}
         self.pous: dict[str, A.PouDecl] = {}
         self.fb_types: dict[str, T.FBType] = {}
         self.globals: dict[str, A.VarDecl] = {}
@@ -95,3 +98,28 @@ class CheckerBase:
 def _is_signed_integer(e: A.Expr) -> bool:
     """A plain decimal integer literal, optionally signed (`5`, `-5`): matiec's signed_integer."""
     return isinstance(e, A.Literal) and e.kind == "int" and e.type_name is None and "#" not in e.text
+
+
+def fold(op: str, a: Any, b: Any) -> Any:
+    """`a op b` for two constant numbers as the C that matiec writes computes it (integer
+    division truncates toward zero, MOD takes the dividend's sign); None for another operator,
+    a division by zero or an overflow."""
+    try:
+        if op == "+":
+            return a + b
+        if op == "-":
+            return a - b
+        if op == "*":
+            return a * b
+        if op == "/":
+            if isinstance(a, int) and isinstance(b, int):
+                q = abs(a) // abs(b)
+                return q if (a < 0) == (b < 0) else -q
+            return a / b
+        if op == "MOD":
+            return int(math.fmod(a, b))
+        if op == "**":
+            return float(a) ** b
+    except (ZeroDivisionError, OverflowError, ValueError):
+        return None
+    return None

@@ -18,6 +18,23 @@ class ConfigurationChecks(CheckerBase):
             self.error(config, _library_variable_message(config.name, "configuration"))
         seen_tasks: dict[str, A.TaskDecl] = {}
         seen_progs: set[str] = set()
+        # compile_program.sh moves Config0.c and Res0.c into OpenPLC's core, the files iec2c
+        # names after the CONFIGURATION and its RESOURCE ("Error moving files" otherwise)
+        if config.name.upper() != "CONFIG0":
+            self.error(config, f"OpenPLC builds a CONFIGURATION named Config0 (it looks for Config0.c), not "
+                               f"'{config.name}': rename it")
+        elif config.resources and not config.resources[0].name:
+            self.error(config, "OpenPLC builds the RESOURCE Res0 (it looks for Res0.c): put the TASK and PROGRAM "
+                               "lines in RESOURCE Res0 ON PLC ... END_RESOURCE")
+        elif config.resources and config.resources[0].name.upper() != "RES0":
+            res = config.resources[0]
+            self.error(res, f"OpenPLC builds a RESOURCE named Res0 (it looks for Res0.c), not '{res.name}': rename it")
+        if len(config.resources) > 1:
+            # webserver/scripts/compile_program.sh compiles Config0.c and Res0.c only: the calls
+            # Config0.c makes into the other resources never link
+            extra = config.resources[1]
+            self.error(extra, f"OpenPLC builds one RESOURCE (its build compiles Res0.c only): put the tasks and "
+                              f"programs of '{extra.name}' in the first RESOURCE")
         for res in config.resources:
             for task in res.tasks:
                 if task.key in seen_tasks:

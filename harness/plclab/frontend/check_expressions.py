@@ -5,7 +5,7 @@ from __future__ import annotations
 from typing import Optional
 
 from plclab.frontend import ast as A
-from plclab.frontend.check_base import CheckerBase, DEFAULT_INT, DEFAULT_REAL, _GENERIC_RESULT_DEFAULT, _Scope
+from plclab.frontend.check_base import CheckerBase, DEFAULT_INT, DEFAULT_REAL, _GENERIC_RESULT_DEFAULT, _Scope, fold
 from plclab.frontend.checked import INT_LIT, REAL_LIT, EnumValue, LiteralType
 from plclab.frontend.stdsigs import FUNCTION_BLOCKS, FUNCTIONS, NO_BOOL_OVERLOAD, FBSig, FuncSig
 from plclab.iec import types as T
@@ -89,8 +89,8 @@ class ExpressionChecks(CheckerBase):
         if not self._is_variable(a.value, d.name, "VAR_OUTPUT"):
             return
         tt = self.lvalue(a.value, scope)
-        if a.negated and d.ty is not None and T.base_of(d.ty) is not T.BOOL:
-            self.error(a, "NOT on an output needs a BOOL output")
+        if a.negated:
+            self.error(a, negated_output_message(a))
         elif tt is not None and d.ty is not None and not self._decl_types_match(T.base_of(tt), T.base_of(d.ty)):
             self.error(a.value, f"output '{d.name}' is {d.ty.name}; it cannot be stored in {self._tname(tt)}")
 
@@ -274,9 +274,18 @@ class ExpressionChecks(CheckerBase):
         if isinstance(sym, EnumValue):
             self.error(e, f"'{root.name}' is an enumerated value, not a variable")
             return None
+        if root.key.startswith("%"):
+            self.error(e, f"{root.name} is written by its address: OpenPLC's compiler stops with an internal error "
+                          f"on that; give the located variable a name (VAR q AT {root.name} : ...) and write the name")
+            return None
         if isinstance(sym, A.VarDecl):
             if sym.constant or (sym.global_decl is not None and sym.global_decl.constant):
                 self.error(e, f"'{root.name}' is a CONSTANT: it cannot be assigned")
+                return None
+            if sym.constant_in_openplc:
+                self.error(e, f"'{root.name}' is declared in a VAR block after a VAR CONSTANT block of this "
+                              f"FUNCTION, which OpenPLC's compiler takes as constant too: declare it before the "
+                              f"VAR CONSTANT block")
                 return None
             if root.key in scope.for_vars and root is e:
                 self.error(e, f"'{root.name}' is the control variable of an enclosing FOR loop: "
@@ -448,6 +457,8 @@ class ExpressionChecks(CheckerBase):
                     self.error(e, f"'{e.text}': a {tn} literal needs a decimal point (e.g. {tn}#{e.value}.0)")
                     return None
             if e.kind == "real" and t.is_real:
+                if t is T.LREAL and not self._single_precision_reads(e):
+                    return None
                 return t
             self.error(e, f"'{e.text}' is not a valid {tn} literal")
             return None
@@ -464,6 +475,11 @@ class ExpressionChecks(CheckerBase):
         if e.kind == "string":
             if len(e.value) > 126:
                 self.error(e, "string literal longer than 126 characters (OpenPLC's STRING limit)")
+                return None
+            if _has_dollar_l(e.text):
+                # iec2c turns $L into a raw line feed inside the C string: g++ stops on it
+                self.error(e, "'$L' in a string does not build in OpenPLC (its compiler writes a raw line "
+                              "break into the C code): write '$N' for a new line")
                 return None
             return T.STRING
         if e.kind == "wstring":
@@ -482,18 +498,21 @@ class ExpressionChecks(CheckerBase):
             return sym.ty
         values = self.enum_values.get(e.key)
         if values:
-            if expected is not None and isinstance(T.base_of(expected), T.EnumType):
-                for v in values:
-                    if v.ty is T.base_of(expected):
-                        e.sym = v
-                        return v.ty
             if len(values) == 1:
                 e.sym = values[0]
                 return values[0].ty
+            # matiec does not let the context choose ("Ambiguous enumerate value"), even where
+            # only one of the types fits (`v := OPEN` with v an E_Valve)
+            mine = next((v for v in values if expected is not None and v.ty is T.base_of(expected)), values[0])
             self.error(e, f"'{e.name}' is a value of several enumerated types; qualify it (e.g. "
-                          f"{values[0].ty.name}#{e.name})")
+                          f"{mine.ty.name}#{e.name}): OpenPLC's compiler refuses it unqualified")
             return None
         if e.key.startswith("%"):
+            named = self.named_at.get(scope.pou.key, {}).get(e.key) if scope.pou is not None else None
+            if isinstance(named, A.VarDecl):
+                self.error(e, f"{e.name} is '{named.name}' in this POU: write its name (OpenPLC's compiler makes C "
+                              f"that has no {e.name} here, only '{named.name}')")
+                return None
             self.error(e, f"{e.name} is not declared in this POU: OpenPLC's compiler needs a located "
                           f"declaration first (e.g. VAR AT {e.name} : BOOL; END_VAR)")
             return None
@@ -516,20 +535,11 @@ class ExpressionChecks(CheckerBase):
         op = e.op
         hint = None if op in self._CMP else expected
         if op == "**":
-            lt = self.expr(e.left, scope, hint)
-            rt = self.expr(e.right, scope, None)
-            if lt is None or rt is None:
-                return None
-            if isinstance(lt, LiteralType):
-                lt = self.settle(e.left, lt, hint if hint is not None and T.in_generic(hint, "ANY_REAL") else DEFAULT_REAL)
-            rt = self.settle(e.right, rt)
-            if not T.in_generic(lt, "ANY_REAL"):
-                self.error(e, f"'**' needs a REAL or LREAL base, not {self._tname(lt)}")
-                return None
-            if not T.in_generic(rt, "ANY_NUM"):
-                self.error(e.right, f"'**' needs a numeric exponent, not {self._tname(rt)}")
-                return None
-            return lt
+            # iec2c writes `a ** b` as __expt(a, b), which OpenPLC's C library (core/lib) lacks:
+            # g++ fails on every program using it; EXPT(a, b) is EXPT__REAL__REAL__REAL there
+            self.error(e, "'**' does not build in OpenPLC (the C it becomes calls __expt, which OpenPLC's "
+                          "library lacks): write EXPT(base, exponent)")
+            return None
         lt = self.expr(e.left, scope, hint)
         rt = self.expr(e.right, scope, hint)
         if lt is None or rt is None:
@@ -545,6 +555,9 @@ class ExpressionChecks(CheckerBase):
                 return T.BOOL
             if op in ("AND", "OR", "XOR"):
                 self.error(e, f"'{op}' needs BOOL or bit-string operands, not untyped numbers")
+                return None
+            if op == "/" and lt.kind == rt.kind == "int" and literal_value(e.right) == 0:
+                self.error(e, _ZERO_DIVISION)
                 return None
             return REAL_LIT if "real" in (lt.kind, rt.kind) else INT_LIT
         if isinstance(lt, LiteralType):
@@ -589,7 +602,7 @@ class ExpressionChecks(CheckerBase):
         if isinstance(lb, T.ElementaryType) and isinstance(rb, T.ElementaryType):
             if lb.is_num and self._same(lt, rt):
                 e.operand_ty = lt
-                return lt
+                return lt if self._folds_within(e, lb) else None
             k = (lb.kind, op, rb.kind)
             time_rules = {
                 ("time", "+", "time"): T.TIME, ("time", "-", "time"): T.TIME,
@@ -606,6 +619,27 @@ class ExpressionChecks(CheckerBase):
         self.error(e, f"'{op}' is not defined for {self._tname(lt)} and {self._tname(rt)}"
                       + ("" if self._same(lt, rt) else " (IEC has no implicit conversion: convert one side)"))
         return None
+
+    def _folds_within(self, e: A.Binary, b: T.ElementaryType) -> bool:
+        """OpenPLC's compiler folds an operation on literals (`INT#32767 + 1`) and refuses it
+        when the value leaves the operation's type, or when it divides an integer by zero."""
+        if literal_value(e.left) is None:
+            return True
+        divisor = literal_value(e.right)
+        if e.op == "/" and divisor == 0 and b.is_integer:      # a REAL one is infinite
+            self.error(e, _ZERO_DIVISION)
+            return False
+        v = literal_value(e)
+        if v is None:
+            return True
+        if b.is_integer and not b.min <= v <= b.max:
+            self.error(e, f"this constant expression is {v}, outside {b.name} ({b.min}..{b.max}): "
+                          f"OpenPLC's compiler refuses it")
+            return False
+        if b.is_real and not abs(v) <= (_REAL_MAX if b is T.REAL else _LREAL_MAX):
+            self.error(e, f"this constant expression overflows {b.name}: OpenPLC's compiler refuses it")
+            return False
+        return True
 
     def _adopt(self, lit_e: A.Expr, lit_t: LiteralType, other: T.Type, op: str) -> Optional[T.Type]:
         """An untyped literal operand takes the type of the other operand."""
@@ -631,7 +665,23 @@ class ExpressionChecks(CheckerBase):
         self._set_lit_type(e, target)
         return target
 
+    def _single_precision_reads(self, e: A.Literal) -> bool:
+        """OpenPLC's compiler reads every real literal with C's strtof (its constant folding
+        picks strtof by mistake: `#if (real64_tX == float)` compares two undefined names), so
+        an LREAL literal that single precision overflows (beyond 3.4E38) or underflows
+        (nonzero below 1.2E-38) is refused: "Numerical value exceeds range for LREAL"."""
+        v = abs(e.value)
+        if v > _REAL_MAX_LITERAL or 0 < v < _REAL_MIN_NORMAL:
+            self.error(e, f"{e.text or e.value}: OpenPLC's compiler reads real literals in single precision, "
+                          f"so an LREAL literal must be 0 or within 1.2E-38..3.4E38 in size "
+                          f"(compute a larger or smaller value, e.g. 1.0E20 * 1.0E20)")
+            return False
+        return True
+
     def _set_lit_type(self, e: A.Expr, target: T.Type) -> None:
+        if isinstance(e, A.Literal) and e.kind == "real" and target is T.LREAL and e.type_name is None \
+                and isinstance(e.ty, LiteralType):
+            self._single_precision_reads(e)
         if isinstance(e.ty, LiteralType) or e.ty is None:
             e.ty = target
         if isinstance(e, A.Binary):
@@ -660,8 +710,10 @@ class ExpressionChecks(CheckerBase):
                     return True
                 if tb.is_real and t.kind == "real":
                     if tb is T.REAL and v is not None and abs(v) > 3.4028234663852886e38:
-                        shown = e.text if isinstance(e, A.Literal) and e.text else v
-                        self.error(e, f"{shown} does not fit in REAL (use LREAL)")
+                        if isinstance(e, A.Literal):      # an LREAL literal cannot be as large either
+                            self.error(e, f"{e.text or v} does not fit in REAL")
+                        else:
+                            self.error(e, f"{v} does not fit in REAL (use LREAL)")
                         return False
                     self._set_lit_type(e, target)
                     return True
@@ -705,3 +757,47 @@ class ExpressionChecks(CheckerBase):
             if f"{sn}_TO_{dn}" in FUNCTIONS:
                 return f" (use {sn}_TO_{dn})"
         return ""
+
+
+_ZERO_DIVISION = "division by zero in a constant expression: OpenPLC's compiler refuses it"
+_REAL_MAX = 3.4028234663852886e38
+_REAL_MAX_LITERAL = 3.4028235677973366e38     # above it, strtof rounds to infinity
+_REAL_MIN_NORMAL = 1.1754943508222875e-38     # below it (nonzero), strtof reports an underflow
+_LREAL_MAX = 1.7976931348623157e308
+
+
+def literal_value(e: A.Expr) -> Optional[float | int]:
+    """The value matiec's constant folding gives an expression of numeric literals (a sign,
+    + - * / and parentheses over INTEGER and REAL literals, typed or not), else None. Names,
+    CONSTANT variables included, are not folded: OpenPLC's compiler folds literals only."""
+    if isinstance(e, A.Literal):
+        return e.value if e.kind in ("int", "real") and not isinstance(e.value, bool) else None
+    if isinstance(e, A.Unary) and e.op == "-":
+        v = literal_value(e.operand)
+        return None if v is None else -v
+    if isinstance(e, A.Binary) and e.op in ("+", "-", "*", "/"):
+        a, b = literal_value(e.left), literal_value(e.right)
+        if a is None or b is None:
+            return None
+        return fold(e.op, a, b)
+    return None
+
+
+def negated_output_message(a: A.Arg) -> str:
+    """`NOT Q => x` in a call: iec2c stops on it ("Internal compiler error in file
+    function_call_param_iterator.cc"), for any block or function."""
+    return (f"a negated output (NOT {a.name} => ...) stops OpenPLC's compiler with an internal error: "
+            f"bind {a.name} to a variable, then negate that after the call")
+
+
+def _has_dollar_l(text: str) -> bool:
+    """Whether a string literal as written has the escape $L (not $$ followed by an L)."""
+    i = 0
+    while i < len(text) - 1:
+        if text[i] == "$":
+            if text[i + 1] in "lL":
+                return True
+            i += 2
+            continue
+        i += 1
+    return False

@@ -6,6 +6,7 @@ from typing import Any, Optional
 
 from plclab.frontend import ast as A
 from plclab.frontend.check_base import CheckerBase, _Scope
+from plclab.frontend.check_expressions import negated_output_message
 from plclab.frontend.check_limits import nesting_violation
 from plclab.frontend.stdsigs import FUNCTIONS, FBSig
 from plclab.iec import types as T
@@ -168,6 +169,13 @@ class StatementChecks(CheckerBase):
                 and target.sym.constant:
             self.error(target, f"'{target.name}' is CONSTANT: it cannot be called")
         s.fb_type = t
+        if isinstance(target, A.Name) and isinstance(target.sym, A.VarDecl) \
+                and target.sym.section == "VAR_EXTERNAL" and s.args:
+            # iec2c passes arguments of an external instance through __SET_EXTERNAL_FB and
+            # `->` member reads that OpenPLC's accessor.h and g++ refuse; a bare call builds
+            self.error(s.args[0], f"'{target.name}' is reached through VAR_EXTERNAL: OpenPLC builds a call of it "
+                                  f"only without arguments; set its inputs ({target.name}.IN := ...) before the "
+                                  f"call and read its outputs ({target.name}.Q) after it")
         self._bind_fb_args(s, t, scope)
 
     def _fb_params(self, fb: T.FBType) -> tuple[dict[str, tuple[str, T.Type, Any]], list[str]]:
@@ -227,8 +235,8 @@ class StatementChecks(CheckerBase):
                     continue
                 tt = self.lvalue(a.value, scope)
                 if tt is not None:
-                    if a.negated and T.base_of(pty) is not T.BOOL:
-                        self.error(a, "NOT on an output needs a BOOL output")
+                    if a.negated:
+                        self.error(a, negated_output_message(a))
                     elif not self._decl_types_match(T.base_of(tt), T.base_of(pty)) and not T.same_type(tt, pty):
                         self.error(a.value, f"output '{a.name}' is {pty.name}; it cannot be stored in {self._tname(tt)}")
             else:

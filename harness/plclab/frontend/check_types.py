@@ -2,14 +2,13 @@
 variable blocks, located variables and VAR_EXTERNAL, as matiec checks them."""
 from __future__ import annotations
 
-import math
 from typing import Any, Optional
 
 from plclab.errors import Diagnostic
 from plclab.frontend import ast as A
 from plclab.frontend.check_base import (
     AREA_LIMIT, CheckerBase, _is_signed_integer, _library_variable_message, LOCATED_AREAS,
-    LOCATED_TYPES, MAX_TYPE_NESTING, RESERVED_WORDS, _Scope
+    LOCATED_TYPES, MAX_TYPE_NESTING, RESERVED_WORDS, _Scope, fold
 )
 from plclab.frontend.check_limits import MAX_DATA_BYTES, mib, type_bytes
 from plclab.frontend.checked import EnumValue
@@ -117,6 +116,16 @@ class DeclarationChecks(CheckerBase):
                     self.error(bad, "an array bound must be an integer literal or the name of a constant "
                                     "(OpenPLC's compiler accepts no expression here)")
                     return None
+                local = next((b for b in (lo_e, hi_e) if isinstance(b, A.Name) and scope is not None and
+                              isinstance(scope.names.get(b.key), A.VarDecl) and
+                              scope.names[b.key].section != "VAR_EXTERNAL"), None)
+                if local is not None:
+                    # matiec folds a global constant (VAR_EXTERNAL CONSTANT) into a bound, but
+                    # not the POU's own VAR CONSTANT: "Subrange upper limit is not a constant value"
+                    self.error(local, f"'{local.name}' is a constant of this POU: OpenPLC's compiler takes as an "
+                                      f"array bound a literal or a global constant (VAR_GLOBAL CONSTANT, "
+                                      f"here VAR_EXTERNAL CONSTANT), not a local one")
+                    return None
                 lo = self.const_int(lo_e, "an array bound", scope)
                 hi = self.const_int(hi_e, "an array bound", scope)
                 if lo is None or hi is None:
@@ -137,6 +146,11 @@ class DeclarationChecks(CheckerBase):
                 self.error(ref.elem, f"arrays of function block instances ({ref.elem.name}) are not "
                                      f"supported by OpenPLC's compiler")
                 return None
+            if isinstance(T.base_of(elem), T.ArrayType):
+                # iec2c's C for a variable of it starts from the empty initialiser {{,}}: g++ stops
+                self.error(ref.elem, f"an array of arrays ({ref.elem.name} is an array) does not build in OpenPLC: "
+                                     f"use one array of several dimensions, e.g. ARRAY[1..2, 1..3] OF INT")
+                return None
             size = 1
             for lo, hi in dims:
                 size *= hi - lo + 1
@@ -153,6 +167,13 @@ class DeclarationChecks(CheckerBase):
                 arr = T.ArrayType(arr.name, elem, tuple(dims), self._init_value(init, arr))
             return arr
         if isinstance(ref, A.EnumTypeRef):
+            if name is None:
+                # iec2c: "C code generator does not currently support anonymous enumerated
+                # data types" (a variable), an internal compiler error (a structure's field)
+                self.error(ref, "an enumerated type must be declared by name in a TYPE block (e.g. TYPE E_Mode : "
+                                f"({', '.join(v for v, _l, _c in ref.values[:3])}); END_TYPE): OpenPLC's compiler "
+                                "cannot make C for one written inline")
+                return None
             seen = set()
             values = []
             for vname, line, col in ref.values:
@@ -338,27 +359,12 @@ class DeclarationChecks(CheckerBase):
                 if isinstance(a, bool) and isinstance(b, bool):
                     return {"AND": a and b, "OR": a or b, "XOR": a != b, "=": a == b, "<>": a != b}.get(e.op)
                 return None
-            try:
-                if e.op == "+":
-                    return a + b
-                if e.op == "-":
-                    return a - b
-                if e.op == "*":
-                    return a * b
-                if e.op == "/":
-                    if isinstance(a, int) and isinstance(b, int):
-                        return int(a / b)
-                    return a / b
-                if e.op == "MOD":
-                    return int(math.fmod(a, b))
-                if e.op == "**":
-                    return float(a) ** b
-            except (ZeroDivisionError, OverflowError, ValueError):
-                return None
+            return fold(e.op, a, b)
         return None
 
-    def _init_value(self, init: Any, ty: T.Type, scope: Optional[_Scope] = None) -> Any:
-        """Check an initializer against `ty` and return the runtime value (None if invalid)."""
+    def _init_value(self, init: Any, ty: T.Type, scope: Optional[_Scope] = None, nested: bool = False) -> Any:
+        """Check an initializer against `ty` and return the runtime value (None if invalid).
+        `nested`: an element of an array, structure or block instance initialiser."""
         base = T.base_of(ty)
         if isinstance(init, A.ArrayInit):
             if not isinstance(base, T.ArrayType):
@@ -375,8 +381,13 @@ class DeclarationChecks(CheckerBase):
                     n = count_e.value
                 if item is None:
                     v = T.default_value(base.elem)
+                elif isinstance(item, A.StructInit):
+                    self.error(item, "OpenPLC's compiler refuses a structure value inside an array initialiser "
+                                     "(\"Initialization element identifier ... is not declared\"): give the "
+                                     "structure type's fields their initial values, or set them in the program")
+                    return None
                 else:
-                    v = self._init_value(item, base.elem, scope)
+                    v = self._init_value(item, base.elem, scope, nested=True)
                     if v is None:
                         return None
                 values.extend(T.copy_value(v) for _ in range(n))
@@ -392,7 +403,20 @@ class DeclarationChecks(CheckerBase):
                 if key not in base.fields:
                     self.diags.append(Diagnostic(init.file, line, col, f"'{ty.name}' has no field '{fname}'"))
                     return None
-                v = self._init_value(fval, base.fields[key][0], scope)
+                if isinstance(fval, A.ArrayInit):
+                    self.diags.append(Diagnostic(init.file, line, col, (
+                        f"OpenPLC's compiler refuses an array value inside a structure initialiser (field "
+                        f"'{fname}'): give it its initial value in the STRUCT's declaration, or set it in the program")))
+                    return None
+                probe = _field_matiec_checks(base, key)
+                if probe != key and not _literal_fits(fval, base.fields[probe][0]):
+                    shown = base.field_names.get(probe, probe)
+                    self.diags.append(Diagnostic(init.file, line, col, (
+                        f"OpenPLC's compiler checks this value against field '{shown}' instead of '{fname}' "
+                        f"(it takes the first field declared whose name sorts at or after '{fname}'), and refuses "
+                        f"it: declare '{fname}' before '{shown}' in '{ty.name}', or set it in the program")))
+                    return None
+                v = self._init_value(fval, base.fields[key][0], scope, nested=True)
                 if v is None:
                     return None
                 setattr(value, key, v)
@@ -409,10 +433,24 @@ class DeclarationChecks(CheckerBase):
         if not self.assignable(ty, init, et):
             return None
         v = self.const_value(init, scope)
-        if v is None:
-            self.error(init, "an initial value must be a constant expression")
+        if v is None or not self._is_literal(init, v):
+            self.error(init, _not_a_literal(init))
+            return None
+        if nested and isinstance(base, T.EnumType):
+            # enum_declaration_check.cc meets an enumerated value with no enumerated type being
+            # declared around it and stops: "Internal compiler error ... line 145"
+            self.error(init, "OpenPLC's compiler stops with an internal error on an enumerated value inside an "
+                             "array, structure or block initialiser: give the value in the program instead")
             return None
         return self._normalise(v, ty, init)
+
+    @staticmethod
+    def _is_literal(init: A.Expr, value: Any) -> bool:
+        """OpenPLC's compiler takes a literal as an initial value (`5`, `-2`, `SINT#-2`,
+        `T#1s`, `'text'`, an enumerated value), not an expression, a parenthesis or a name."""
+        if isinstance(init, A.Literal):
+            return not init.parenthesized
+        return isinstance(init, A.Name) and not isinstance(init.sym, A.VarDecl) and isinstance(value, str)
 
     def _normalise(self, v: Any, ty: T.Type, node: Any) -> Any:
         if isinstance(ty, T.SubrangeType) and isinstance(v, int) and not (ty.lo <= v <= ty.hi):
@@ -461,9 +499,12 @@ class DeclarationChecks(CheckerBase):
     def _declare_var(self, d: A.VarDecl, names: dict[str, Any], pou: Optional[A.PouDecl]) -> None:
         if d.location is not None:
             self._check_location(d, pou)
-            if pou is not None:
-                # as in matiec, the body may then use the address itself (`%QX0.0 := TRUE;`)
+            if pou is not None and not d.name:
+                # an unnamed one: the body may then read the address itself (matiec's C names
+                # its member __IX0_0); for a named one that member does not exist (g++ fails)
                 names.setdefault(d.location.key, d)
+            elif pou is not None:
+                self.named_at.setdefault(pou.key, {}).setdefault(d.location.key, d)
         if not d.name:
             d.ty = self.resolve_type(d.type_ref)
             if isinstance(d.ty, T.FBType):   # already reported by _check_location
@@ -521,8 +562,7 @@ class DeclarationChecks(CheckerBase):
                 and isinstance(T.base_of(ty), (T.ArrayType, T.StructType))):
             self.error(d, "an ARRAY or STRUCT passed by value to a FUNCTION does not compile in OpenPLC "
                           "(its C code is rejected); use a FUNCTION_BLOCK with VAR_IN_OUT")
-        if d.section in ("VAR_IN_OUT", "VAR_TEMP") and d.init is not None \
-                and not isinstance(d.type_ref, A.StringTypeRef):   # (matiec's grammar allows it for STRING)
+        if d.section in ("VAR_IN_OUT", "VAR_TEMP") and d.init is not None:    # a STRING's neither (iec2c)
             self.error(d.init, f"a {d.section} cannot have an initial value in OpenPLC's compiler")
         if self._declaration_too_large(d, ty):
             return
@@ -545,7 +585,7 @@ class DeclarationChecks(CheckerBase):
             if p is None:
                 self.diags.append(Diagnostic(d.file, line, col, f"function block {fb.name} has no input '{fname}'"))
                 continue
-            v = self._init_value(fval, p[1])
+            v = self._init_value(fval, p[1], nested=True)
             if v is not None:
                 values[fname.upper()] = v
         d.fb_init = values
@@ -600,6 +640,7 @@ class DeclarationChecks(CheckerBase):
             self.error(d.type_ref, "STRING[n] is not allowed in VAR_EXTERNAL by OpenPLC's compiler")
         ty = self.resolve_type(d.type_ref)
         d.ty = ty
+
         g = self.globals.get(d.key)
         if g is None:
             if self.unit.configs or self.unit.gvls:
@@ -643,9 +684,18 @@ class DeclarationChecks(CheckerBase):
             if isinstance(pou.ret_ty, T.FBType):
                 self.error(pou.return_type, "a FUNCTION cannot return a function block")
                 pou.ret_ty = None
+        after_constant = False
         for block in pou.blocks:
             self._check_block_rules(block, pou)
             sec = block.section
+            if pou.kind == "FUNCTION" and sec == "VAR":
+                if "CONSTANT" in block.qualifiers:
+                    after_constant = True
+                elif after_constant:
+                    # iec2c takes a FUNCTION's VAR block after a VAR CONSTANT block as constant
+                    # too: writing its variables is "Assignment to CONSTANT variables"
+                    for d in block.decls:
+                        d.constant_in_openplc = True
             if sec == "VAR_GLOBAL":
                 self.error(block, "VAR_GLOBAL belongs in a CONFIGURATION or RESOURCE (or a GVL file), not in a POU")
                 continue
@@ -676,3 +726,46 @@ class DeclarationChecks(CheckerBase):
             names["ENO"] = eno
             pou.eno_decl = eno
         pou.symbols = names
+
+
+def _not_a_literal(init: A.Expr) -> str:
+    """Why an initial value is refused, with the literal to write where there is one."""
+    why = "an initial value must be a literal: OpenPLC's compiler takes no expression, parenthesis or name here"
+    if isinstance(init, A.Unary) and init.op == "-" and isinstance(init.operand, A.Literal) \
+            and init.operand.type_name and "#" in init.operand.text:
+        prefix, digits = init.operand.text.split("#", 1)
+        return f"{why} (write {prefix}#-{digits})"
+    return why
+
+
+def _field_matiec_checks(struct: T.StructType, key: str) -> str:
+    """The field whose type matiec checks a structure initialiser's `key := value` against: the
+    first one declared whose (upper-case) name is `key` or sorts after it. Found with an iec2c
+    built from OpenPLC's fork: with `z : INT; a : REAL;`, `(a := 1.5)` is refused ("is set to
+    value of incompatible datatype") and `(a := 1)` accepted, both checked against z."""
+    return next((k for k in struct.fields if k >= key), key)
+
+
+def _literal_fits(e: Any, ty: T.Type) -> bool:
+    """Whether matiec would take the initial value `e` (a literal, an enumerated value or a
+    nested initialiser) for a field of type `ty`."""
+    b = T.base_of(ty)
+    if isinstance(e, A.ArrayInit):
+        return isinstance(b, T.ArrayType)
+    if isinstance(e, A.StructInit):
+        return isinstance(b, T.StructType)
+    if isinstance(e, A.Name) or (isinstance(e, A.Literal) and e.kind == "enum"):
+        value = e.key if isinstance(e, A.Name) else str(e.value).upper()
+        return isinstance(b, T.EnumType) and value in b.values
+    if not isinstance(e, A.Literal) or not isinstance(b, T.ElementaryType):
+        return isinstance(b, T.ElementaryType) or not isinstance(e, A.Literal)
+    if e.type_name is not None:
+        return e.type_name == b.name
+    if e.kind == "int":
+        return (b.is_integer or b.kind == "bits") and b.min <= e.value <= b.max or \
+            (b is T.BOOL and e.value in (0, 1))
+    if e.kind == "real":
+        return b.is_real
+    if e.kind in ("bool", "time", "date", "tod", "dt"):
+        return b.kind == e.kind if e.kind != "bool" else b is T.BOOL
+    return True

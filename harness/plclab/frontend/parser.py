@@ -74,6 +74,7 @@ class _Builder(Transformer):
     def __init__(self, file: str):
         super().__init__()
         self.file = file
+        self.text = ""          # the source being parsed (set with `file`)
 
     # -- helpers ------------------------------------------------------------------------
     def _at(self, children: Any) -> dict:
@@ -185,6 +186,13 @@ class _Builder(Transformer):
     def _pou(self, kind, children, has_return=False):
         w = _words(children)
         name = w[0]
+        keyword = children[0]
+        if isinstance(keyword, Token) and "(*" in self.text[keyword.end_pos:name.start_pos]:
+            # iec2c -p finds the POU names before it parses, and a comment in between makes it
+            # fail on the whole POU ("unknown error in program declaration" at its end)
+            raise _Positioned(keyword.line, keyword.column,
+                              f"a comment between {kind} and its name: OpenPLC's compiler fails on the whole "
+                              f"{kind}; move the comment")
         ret = w[1] if has_return else None
         rest = w[2:] if has_return else w[1:]
         blocks = [c for c in rest if isinstance(c, A.VarBlock)]
@@ -489,13 +497,19 @@ class _Builder(Transformer):
     def neg(self, children):
         minus, operand = children
         if isinstance(operand, A.Literal) and operand.kind in ("int", "real", "time") and operand.type_name is None \
-                and not operand.text.startswith("("):
+                and not operand.parenthesized:
             # `-5` is a signed literal, not an operation: it must fit the target type as a whole.
             operand.value = -operand.value
             operand.text = "-" + operand.text
             operand.line, operand.col = minus.line, minus.column
             return operand
         return A.Unary(**self._tok(minus), op="-", operand=operand)
+
+    def paren(self, children):
+        (inner,) = children
+        if isinstance(inner, A.Literal):
+            inner.parenthesized = True
+        return inner
 
     def pos(self, children):
         plus, operand = children
@@ -778,7 +792,7 @@ def _parse(text: str, file: str) -> tuple[A.Unit | None, list[Diagnostic]]:
     lark = _lark()
     try:
         with _BUILDER_LOCK:
-            _builder().file = file
+            _builder().file, _builder().text = file, text
             unit = lark.parse(text)
         return unit, []
     except UnexpectedCharacters as e:

@@ -872,7 +872,7 @@ class CGen:
             if isinstance(v, float):
                 return self.const(v, T.LREAL)
             if isinstance(tb, T.ElementaryType) and tb.kind in ("sint", "uint", "bits") and tb.bits >= 32:
-                # matiec writes a typed literal as `(UDINT)5`: `UDINT#0 - 1 > 0` is TRUE
+                # matiec writes a typed literal as `(DWORD)5`: `NOT DWORD#5 > DWORD#0` is TRUE
                 return f"(({_CTYPE[tb.name]}){self.const(v, tb)})"
             return self.const(v, tb)
         if isinstance(e, (A.Name, A.Member, A.Index)):
