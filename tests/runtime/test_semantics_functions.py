@@ -175,6 +175,28 @@ def test_string_equality_compares_only_the_common_prefix():
 
 # --------------------------------------------------------------------------- numeric
 
+# OpenPLC's library is C++: SIN(op) of a REAL calls the float overload, glibc's sinf, whose
+# result can be one unit in the last place away from sin() rounded to REAL. Each value below
+# is what OpenPLC computed (iec2c + g++ with webserver/core/lib, run), for an argument where
+# the two differ; LREAL and SQRT are the double functions.
+@pytest.mark.parametrize("call, openplc", [
+    ("SIN(REAL#40.395835876464844)", 0.4303392767906189),
+    ("COS(REAL#153.0837860107422)", -0.6567812561988831),
+    ("TAN(REAL#98.38943481445312)", 1.557621955871582),
+    ("ATAN(REAL#21.36781883239746)", 1.524031162261963),
+    ("EXP(REAL#5.874266624450684)", 355.763671875),
+    ("LN(REAL#217.871337890625)", 5.383904933929443),
+    ("LOG(REAL#40.16196060180664)", 1.6038148403167725),
+    ("ASIN(REAL#0.21408352255821228)", 0.2157534956932068),
+    ("ACOS(REAL#0.48075562715530396)", 1.0692801475524902),
+    ("EXPT(REAL#1.0574874877929688, REAL#-2.447187900543213)", 0.8721555471420288),   # powf
+    ("EXPT(REAL#1.0574874877929688, n)", 1.1825668811798096),       # pow(float, int): in double
+])
+def test_real_math_functions_compute_in_single_precision_as_openplc_does(call, openplc):
+    sim = once("VAR r : REAL; n : INT := 3; END_VAR", f"r := {call};")
+    assert val(sim, "r") == openplc
+
+
 def test_expt_and_numeric_functions():
     sim = once("VAR e1, e2, a, q, l : REAL; i : INT := -7; ai : INT; x : REAL := 2.0; END_VAR",
                "e1 := EXPT(x, 10); e2 := EXPT(x, -1.0); a := ABS(-2.5); ai := ABS(i);"

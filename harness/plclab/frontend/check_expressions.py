@@ -622,13 +622,13 @@ class ExpressionChecks(CheckerBase):
 
     def _folds_within(self, e: A.Binary, b: T.ElementaryType) -> bool:
         """OpenPLC's compiler folds an operation on literals (`INT#32767 + 1`) and refuses it
-        when the value leaves the operation's type, or when it divides an integer by zero."""
+        when the value leaves the operation's type; it refuses an integer division by a literal
+        zero whatever the dividend (`v / 0`)."""
+        if e.op == "/" and b.is_integer and literal_value(e.right) == 0:     # a REAL one is infinite
+            self.error(e, _ZERO_DIVISION)          # `v / 0` too: its constant divisor decides
+            return False
         if literal_value(e.left) is None:
             return True
-        divisor = literal_value(e.right)
-        if e.op == "/" and divisor == 0 and b.is_integer:      # a REAL one is infinite
-            self.error(e, _ZERO_DIVISION)
-            return False
         v = literal_value(e)
         if v is None:
             return True
@@ -759,7 +759,7 @@ class ExpressionChecks(CheckerBase):
         return ""
 
 
-_ZERO_DIVISION = "division by zero in a constant expression: OpenPLC's compiler refuses it"
+_ZERO_DIVISION = "division by a literal zero: OpenPLC's compiler refuses it"
 _REAL_MAX = 3.4028234663852886e38
 _REAL_MAX_LITERAL = 3.4028235677973366e38     # above it, strtof rounds to infinity
 _REAL_MIN_NORMAL = 1.1754943508222875e-38     # below it (nonzero), strtof reports an underflow

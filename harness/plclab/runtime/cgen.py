@@ -1015,7 +1015,11 @@ class CGen:
                 raise Unsupported(f"standard function {name}")
             return self.conversion(name, types[0], rb, codes[0])
         if name in _MATH1 and len(codes) == 1 and types[0].is_real:
+            if types[0] is T.REAL and name != "SQRT":      # OpenPLC's C++ calls sinf & co for a REAL
+                return f"({_MATH1[name]}f((float)({codes[0]})))"
             return f"(({_CTYPE[types[0].name]}){_MATH1[name]}((double)({codes[0]})))"
+        if name == "EXPT" and len(codes) == 2 and types[0] is T.REAL and types[1] is T.REAL:
+            return f"(powf((float)({codes[0]}), (float)({codes[1]})))"
         if name == "EXPT" and len(codes) == 2 and types[0].is_real and types[1].kind in ("sint", "uint", "real"):
             return f"(({_CTYPE[types[0].name]})c_pow((double)({codes[0]}), (double)({codes[1]})))"
         if name == "ABS" and len(codes) == 1:

@@ -860,7 +860,10 @@ def _b_mod(args: Sequence[Type], res: Type) -> Optional[Fn]:
 def _b_expt(args: Sequence[Type], res: Type) -> Optional[Fn]:
     if not (_is_real(args[0]) and _is_num(args[1])):
         return None
-    w = _wrapper(args[0])
+    if base_of(args[0]) is T.REAL and base_of(args[1]) is T.REAL:
+        powf = _libm_float("powf", 2)      # C++'s pow(float, float): single precision
+        return lambda a, b: powf(a, b)
+    w = _wrapper(args[0])                  # pow(float, int or double) is computed in double
     return lambda a, b: w(_c_pow(float(a), float(b)))
 
 
@@ -877,12 +880,33 @@ _UNARY_MATH: dict[str, Callable[[float], float]] = {
 }
 
 
+_FLOAT_MATH = {"SIN": "sinf", "COS": "cosf", "TAN": "tanf", "ASIN": "asinf", "ACOS": "acosf",
+               "ATAN": "atanf", "EXP": "expf", "LN": "logf", "LOG": "log10f"}
+"""OpenPLC's library is compiled as C++, where SIN(op) of a REAL calls the float overload,
+glibc's sinf: its result may be one unit in the last place away from sin() rounded to REAL
+(SIN(REAL#40.395836) is 0.43033928 in OpenPLC, not 0.43033931). SQRT is exact either way."""
+
+
+@lru_cache(maxsize=None)
+def _libm_float(cname: str, arity: int = 1) -> Callable[..., float]:
+    """The C library's single-precision function `cname` (sinf, powf...), as OpenPLC calls it."""
+    import ctypes
+    import ctypes.util
+    libm = ctypes.CDLL(ctypes.util.find_library("m") or "libm.so.6")
+    fn = getattr(libm, cname)
+    fn.restype = ctypes.c_float
+    fn.argtypes = [ctypes.c_float] * arity
+    return fn
+
+
 def _make_math(name: str) -> Builder:
     f = _UNARY_MATH[name]
 
     def build(args: Sequence[Type], res: Type) -> Optional[Fn]:
         if not _is_real(args[0]):
             return None
+        if base_of(args[0]) is T.REAL and name in _FLOAT_MATH:
+            return _libm_float(_FLOAT_MATH[name])
         w = _wrapper(args[0])
         return lambda x: w(f(x))
     return build
