@@ -33,7 +33,6 @@ NO_TC6_FORM = {"config_program_without_task.st": "RETAIN of program instance",
                "var_direct_addresses_in_code.st": "unnamed located variable",
                # forms OpenPLC Editor reads as another program (docs/ladder.md, the Editor's rules)
                "pou_fb_instance_init.st": "variable t: TON instance with an initial value: OpenPLC Editor drops it",
-               "type_strings.st": "variable short: STRING[10]: OpenPLC Editor drops the length",
                "type_subrange.st": "variable level: an inline <subrangeUnsigned> type"}
 
 

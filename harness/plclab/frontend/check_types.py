@@ -96,15 +96,13 @@ class DeclarationChecks(CheckerBase):
             if ref.wide:
                 self.error(ref, "WSTRING is not supported by OpenPLC's compiler; use STRING")
                 return None
-            length = 126
             if ref.length is not None:
-                length = self.const_int(ref.length, "a string length", scope)
-                if length is None:
-                    return None
-                if not 1 <= length <= 126:
-                    self.error(ref.length, f"string length {length} out of range (1..126 in OpenPLC)")
-                    return None
-            st = T.StringType(name or (f"STRING[{length}]" if ref.length is not None else "STRING"), length)
+                # iec2c takes the declaration, then calls a variable of it "not declared in this
+                # scope" where the body uses it (a TYPE of it: "invalid specification")
+                self.error(ref, "STRING[n] does not work in OpenPLC's compiler (a variable declared so is "
+                                "'not declared' where it is used): declare STRING (up to 126 characters)")
+                return None
+            st = T.StringType(name or "STRING", 126)
             if name and init is not None:
                 return T.AliasType(name, st, self._init_value(init, st))
             return st if name is None else T.AliasType(name, st, None)

@@ -52,13 +52,13 @@ class PRG_MAIN:
                 if (v_K < 0): break                                                                                                                                                                             # statements.st:24 main
             _c10 = v_STATE                                                                                                                                                                                      # statements.st:25 main
             if _c10 == 0:                                                                                                                                                                                       # statements.st:26 main
-                v_NAME = ('start')[:8]                                                                                                                                                                          # statements.st:26 main
+                v_NAME = 'start'                                                                                                                                                                                # statements.st:26 main
                 v_STATE = 1                                                                                                                                                                                     # statements.st:26 main
             elif 1 <= _c10 <= 3:                                                                                                                                                                                # statements.st:27 main
                 v_STATE = (((v_STATE + 1)) & 255)                                                                                                                                                               # statements.st:27 main
             else:
                 v_STATE = 0                                                                                                                                                                                     # statements.st:29 main
-                v_NAME = (_concat11(v_NAME, '!'))[:8]                                                                                                                                                           # statements.st:29 main
+                v_NAME = _concat11(v_NAME, '!')                                                                                                                                                                 # statements.st:29 main
             v_W = (((((v_W << 4) & 65535) | (~(v_W)))) & 65535)                                                                                                                                                 # statements.st:31 main
         finally:
             self.I = v_I
