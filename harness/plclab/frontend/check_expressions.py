@@ -2,6 +2,7 @@
 and the overloads of the standard functions, and assignability (no implicit conversion)."""
 from __future__ import annotations
 
+import sys
 from typing import Optional
 
 from plclab.frontend import ast as A
@@ -636,7 +637,7 @@ class ExpressionChecks(CheckerBase):
             self.error(e, f"this constant expression is {v}, outside {b.name} ({b.min}..{b.max}): "
                           f"OpenPLC's compiler refuses it")
             return False
-        if b.is_real and not abs(v) <= (_REAL_MAX if b is T.REAL else _LREAL_MAX):
+        if b.is_real and not abs(v) <= (T.REAL_MAX if b is T.REAL else sys.float_info.max):
             self.error(e, f"this constant expression overflows {b.name}: OpenPLC's compiler refuses it")
             return False
         return True
@@ -709,7 +710,7 @@ class ExpressionChecks(CheckerBase):
                     self._set_lit_type(e, target)
                     return True
                 if tb.is_real and t.kind == "real":
-                    if tb is T.REAL and v is not None and abs(v) > 3.4028234663852886e38:
+                    if tb is T.REAL and v is not None and abs(v) > T.REAL_MAX:
                         if isinstance(e, A.Literal):      # an LREAL literal cannot be as large either
                             self.error(e, f"{e.text or v} does not fit in REAL")
                         else:
@@ -760,10 +761,8 @@ class ExpressionChecks(CheckerBase):
 
 
 _ZERO_DIVISION = "division by a literal zero: OpenPLC's compiler refuses it"
-_REAL_MAX = 3.4028234663852886e38
 _REAL_MAX_LITERAL = 3.4028235677973366e38     # above it, strtof rounds to infinity
 _REAL_MIN_NORMAL = 1.1754943508222875e-38     # below it (nonzero), strtof reports an underflow
-_LREAL_MAX = 1.7976931348623157e308
 
 
 def literal_value(e: A.Expr) -> Optional[float | int]:

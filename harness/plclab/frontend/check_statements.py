@@ -165,12 +165,12 @@ class StatementChecks(CheckerBase):
         if not isinstance(t, T.FBType):
             self.error(target, f"'{self._path_text(target)}' is not a function block instance or a function")
             return
-        if isinstance(target, A.Name) and isinstance(target.sym, A.VarDecl) and target.sym.section == "VAR_EXTERNAL" \
-                and target.sym.constant:
+        external = isinstance(target, A.Name) and isinstance(target.sym, A.VarDecl) \
+            and target.sym.section == "VAR_EXTERNAL"
+        if external and target.sym.constant:
             self.error(target, f"'{target.name}' is CONSTANT: it cannot be called")
         s.fb_type = t
-        if isinstance(target, A.Name) and isinstance(target.sym, A.VarDecl) \
-                and target.sym.section == "VAR_EXTERNAL" and s.args:
+        if external and s.args:
             # iec2c passes arguments of an external instance through __SET_EXTERNAL_FB and
             # `->` member reads that OpenPLC's accessor.h and g++ refuse; a bare call builds
             self.error(s.args[0], f"'{target.name}' is reached through VAR_EXTERNAL: OpenPLC builds a call of it "

@@ -634,11 +634,8 @@ class DeclarationChecks(CheckerBase):
                           "by OpenPLC's compiler); declare each on its own line")
         if d.init is not None:
             self.error(d.init, "a VAR_EXTERNAL cannot have an initial value")
-        if isinstance(d.type_ref, A.StringTypeRef) and d.type_ref.length is not None:
-            self.error(d.type_ref, "STRING[n] is not allowed in VAR_EXTERNAL by OpenPLC's compiler")
-        ty = self.resolve_type(d.type_ref)
+        ty = self.resolve_type(d.type_ref)       # refuses STRING[n], here as anywhere
         d.ty = ty
-
         g = self.globals.get(d.key)
         if g is None:
             if self.unit.configs or self.unit.gvls:
@@ -755,15 +752,19 @@ def _literal_fits(e: Any, ty: T.Type) -> bool:
     if isinstance(e, A.Name) or (isinstance(e, A.Literal) and e.kind == "enum"):
         value = e.key if isinstance(e, A.Name) else str(e.value).upper()
         return isinstance(b, T.EnumType) and value in b.values
-    if not isinstance(e, A.Literal) or not isinstance(b, T.ElementaryType):
-        return isinstance(b, T.ElementaryType) or not isinstance(e, A.Literal)
+    if not isinstance(e, A.Literal):
+        return True                       # not an initial value matiec takes: refused elsewhere
+    if not isinstance(b, T.ElementaryType):
+        return False
     if e.type_name is not None:
         return e.type_name == b.name
     if e.kind == "int":
-        return (b.is_integer or b.kind == "bits") and b.min <= e.value <= b.max or \
+        return ((b.is_integer or b.kind == "bits") and b.min <= e.value <= b.max) or \
             (b is T.BOOL and e.value in (0, 1))
     if e.kind == "real":
         return b.is_real
-    if e.kind in ("bool", "time", "date", "tod", "dt"):
-        return b.kind == e.kind if e.kind != "bool" else b is T.BOOL
-    return True
+    if e.kind == "bool":
+        return b is T.BOOL
+    if e.kind in ("time", "date", "tod", "dt"):
+        return b.kind == e.kind
+    return True                           # a string: not probed

@@ -246,6 +246,10 @@ _F32 = struct.Struct("f")
 _f32_pack, _f32_unpack = _F32.pack, _F32.unpack
 
 
+REAL_MAX = 3.4028234663852886e38
+"""The largest finite REAL (C's FLT_MAX)."""
+
+
 def to_f32(x: float) -> float:
     """Round a Python float to IEEE single precision (REAL); on the hot path of every REAL operation."""
     try:

@@ -31,7 +31,6 @@ from plclab.iec import types as T
 
 FORMAT = "plclab-retain-1"
 MAX_FILE_BYTES = 64 * 1024 * 1024      # far beyond any program's retained variables
-_REAL_MAX = 3.4028234663852886e38
 
 
 def signature(items: Iterable[tuple[str, T.Type]]) -> str:
@@ -90,7 +89,7 @@ def from_json_value(data: Any, ty: T.Type) -> Any:
                 raise RetainError(f"{data['float']!r} is not a number") from None
         if isinstance(data, (int, float)) and not isinstance(data, bool):
             value = float(data)
-            if b is T.REAL and math.isfinite(value) and abs(value) > _REAL_MAX:
+            if b is T.REAL and math.isfinite(value) and abs(value) > T.REAL_MAX:
                 raise RetainError(f"{quoted(data)} is out of range for REAL")
             return T.wrapper_for(b)(value)
         raise RetainError(f"{quoted(data)} is not of type {b.name}")

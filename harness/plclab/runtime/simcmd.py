@@ -85,7 +85,6 @@ def _declared(plc: PLC, area: str, shown: int = 8) -> str:
 
 
 _INT_TEXT = re.compile(r"[+-]?\d{1,40}")
-_REAL_MAX = 3.4028234663852886e38
 
 
 def typed_value(text: str, ty: Any, name: str) -> Any:
@@ -104,7 +103,7 @@ def typed_value(text: str, ty: Any, name: str) -> Any:
             value = float(t)
         except ValueError:
             raise PlcLabError(f"bad value {shown} for {b.name} {name}: not a number") from None
-        if b is T.REAL and math.isfinite(value) and abs(value) > _REAL_MAX:
+        if b is T.REAL and math.isfinite(value) and abs(value) > T.REAL_MAX:
             raise PlcLabError(f"value {shown} is out of range for REAL {name} (at most 3.4e38 in magnitude)")
         return value
     if isinstance(b, T.ElementaryType) and b.kind in ("time", "date", "tod", "dt"):
