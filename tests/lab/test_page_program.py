@@ -3,6 +3,7 @@ PLC's frame memory, decoded, the frame being executed highlighted); the watch an
 online monitoring (the ST with live values beside each use, a fault's statement)."""
 from __future__ import annotations
 
+import json
 import re
 
 from playwright.sync_api import expect
@@ -218,3 +219,63 @@ def test_an_indexed_use_follows_its_index_and_is_marked_when_its_element_is_forc
     lab.call(lambda: lab.force("Main.i", "2")).result(10)
     expect(use).to_have_text("55", timeout=WAIT)
     expect(use).to_have_attribute("data-forced", "true")
+
+
+def test_a_state_made_before_a_pick_and_drawn_after_its_reply_does_not_undo_the_pick(lab_page):
+    """The page draws the newest state in an animation frame, so a state the lab made before
+    a watch command can be drawn after the command's reply. Taken then for the lab's list, it
+    made the next pick send the old list and drop the variable just picked (CI, under load:
+    SA5's row vanished). Here the WebSocket is routed so that this happens every time: the
+    last state made before Main.Cp.Count's pick is passed on together with the pick's reply,
+    and newer states are held back while SA5 is picked."""
+    lp = lab_page("mp9c", speed=2)
+    held = {"on": False, "last": None, "replies": 0, "drawn": None}
+
+    def route(page_side):
+        lab_side = page_side.connect_to_server()
+
+        def to_page(text):
+            msg = json.loads(text)
+            if held["on"] and msg["type"] == "state":
+                held["last"] = text                    # made before the pick was done, or held back
+                return
+            if held["on"] and msg["type"] == "reply" and msg["op"] == "watch":
+                if held["last"] and held["drawn"] is None:
+                    page_side.send(held["last"])       # the older state, then the reply at once
+                    held["drawn"] = json.loads(held["last"])["t"]
+                held["replies"] += 1
+            page_side.send(text)
+
+        lab_side.on_message(to_page)
+        page_side.on_message(lab_side.send)
+
+    def replies(n):                                    # the page's WebSocket served meanwhile
+        for _ in range(500):
+            if held["replies"] >= n:
+                return
+            page.wait_for_timeout(20)
+        raise AssertionError(f"the lab did not answer {n} watch command(s)")
+
+    page = lp.context.new_page()
+    page.set_default_timeout(20_000)
+    page.route_web_socket(re.compile(r".*/ws\?.*"), route)
+    page.goto(lp.url)
+    page.wait_for_selector("#plc-state[data-state='RUN']")
+    page.get_by_role("button", name="Pick variables from the program").click()
+    tree = page.get_by_label("program variables")
+    tree.get_by_text("Main : PRG_Mp9cBaseline", exact=True).click()
+    tree.get_by_text("Cp : ST_ControlProgram", exact=True).click()
+    held["on"] = True                                  # states from now on: made before the pick
+    page.wait_for_timeout(100)
+    tree.get_by_role("button", name="watch Main.Cp.Count").click()
+    replies(1)
+    assert held["drawn"] is not None, "no state came while the pick was on its way"
+    expect(page.locator("#clock")).to_have_text(f"t = {held['drawn']:.2f} s", timeout=WAIT)   # drawn after the reply
+    tree.get_by_text("globals", exact=True).click()
+    tree.get_by_role("button", name="watch SA5", exact=True).click()
+    replies(2)
+    held["on"] = False
+    rows = page.get_by_role("table", name="watched variables").locator("tbody tr")
+    expect(rows).to_have_count(2, timeout=WAIT)
+    assert rows.evaluate_all("rows => rows.map(r => r.dataset.path)") == ["Main.Cp.Count", "SA5"]
+    assert lp.lab.watched == ["Main.Cp.Count", "SA5"]

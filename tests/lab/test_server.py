@@ -495,3 +495,54 @@ def test_a_setting_that_restarts_the_program_keeps_the_forces():
         assert lab.call(lambda: lab.session.tick).result(10) == 0.005     # the restart did happen
     finally:
         lab.stop()
+
+
+class _SlowPage:
+    """A WebSocket whose page reads only when let: what a loaded browser does to the lab."""
+
+    closed = False
+
+    def __init__(self):
+        self.got: list[dict] = []
+        self.reading = asyncio.Event()
+
+    async def send_str(self, text: str) -> None:
+        await self.reading.wait()
+        self.got.append(json.loads(text))
+
+
+def test_a_page_reading_slowly_gets_every_reply_after_the_states_made_before_it():
+    """The lab made a state (watch list [A]), then did the page's command (watch [A, B]) and
+    replied: the page must see that state before the reply, or it takes the old list for the
+    lab's newest and drops B (the watch table lost a row under load). States queued side by
+    side still merge into one; a page that does not read holds its commands back."""
+    from plclab.lab.server import MAX_QUEUED, LabServer, _Client
+
+    async def play() -> tuple[list[dict], int]:
+        page = _SlowPage()
+        client = _Client(page)
+        sender = asyncio.ensure_future(LabServer._sender(client))
+        client.put_state({"type": "state", "t": 1, "watch": [["A", 0, False]], "events": ["e1"]})
+        await asyncio.sleep(0)                              # the sender waits on the socket
+        client.put_state({"type": "state", "t": 2, "watch": [["A", 0, False]], "events": ["e2"]})
+        client.put_state({"type": "state", "t": 3, "watch": [["A", 0, False]], "events": ["e3"]})
+        client.put({"type": "reply", "id": 7, "op": "watch", "ok": True})
+        client.put_state({"type": "state", "t": 4, "watch": [["A", 0, False], ["B", 1, False]], "events": []})
+        for i in range(MAX_QUEUED + 10):                   # replies the page does not read yet
+            client.put({"type": "reply", "id": 100 + i, "op": "run", "ok": True})
+        waiting = asyncio.ensure_future(client.room())
+        await asyncio.sleep(0.01)
+        held = not waiting.done()
+        page.reading.set()
+        await asyncio.wait_for(waiting, 5)
+        while client.outbox:
+            await asyncio.sleep(0.001)
+        sender.cancel()
+        return page.got, held
+
+    got, held = asyncio.run(play())
+    assert [m.get("t", m.get("id")) for m in got[:5]] == [1, 3, 7, 4, 100], got[:5]
+    assert got[1]["events"] == ["e2", "e3"]                   # two unsent states, one message, nothing lost
+    assert [r[0] for r in got[3]["watch"]] == ["A", "B"]
+    assert len(got) == 4 + MAX_QUEUED + 10
+    assert held, "a page that does not read got its commands answered into an unbounded queue"

@@ -50,16 +50,50 @@ MAX_FILES = 32
 LAB_OVERHEAD = 512 * 1024 * 1024  # bytes the lab process may grow by beyond one program run's allowance:
                                   # its threads' malloc arenas, the page's traces, a grade beside the running PLC
 MAX_MESSAGE = 64 * 1024           # bytes of one WebSocket message from a page
+MAX_QUEUED = 64                   # messages waiting for a page before its commands wait too
 
 
 class _Client:
-    """One connected page: what it has not been sent yet and the buttons it holds."""
+    """One connected page: what it has not been sent yet, in the order the lab made it, and
+    the buttons it holds.
+
+    Everything for a page (states, replies, notices) goes through one queue and one sender.
+    A reply written beside the sender overtook, for a page reading slowly (the sender waiting
+    for its socket), a state the lab had made before the command: the page took that older
+    state for news and dropped a variable it had just asked to watch."""
 
     def __init__(self, ws: web.WebSocketResponse):
         self.ws = ws
-        self.pending: Optional[dict] = None
-        self.ready = asyncio.Event()
+        self.outbox: list = []           # JSON texts, and states (dicts) merged while unsent
+        self.ready = asyncio.Event()     # something to send
+        self.sent = asyncio.Event()      # something was sent (or the page is gone)
+        self.gone = False                # its sender has stopped: nothing more is queued
         self.held: set[str] = set()
+
+    def put_state(self, snap: dict) -> None:
+        """A state: merged into the one waiting at the end of the queue, if any (a slow page
+        gets the newest state with every event and trend point), else queued."""
+        if self.gone:
+            return
+        if self.outbox and isinstance(self.outbox[-1], dict):
+            self.outbox[-1] = _merge(self.outbox[-1], snap)
+        else:
+            self.outbox.append(snap)
+        self.ready.set()
+
+    def put(self, message: dict) -> None:
+        """A message sent once (a reply, a notice), after everything queued before it."""
+        if self.gone:
+            return
+        self.outbox.append(json.dumps(message))
+        self.ready.set()
+
+    async def room(self) -> None:
+        """Until the queue is short again: a page that sends commands faster than it reads
+        the replies is read from no faster than it reads (its queue stays bounded)."""
+        while len(self.outbox) > MAX_QUEUED and not self.gone:
+            self.sent.clear()
+            await self.sent.wait()
 
 
 def _merge(old: dict, new: dict) -> dict:
@@ -239,33 +273,30 @@ class LabServer:
 
     def _fanout(self, snap: dict) -> None:
         for c in self.clients:
-            c.pending = snap if c.pending is None else _merge(c.pending, snap)
-            c.ready.set()
+            c.put_state(snap)
 
     def _broadcast(self, message: dict) -> None:
-        text = json.dumps(message)
         for c in self.clients:
             if not c.ws.closed:
-                asyncio.ensure_future(self._send(c, text))
+                c.put(message)
 
     @staticmethod
-    async def _send(c: _Client, text: str) -> None:
+    async def _sender(c: _Client) -> None:
+        """The page's one writer: the queue in order, each message sent before the next."""
         try:
-            await c.ws.send_str(text)
+            while not c.ws.closed:
+                await c.ready.wait()
+                c.ready.clear()
+                while c.outbox and not c.ws.closed:
+                    item = c.outbox.pop(0)
+                    await c.ws.send_str(item if isinstance(item, str) else json.dumps(item))
+                    c.sent.set()
         except (ConnectionError, RuntimeError):
             pass
-
-    async def _sender(self, c: _Client) -> None:
-        while not c.ws.closed:
-            await c.ready.wait()
-            c.ready.clear()
-            snap, c.pending = c.pending, None
-            if snap is None:
-                continue
-            try:
-                await c.ws.send_str(json.dumps(snap))
-            except (ConnectionError, RuntimeError):
-                return
+        finally:
+            c.gone = True
+            c.outbox.clear()
+            c.sent.set()
 
     # ------------------------------------------------------------------ the page
     async def index(self, request: web.Request) -> web.StreamResponse:
@@ -306,7 +337,8 @@ class LabServer:
                 if msg.type == WSMsgType.TEXT:
                     reply = await self._command(client, msg.data)
                     if reply is not None and not ws.closed:
-                        await ws.send_str(json.dumps(reply))
+                        client.put(reply)
+                        await client.room()
                 elif msg.type == WSMsgType.ERROR:
                     break
         finally:
@@ -322,8 +354,7 @@ class LabServer:
     def _join(self, client: _Client, snap: dict) -> None:
         self.clients.add(client)
         self.lab.viewers = len(self.clients)
-        client.pending = snap
-        client.ready.set()
+        client.put_state(snap)
         self._broadcast({"type": "pages", "pages": len(self.clients)})
 
     async def _command(self, client: _Client, text: str) -> Optional[dict]:

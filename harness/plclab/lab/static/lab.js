@@ -465,6 +465,10 @@ function onState(s) {
     lab.dirtyEvents = lab.dirtyActions = true;
   }
   lab.state = s;
+  // the lab's watch list, taken when the state comes (not when drawn): a state that came before
+  // the reply to the page's own watch command is older than that command, and drawn after the
+  // reply it would undo it (the next pick then sent the old list and dropped a variable)
+  if (!lab.watchPending) lab.watched = (s.watch || []).map((r) => r[0]);
   if ("frames" in s) { lab.frames = s.frames; lab.dirtyFrames = true; }
   if (s.monitor) {                           // changes only: kept until drawn (several may come per frame)
     const p = lab.pendingMonitor;
@@ -899,7 +903,8 @@ function treeNode(n) {
     onclick: () => watch(lab.watched.concat([n.path])) }, `${n.name} : ${n.type}`);
 }
 
-// the list asked for is the page's until the lab answers (two quick picks both count)
+// the list asked for is the page's until the lab answers (two quick picks both count); the
+// lab's states, which come in the order it made them, say the list again after that
 function watch(paths) {
   lab.watched = paths;
   lab.watchPending = (lab.watchPending || 0) + 1;
@@ -925,7 +930,6 @@ function watchRow(path) {
 // Rows are kept while their variable is watched (what is typed in a force box, the focus and
 // a click in progress survive another variable being added or removed); new ones are added.
 function renderWatch(rows) {
-  if (!lab.watchPending) lab.watched = rows.map((r) => r[0]);
   const body = $("#watch-table tbody");
   const want = rows.map((r) => r[0]);
   const have = [...body.children].map((tr) => tr.dataset.path);
