@@ -916,10 +916,6 @@ class CGen:
             if op in ("+", "-") and _b(e.left.ty).kind in kinds and _b(e.right.ty).kind in kinds:
                 return f"((int64_t)((uint64_t)({l}) {op} (uint64_t)({r})))"
             raise Unsupported(f"TIME {op}")
-        if op == "**":
-            if not rb.is_real:
-                raise Unsupported("** with an integer result")
-            return f"c_pow((double)({l}), (double)({r}))"
         if op in ("/", "MOD"):
             if rb.is_real:
                 if op == "MOD":

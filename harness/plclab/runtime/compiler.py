@@ -16,9 +16,9 @@ plain C operators, no casts) computes:
   * SINT/INT/USINT/UINT/BYTE/WORD operands are promoted to C `int`: intermediates (also of
     `/`, `MOD` and `NOT` on BYTE/WORD) are 32-bit and only narrowed where the value is stored
     or passed (assignment, parameter, CASE selector);
-  * REAL is single precision, except that an untyped real literal is a C double constant and
-    `**` returns an LREAL, so an expression mixing them is computed in double and rounded to
-    REAL once, where it is stored or passed (`r = 0.1` is FALSE after `r := 0.1`);
+  * REAL is single precision, except that an untyped real literal is a C double constant,
+    so an expression mixing them is computed in double and rounded to REAL once, where it is
+    stored or passed (`r = 0.1` is FALSE after `r := 0.1`);
   * FOR is matiec's while(1) loop: END and BY re-evaluated on every pass, BY 0 tests `>=`.
 A line map from generated Python lines to ST lines lets a runtime fault name the POU, file
 and line without any cost on the hot path.
@@ -808,7 +808,7 @@ class Compiler:
             # C computes SINT/INT/USINT/UINT operands as int: (a + b) / 2 does not overflow
             lt = rt_ = rt = T.DINT
         elif rb is T.REAL and _is_double(e):
-            # a REAL operand mixed with a double (untyped real literal, `**`): C double maths,
+            # a REAL operand mixed with a double (an untyped real literal): C double maths,
             # rounded to REAL only where it is stored or passed
             lt = rt_ = rt = T.LREAL
         if op == "MOD" and isinstance(rb, T.ElementaryType) and rb.kind in ("sint", "uint"):
@@ -821,7 +821,7 @@ class Compiler:
                     return f"({l} % {divisor})"
                 t = f"_m{next(self.tmp)}"
                 return f"(-(-{t} % {divisor}) if ({t} := {l}) < 0 else {t} % {divisor})"
-        if op in ("/", "MOD", "**") or (op == "*" and isinstance(rb, T.ElementaryType) and rb.kind == "time"):
+        if op in ("/", "MOD") or (op == "*" and isinstance(rb, T.ElementaryType) and rb.kind == "time"):
             return f"{self.operator(op, [lt, rt_], rt)}({l}, {r})"
         return self.wrap(f"({l} {op} {r})", rt)
 
@@ -953,14 +953,11 @@ def _register_source(program: CompiledProgram) -> None:
 
 def _is_double(e: A.Expr) -> bool:
     """Whether the C that matiec generates computes REAL expression `e` as a double: an
-    untyped real literal is a C double constant (`0.1`, not `0.1f`), `**` is
-    `__expt((LREAL)a, (LREAL)b)`, and C promotes the other float operand of + - * / to
-    double. (So `r = 0.1` is FALSE for a REAL r even right after `r := 0.1`.)"""
+    untyped real literal is a C double constant (`0.1`, not `0.1f`), and C promotes the
+    other float operand of + - * / to double. (So `r = 0.1` is FALSE for a REAL r even right after `r := 0.1`.)"""
     if isinstance(e, A.Literal):
         return e.kind == "real" and e.type_name is None
     if isinstance(e, A.Binary):
-        if e.op == "**":
-            return True
         if e.op in ("+", "-", "*", "/"):
             return _is_double(e.left) or _is_double(e.right)
         return False

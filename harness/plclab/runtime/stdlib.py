@@ -32,7 +32,8 @@ lookup(name, arg_types, result_type) -> callable
 
 lookup_operator(op, arg_types, result_type) -> callable
     The same for ST operators, which matiec compiles to C operators or to library helpers
-    (`+ - * / MOD ** = <> < <= > >= AND OR XOR NOT NEG`).
+    (`+ - * / MOD = <> < <= > >= AND OR XOR NOT NEG`; `**` is refused by the
+    front end: the C it becomes does not build in OpenPLC).
 
 The signatures the type checker uses (which functions exist, their parameters and generic
 types) are in plclab.frontend.stdsigs: one table, so the checker and the runtime cannot
@@ -1398,16 +1399,6 @@ def _build_operator(op: str, args: tuple[Type, ...], res: Type) -> Fn:
             w = _wrapper(args[0])
             return lambda x: w(-x)
         raise missing("C cannot negate this type")
-    if op == "**":
-        if len(args) != 2 or not (_is_num(args[0]) and _is_num(args[1])):
-            raise missing()
-        if _is_real(res):
-            w = _wrapper(res)
-            return lambda a, b: w(_c_pow(float(a), float(b)))
-        if _is_int(res):
-            et = base_of(res)
-            return lambda a, b: c_double_to(_c_pow(float(a), float(b)), et)
-        raise missing()
     if op in ("+", "-", "*", "/", "MOD"):
         a, b = args
         if _is_timelike(res) or _is_timelike(a):
@@ -1437,14 +1428,13 @@ def _cached_op(op: str, args: tuple[Type, ...], res: Type) -> Fn:
 def lookup_operator(op: str, arg_types: Sequence[Type], result_type: Type) -> Fn:
     """The callable for an ST operator as matiec compiles it for OpenPLC.
 
-    op: "+", "-", "*", "/", "MOD", "**", "=", "<>", "<", "<=", ">", ">=", "AND" (or "&"),
+    op: "+", "-", "*", "/", "MOD", "=", "<>", "<", "<=", ">", ">=", "AND" (or "&"),
     "OR", "XOR", "NOT", "NEG" (unary minus). Facts encoded here:
       * integer `/` by zero raises PlcRuntimeFault("division_by_zero") (C `/` traps);
         REAL `/` by zero gives +-inf/NaN; MOD by zero gives 0 (matiec emits `(b == 0)?0:a%b`);
       * TIME/DATE `+ - * /` use __time_add/__time_sub/__time_mul/__time_div;
       * comparisons of TIME, DATE and STRING call the EQ/LT... library functions, so strings
         compare only over the shorter length;
-      * `**` is __expt((LREAL)a, (LREAL)b) converted to the result type.
     Arithmetic results are wrapped to `result_type`. NOTE: matiec emits plain C expressions
     without casts, so an *intermediate* SINT/INT/USINT/UINT result is computed in C `int`
     and only narrowed on assignment ((a + b) / 2 does not overflow for INT a, b); that is the
