@@ -20,6 +20,21 @@ LOCATED_TYPES = {
     "L": {"LINT", "ULINT", "LWORD", "LREAL"},
 }
 AREA_LIMIT = {"X": 99, "W": 1023, "D": 1023, "L": 1023}
+
+
+def short_address_message(text: str, in_statement: bool = False) -> str:
+    """Why `%I0.1` (the bit address without its size letter) is refused. iec2c takes it in a
+    declaration as a BOOL named `__I0_1`, apart from `%IX0.1` (`__IX0_1`), and OpenPLC's glue
+    generator connects a located variable by the letter after its area: `__I0_1` has none, so
+    it is never connected to the I/O (an input that never changes, an output that drives
+    nothing). In a statement it is not %IX0.1 either (iec2c refuses it where no `AT %I0.1` is)."""
+    area, parts = text[1].upper(), text[2:].split(".")
+    full = f"%{area}X{parts[0]}.{parts[1] if len(parts) > 1 else 0}"
+    instead = "OpenPLC's memory area is %MW, %MD or %ML only" if area == "M" else f"write {full}"
+    if in_statement:
+        return f"{text} leaves out the size letter: OpenPLC's compiler does not read it as {full}; {instead}"
+    return (f"{text} leaves out the size letter: OpenPLC builds it but never connects it to the I/O "
+            f"(its glue generator needs the X, W, D or L after the area); {instead}")
 # Words matiec reserves that this grammar lexes as identifiers (keywords of IL/SFC/REF extensions).
 RESERVED_WORDS = frozenset("""EN ENO ANY ANY_DERIVED ANY_ELEMENTARY ANY_MAGNITUDE ANY_NUM ANY_REAL ANY_INT
 ANY_BIT ANY_STRING ANY_DATE VAR_CONFIG VAR_ACCESS ACTION END_ACTION TRANSITION END_TRANSITION FROM

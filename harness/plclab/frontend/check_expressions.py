@@ -6,7 +6,9 @@ import sys
 from typing import Optional
 
 from plclab.frontend import ast as A
-from plclab.frontend.check_base import CheckerBase, DEFAULT_INT, DEFAULT_REAL, _GENERIC_RESULT_DEFAULT, _Scope, fold
+from plclab.frontend.check_base import (
+    CheckerBase, DEFAULT_INT, DEFAULT_REAL, _GENERIC_RESULT_DEFAULT, _Scope, fold, short_address_message
+)
 from plclab.frontend.checked import INT_LIT, REAL_LIT, EnumValue, LiteralType
 from plclab.frontend.stdsigs import FUNCTION_BLOCKS, FUNCTIONS, NO_BOOL_OVERLOAD, FBSig, FuncSig
 from plclab.iec import types as T
@@ -507,6 +509,9 @@ class ExpressionChecks(CheckerBase):
             mine = next((v for v in values if expected is not None and v.ty is T.base_of(expected)), values[0])
             self.error(e, f"'{e.name}' is a value of several enumerated types; qualify it (e.g. "
                           f"{mine.ty.name}#{e.name}): OpenPLC's compiler refuses it unqualified")
+            return None
+        if e.key.startswith("%") and not e.key[2:3].isalpha():
+            self.error(e, short_address_message(e.name, in_statement=True))
             return None
         if e.key.startswith("%"):
             named = self.named_at.get(scope.pou.key, {}).get(e.key) if scope.pou is not None else None

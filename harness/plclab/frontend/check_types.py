@@ -8,7 +8,7 @@ from plclab.errors import Diagnostic
 from plclab.frontend import ast as A
 from plclab.frontend.check_base import (
     AREA_LIMIT, CheckerBase, _is_signed_integer, _library_variable_message, LOCATED_AREAS,
-    LOCATED_TYPES, MAX_TYPE_NESTING, RESERVED_WORDS, _Scope, fold
+    LOCATED_TYPES, MAX_TYPE_NESTING, RESERVED_WORDS, _Scope, fold, short_address_message
 )
 from plclab.frontend.check_limits import MAX_DATA_BYTES, mib, type_bytes
 from plclab.frontend.checked import EnumValue
@@ -600,6 +600,12 @@ class DeclarationChecks(CheckerBase):
             self.error(loc, f"located variables are not allowed in {d.section}")
             return
         area = loc.area + loc.size
+        if not loc.text[2:3].isalpha():
+            # iec2c takes `%I0.1` as a BOOL, but OpenPLC's glue generator connects a located
+            # variable by the letter after the area (`__IX0_1`); `__I0_1` has none, so the
+            # variable is never connected to the I/O: an input that never changes in OpenPLC
+            self.error(loc, short_address_message(loc.text))
+            return
         if area not in LOCATED_AREAS:
             self.error(loc, f"{loc.text} is outside OpenPLC's located areas "
                             f"(%IX, %QX, %IW, %QW, %MW, %MD, %ML)")

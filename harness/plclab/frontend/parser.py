@@ -291,8 +291,10 @@ class _Builder(Transformer):
 
     def direct_name(self, children):
         # `%QX0.0` used in a body: it names the POU's variable located there (see the checker)
+        # (`%I0.1` stays as written: OpenPLC's C names it apart from %IX0.1, see the checker)
         (tok,) = children
-        return A.Name(**self._tok(tok), name=self._location(tok).key)
+        loc = self._location(tok)
+        return A.Name(**self._tok(tok), name=loc.key if loc.text[2:3].isalpha() else loc.text)
 
     # -- configuration --------------------------------------------------------------------
     def config_single(self, children):
