@@ -299,6 +299,11 @@ class Location(Node):
     parts: list[int]
 
     @property
+    def written_without_size(self) -> bool:
+        """`%I0.1`: the size letter left out (OpenPLC never connects it: the checker)."""
+        return not self.text[2:3].isalpha()
+
+    @property
     def key(self) -> str:
         """The canonical spelling: `%ix0.1` and `%I0.1` are both `%IX0.1`."""
         return f"%{self.area}{self.size}{'.'.join(map(str, self.parts))}"

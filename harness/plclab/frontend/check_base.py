@@ -35,6 +35,8 @@ def short_address_message(text: str, in_statement: bool = False) -> str:
         return f"{text} leaves out the size letter: OpenPLC's compiler does not read it as {full}; {instead}"
     return (f"{text} leaves out the size letter: OpenPLC builds it but never connects it to the I/O "
             f"(its glue generator needs the X, W, D or L after the area); {instead}")
+
+
 # Words matiec reserves that this grammar lexes as identifiers (keywords of IL/SFC/REF extensions).
 RESERVED_WORDS = frozenset("""EN ENO ANY ANY_DERIVED ANY_ELEMENTARY ANY_MAGNITUDE ANY_NUM ANY_REAL ANY_INT
 ANY_BIT ANY_STRING ANY_DATE VAR_CONFIG VAR_ACCESS ACTION END_ACTION TRANSITION END_TRANSITION FROM

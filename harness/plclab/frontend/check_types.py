@@ -600,10 +600,7 @@ class DeclarationChecks(CheckerBase):
             self.error(loc, f"located variables are not allowed in {d.section}")
             return
         area = loc.area + loc.size
-        if not loc.text[2:3].isalpha():
-            # iec2c takes `%I0.1` as a BOOL, but OpenPLC's glue generator connects a located
-            # variable by the letter after the area (`__IX0_1`); `__I0_1` has none, so the
-            # variable is never connected to the I/O: an input that never changes in OpenPLC
+        if loc.written_without_size:
             self.error(loc, short_address_message(loc.text))
             return
         if area not in LOCATED_AREAS:

@@ -294,7 +294,7 @@ class _Builder(Transformer):
         # (`%I0.1` stays as written: OpenPLC's C names it apart from %IX0.1, see the checker)
         (tok,) = children
         loc = self._location(tok)
-        return A.Name(**self._tok(tok), name=loc.key if loc.text[2:3].isalpha() else loc.text)
+        return A.Name(**self._tok(tok), name=loc.text if loc.written_without_size else loc.key)
 
     # -- configuration --------------------------------------------------------------------
     def config_single(self, children):
