@@ -23,6 +23,7 @@ from plclab.errors import Diagnostic
 from plclab.fileio import user_cache_dir
 from plclab.frontend import ast as A
 from plclab.frontend import literals as L
+from plclab.frontend.s7names import bit_address_hint, word_address_hint
 
 MAX_SOURCE_BYTES = 8 * 1024 * 1024
 MAX_NESTING = 200   # statement/expression nesting deeper than this is refused, not a crash
@@ -984,11 +985,30 @@ def _syntax_error(file: str, e: UnexpectedToken, text: str) -> Diagnostic:
     return Diagnostic(file, line, col, f"unexpected {_token_text(tok)}{_describe_expected(expected)}")
 
 
+def _s7_address(text: str, tok: Token, prev: list[Token], expected: set[str]) -> tuple[str, int, int] | None:
+    """An S7-200 address where the error stands: `AT I0.1` (a name where the address goes) or
+    `x := I0.1` (the name `I0`, then `.1`)."""
+    word = str(tok)
+    if tok.type == "IDENT" and "LOCATION" in expected:
+        bit = re.match(r"\.(\d+)", text[tok.end_pos:]) if tok.end_pos is not None else None
+        hint = bit_address_hint(word, bit.group(1)) if bit else word_address_hint(word)
+        if hint:
+            return hint, tok.line, tok.column
+    if len(prev) == 2 and prev[0].type == "IDENT" and str(prev[1]) == "." and re.fullmatch(r"\d+", word):
+        hint = bit_address_hint(str(prev[0]), word)
+        if hint:
+            return hint, prev[0].line, prev[0].column
+    return None
+
+
 def _syntax_hint(text: str, tok: Token, expected: set[str]) -> tuple[str, int, int] | None:
     """A precise message for the syntax errors students make most, else None."""
     line, col = tok.line, tok.column
     prev = _tokens_before(text, tok)
     last = prev[-1] if prev else None
+    s7 = _s7_address(text, tok, prev, expected)
+    if s7:
+        return s7
     if last is not None and last.type == "IDENT" and str(last).upper() in _NOT_SUPPORTED_WORDS:
         return (f"'{last}' is a reserved word of OpenPLC's compiler (and this construct is not supported)",
                 last.line, last.column)
