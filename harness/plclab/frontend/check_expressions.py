@@ -734,8 +734,11 @@ class ExpressionChecks(CheckerBase):
                         e.value = bool(e.value)
                         e.kind = "bool"
                     return True
+            hint = ""
+            if tb is T.TIME and t.kind == "int":     # an S7 timer's preset is a count of 1/10/100 ms
+                hint = f": write a duration, e.g. T#{v if isinstance(v, int) and v >= 0 else 500}ms"
             self.error(e, f"type mismatch in {what}: {self._tname(target)} cannot take "
-                          f"{'a real' if t.kind == 'real' else 'an integer'} literal")
+                          f"{'a real' if t.kind == 'real' else 'an integer'} literal{hint}")
             return False
         if isinstance(t, T.FBType) or isinstance(tb, T.FBType):
             self.error(e, f"type mismatch in {what}: function block instances cannot be assigned")
