@@ -832,7 +832,14 @@ def _lex_error(text: str, file: str, e: UnexpectedCharacters) -> Diagnostic:
         return Diagnostic(file, e.line, e.column, "pragmas '{...}' are not supported (OpenPLC pastes them "
                                                   "into C code); remove it")
     if ch == "%":
+        if not re.match(r"%[IQM]", text[e.pos_in_stream:e.pos_in_stream + 2], re.I):
+            return Diagnostic(file, e.line, e.column, "'%' is not an operator in ST: the remainder is MOD (a MOD b)")
         return Diagnostic(file, e.line, e.column, "malformed direct address (expected e.g. %IX0.0, %QW1, %MD4)")
+    if ch in "!|":
+        two = text[e.pos_in_stream:e.pos_in_stream + 2]
+        instead = {"!=": "'<>'", "||": "OR", "|": "OR"}.get(two, {"|": "OR"}.get(ch, "NOT"))
+        shown = two if two in ("!=", "||") else ch
+        return Diagnostic(file, e.line, e.column, f"'{shown}' is not ST: write {instead}")
     printable = ch if ch.isprintable() else f"\\x{ord(ch):02x}"
     return Diagnostic(file, e.line, e.column, f"unexpected character '{printable}'")
 
@@ -971,8 +978,13 @@ def _syntax_error(file: str, e: UnexpectedToken, text: str) -> Diagnostic:
             where = "end of file" if tok.type == "$END" else f"'{tok}'"
             if "SEMICOLON" in expected and tok.type != "$END":
                 return Diagnostic(file, line, col, f"missing ';' before {where}")
+            else_if = ""
+            if closer == "END_IF" and re.search(r"\bELSE\s+IF\b", text[opener.start_pos:tok.start_pos
+                                                                       if tok.type != "$END" else len(text)], re.I):
+                else_if = "; ELSE IF opens a second IF: write ELSIF"
             return Diagnostic(file, line, col, f"missing {closer} before {where} "
-                                               f"(the {opener} at line {opener.line}, column {opener.column} is not closed)")
+                                               f"(the {opener} at line {opener.line}, column {opener.column} is not "
+                                               f"closed){else_if}")
         if tok.type == "$END":
             return Diagnostic(file, line, col, "unexpected end of file")
     hint = _syntax_hint(text, tok, expected)
@@ -1001,6 +1013,34 @@ def _s7_address(text: str, tok: Token, prev: list[Token], expected: set[str]) ->
     return None
 
 
+_FUSED_END = re.compile(r"END(IF|WHILE|FOR|CASE|REPEAT|VAR|PROGRAM|FUNCTION|FUNCTION_BLOCK|TYPE|STRUCT)", re.I)
+
+
+def _foreign_syntax(text: str, tok: Token, last: Token | None, expected: set[str]) -> tuple[str, int, int] | None:
+    """C, Python and ladder habits (`x = 1;`, `==`, `&&`, `n++`, `n += 1`, `ENDIF`, `0x10`)
+    named as such, with the ST to write."""
+    line, col = tok.line, tok.column
+    word, after = str(tok), text[tok.end_pos:tok.end_pos + 1] if tok.end_pos is not None else ""
+    assign_expected = any(_PRETTY.get(e) == "':='" for e in expected)
+    if last is not None and _FUSED_END.fullmatch(str(last)) and last.type == "IDENT" \
+            and (tok.type in ("SEMICOLON", "$END") or tok.line > last.line):
+        return (f"'{last}' is written END_{_FUSED_END.fullmatch(str(last)).group(1).upper()}",
+                last.line, last.column)
+    if word == "=" and last is not None and str(last) == "=" and last.end_pos == tok.start_pos:
+        return "'==' is not ST: compare with '='", last.line, last.column
+    if word == "&" and last is not None and str(last) == "&" and last.end_pos == tok.start_pos:
+        return "'&&' is not ST: write AND", last.line, last.column
+    if word in ("+", "-") and after in (word, "=") and assign_expected:
+        op, name = word + after, str(last) if last is not None and last.type == "IDENT" else "v"
+        return (f"'{op}' is not ST: write {name} := {name} {word} {'1' if after == word else '...'}", line, col)
+    if word == "=" and assign_expected:
+        return "'=' compares in ST; an assignment is written ':='", line, col
+    if tok.type == "IDENT" and re.fullmatch(r"[xX][0-9A-Fa-f_]+", word) and last is not None \
+            and str(last) == "0" and last.end_pos == tok.start_pos:
+        return f"a hexadecimal number is written 16#{word[1:]} in ST", last.line, last.column
+    return None
+
+
 def _syntax_hint(text: str, tok: Token, expected: set[str]) -> tuple[str, int, int] | None:
     """A precise message for the syntax errors students make most, else None."""
     line, col = tok.line, tok.column
@@ -1009,6 +1049,9 @@ def _syntax_hint(text: str, tok: Token, expected: set[str]) -> tuple[str, int, i
     s7 = _s7_address(text, tok, prev, expected)
     if s7:
         return s7
+    foreign = _foreign_syntax(text, tok, last, expected)
+    if foreign:
+        return foreign
     if last is not None and last.type == "IDENT" and str(last).upper() in _NOT_SUPPORTED_WORDS:
         return (f"'{last}' is a reserved word of OpenPLC's compiler (and this construct is not supported)",
                 last.line, last.column)
