@@ -8,7 +8,7 @@ from plclab.frontend import ast as A
 from plclab.frontend.check_base import CheckerBase, _Scope
 from plclab.frontend.check_expressions import negated_output_message
 from plclab.frontend.check_limits import nesting_violation
-from plclab.frontend.stdsigs import FUNCTIONS, FBSig
+from plclab.frontend.stdsigs import FUNCTION_BLOCKS, FUNCTIONS, FBSig
 from plclab.iec import types as T
 
 
@@ -156,6 +156,14 @@ class StatementChecks(CheckerBase):
                 target.key in FUNCTIONS or (target.key in self.pous and self.pous[target.key].kind == "FUNCTION")):
             self.error(s, f"'{target.name}' is a function: its result must be used (OpenPLC's compiler "
                           f"rejects a function call as a statement), e.g. x := {target.name}(...);")
+            return
+        if isinstance(target, A.Name) and target.key not in scope.names and (
+                target.key in FUNCTION_BLOCKS or (target.key in self.pous and self.pous[target.key].kind == "FUNCTION_BLOCK")):
+            # `CTU(CU := x);` as an S7 box is drawn: the block needs an instance that keeps its state
+            inst = f"{target.name[0].upper()}1"
+            self.error(s, f"'{target.name}' is a function block type: declare an instance (e.g. "
+                          f"{inst} : {target.name.upper() if target.key in FUNCTION_BLOCKS else target.name};) "
+                          f"and call it, {inst}(...)")
             return
         t = self.expr(target, scope, None, allow_fb=True)
         if t is None:
