@@ -10,6 +10,7 @@ from plclab.frontend.check_base import (
     CheckerBase, DEFAULT_INT, DEFAULT_REAL, _GENERIC_RESULT_DEFAULT, _Scope, fold, short_address_message
 )
 from plclab.frontend.s7names import word_address_hint
+from plclab.frontend.suggest import did_you_mean
 from plclab.frontend.checked import INT_LIT, REAL_LIT, EnumValue, LiteralType
 from plclab.frontend.stdsigs import FUNCTION_BLOCKS, FUNCTIONS, NO_BOOL_OVERLOAD, FBSig, FuncSig
 from plclab.iec import types as T
@@ -533,7 +534,8 @@ class ExpressionChecks(CheckerBase):
         if e.key in self.pous or e.key in FUNCTIONS:
             self.error(e, f"'{e.name}' is a POU, not a variable")
             return None
-        self.error(e, word_address_hint(e.name) or f"undeclared identifier '{e.name}'")
+        known = [getattr(v, "name", "") for v in scope.names.values()] + [g.name for g in self.globals.values()]
+        self.error(e, word_address_hint(e.name) or f"undeclared identifier '{e.name}'{did_you_mean(e.name, known)}")
         return None
 
     _CMP = {"=", "<>", "<", ">", "<=", ">="}

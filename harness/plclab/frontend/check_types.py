@@ -13,6 +13,7 @@ from plclab.frontend.check_base import (
 from plclab.frontend.check_limits import MAX_DATA_BYTES, mib, type_bytes
 from plclab.frontend.checked import EnumValue
 from plclab.frontend.stdsigs import FUNCTION_BLOCKS, LIBRARY_VARIABLES, RESERVED_NAMES
+from plclab.frontend.suggest import did_you_mean, foreign_type
 from plclab.iec import types as T
 
 
@@ -261,7 +262,9 @@ class DeclarationChecks(CheckerBase):
         if key in T.GENERICS:
             self.error(ref, f"generic type {ref.name} can only be used by standard functions")
             return None
-        self.error(ref, f"unknown type '{ref.name}'")
+        known = [*T.ELEMENTARY, *(d.name for d in self.type_decls.values()), *FUNCTION_BLOCKS,
+                 *(p.name for p in self.pous.values() if p.kind == "FUNCTION_BLOCK")]
+        self.error(ref, f"unknown type '{ref.name}'{foreign_type(ref.name) or did_you_mean(ref.name, known)}")
         return None
 
     _std_fb_cache: dict[str, T.FBType] = {}

@@ -1016,9 +1016,10 @@ def _s7_address(text: str, tok: Token, prev: list[Token], expected: set[str]) ->
 _FUSED_END = re.compile(r"END(IF|WHILE|FOR|CASE|REPEAT|VAR|PROGRAM|FUNCTION|FUNCTION_BLOCK|TYPE|STRUCT)", re.I)
 
 
-def _foreign_syntax(text: str, tok: Token, last: Token | None, expected: set[str]) -> tuple[str, int, int] | None:
-    """C, Python and ladder habits (`x = 1;`, `==`, `&&`, `n++`, `n += 1`, `ENDIF`, `0x10`)
-    named as such, with the ST to write."""
+def _foreign_syntax(text: str, tok: Token, prev: list[Token], expected: set[str]) -> tuple[str, int, int] | None:
+    """C, Python and ladder habits (`x = 1;`, `==`, `&&`, `n++`, `n += 1`, `ENDIF`, `0x10`,
+    `ARRAY[10]`, `a : BOOL, b : BOOL;`) named as such, with the ST to write."""
+    last = prev[-1] if prev else None
     line, col = tok.line, tok.column
     word, after = str(tok), text[tok.end_pos:tok.end_pos + 1] if tok.end_pos is not None else ""
     assign_expected = any(_PRETTY.get(e) == "':='" for e in expected)
@@ -1035,6 +1036,12 @@ def _foreign_syntax(text: str, tok: Token, last: Token | None, expected: set[str
         return (f"'{op}' is not ST: write {name} := {name} {word} {'1' if after == word else '...'}", line, col)
     if word == "=" and assign_expected:
         return "'=' compares in ST; an assignment is written ':='", line, col
+    if tok.type == "RSQB" and last is not None and last.type == "INTEGER" and len(prev) == 2 and str(prev[0]) == "[":
+        n = int(str(last).replace("_", "") or 0)
+        return (f"an array's bounds are written first..last: for {n} elements, [0..{max(n - 1, 0)}] "
+                f"(or [1..{max(n, 1)}])", prev[0].line, prev[0].column)
+    if tok.type == "COMMA" and len(prev) == 2 and str(prev[0]) == ":":
+        return ("a declaration ends with ';', not ',': write a : BOOL; b : BOOL; (or a, b : BOOL;)", line, col)
     if tok.type == "IDENT" and re.fullmatch(r"[xX][0-9A-Fa-f_]+", word) and last is not None \
             and str(last) == "0" and last.end_pos == tok.start_pos:
         return f"a hexadecimal number is written 16#{word[1:]} in ST", last.line, last.column
@@ -1049,7 +1056,7 @@ def _syntax_hint(text: str, tok: Token, expected: set[str]) -> tuple[str, int, i
     s7 = _s7_address(text, tok, prev, expected)
     if s7:
         return s7
-    foreign = _foreign_syntax(text, tok, last, expected)
+    foreign = _foreign_syntax(text, tok, prev, expected)
     if foreign:
         return foreign
     if last is not None and last.type == "IDENT" and str(last).upper() in _NOT_SUPPORTED_WORDS:
