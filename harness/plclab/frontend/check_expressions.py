@@ -324,6 +324,13 @@ class ExpressionChecks(CheckerBase):
         e.ty = t
         return t
 
+    @staticmethod
+    def _no_member(fb: T.FBType, name: str, params: list[str]) -> str:
+        """`t.DONE`: the block's inputs and outputs, the closest one first if any is close."""
+        return (f"function block {fb.name} has no variable '{name}'{did_you_mean(name, params)}; "
+                f"its inputs and outputs: {', '.join(params)}" if params else
+                f"function block {fb.name} has no variable '{name}'")
+
     def _expr(self, e: A.Expr, scope: _Scope, expected: Optional[T.Type]) -> Optional[T.Type]:
         if isinstance(e, A.Literal):
             return self._literal(e, expected)
@@ -336,7 +343,8 @@ class ExpressionChecks(CheckerBase):
             b = T.base_of(bt)
             if isinstance(b, T.StructType):
                 if e.key not in b.fields:
-                    self.error(e, f"'{bt.name}' has no field '{e.name}'")
+                    self.error(e, f"'{bt.name}' has no field '{e.name}'"
+                                  f"{did_you_mean(e.name, [b.field_names.get(k, k) for k in b.fields])}")
                     return None
                 return b.fields[e.key][0]
             if isinstance(b, T.FBType):
@@ -345,11 +353,12 @@ class ExpressionChecks(CheckerBase):
                         if n == e.key:     # matiec gives every block EN and ENO (OpenPLC Editor's ladder reads ENO)
                             e.sym = n
                             return T.ELEMENTARY[tn]
-                    self.error(e, f"function block {b.name} has no variable '{e.name}'")
+                    self.error(e, self._no_member(b, e.name, [n for n, _t in b.pou.inputs + b.pou.outputs]))
                     return None
                 d = (b.pou.symbols or {}).get(e.key)
                 if d is None or d.section == "RETURN":
-                    self.error(e, f"function block {b.name} has no variable '{e.name}'")
+                    self.error(e, self._no_member(b, e.name, [v.name for v in b.pou.decls if v.section in (
+                        "VAR_INPUT", "VAR_OUTPUT", "VAR_IN_OUT")]))
                     return None
                 if d.section not in ("VAR_INPUT", "VAR_OUTPUT", "VAR_IN_OUT"):
                     self.error(e, f"'{e.name}' is internal to {b.name}: only inputs and outputs can be "
