@@ -289,6 +289,11 @@ class StructInit(Node):
 # --------------------------------------------------------------------------- declarations
 
 
+def address_without_size(address: str) -> bool:
+    """Whether a direct address (`%I0.1`, `%IX0.1`) is written without its size letter."""
+    return not address[2:3].isalpha()
+
+
 @dataclass(eq=False)
 class Location(Node):
     """`%IX1.6`: area 'I' | 'Q' | 'M', size 'X' | 'B' | 'W' | 'D' | 'L', address parts."""
@@ -301,7 +306,7 @@ class Location(Node):
     @property
     def written_without_size(self) -> bool:
         """`%I0.1`: the size letter left out (OpenPLC never connects it: the checker)."""
-        return not self.text[2:3].isalpha()
+        return address_without_size(self.text)
 
     @property
     def key(self) -> str:

@@ -521,7 +521,7 @@ class ExpressionChecks(CheckerBase):
             self.error(e, f"'{e.name}' is a value of several enumerated types; qualify it (e.g. "
                           f"{mine.ty.name}#{e.name}): OpenPLC's compiler refuses it unqualified")
             return None
-        if e.key.startswith("%") and not e.key[2:3].isalpha():
+        if e.key.startswith("%") and A.address_without_size(e.key):
             self.error(e, short_address_message(e.name, in_statement=True))
             return None
         if e.key.startswith("%"):

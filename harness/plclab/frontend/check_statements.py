@@ -158,12 +158,12 @@ class StatementChecks(CheckerBase):
                           f"rejects a function call as a statement), e.g. x := {target.name}(...);")
             return
         if isinstance(target, A.Name) and target.key not in scope.names and (
-                target.key in FUNCTION_BLOCKS or (target.key in self.pous and self.pous[target.key].kind == "FUNCTION_BLOCK")):
+                target.key in FUNCTION_BLOCKS or target.key in self.fb_types):
             # `CTU(CU := x);` as an S7 box is drawn: the block needs an instance that keeps its state
             inst = f"{target.name[0].upper()}1"
+            type_name = target.key if target.key in FUNCTION_BLOCKS else target.name
             self.error(s, f"'{target.name}' is a function block type: declare an instance (e.g. "
-                          f"{inst} : {target.name.upper() if target.key in FUNCTION_BLOCKS else target.name};) "
-                          f"and call it, {inst}(...)")
+                          f"{inst} : {type_name};) and call it, {inst}(...)")
             return
         t = self.expr(target, scope, None, allow_fb=True)
         if t is None:

@@ -837,8 +837,8 @@ def _lex_error(text: str, file: str, e: UnexpectedCharacters) -> Diagnostic:
         return Diagnostic(file, e.line, e.column, "malformed direct address (expected e.g. %IX0.0, %QW1, %MD4)")
     if ch in "!|":
         two = text[e.pos_in_stream:e.pos_in_stream + 2]
-        instead = {"!=": "'<>'", "||": "OR", "|": "OR"}.get(two, {"|": "OR"}.get(ch, "NOT"))
         shown = two if two in ("!=", "||") else ch
+        instead = {"!=": "'<>'", "||": "OR", "|": "OR", "!": "NOT"}[shown]
         return Diagnostic(file, e.line, e.column, f"'{shown}' is not ST: write {instead}")
     printable = ch if ch.isprintable() else f"\\x{ord(ch):02x}"
     return Diagnostic(file, e.line, e.column, f"unexpected character '{printable}'")
@@ -1023,10 +1023,9 @@ def _foreign_syntax(text: str, tok: Token, prev: list[Token], expected: set[str]
     line, col = tok.line, tok.column
     word, after = str(tok), text[tok.end_pos:tok.end_pos + 1] if tok.end_pos is not None else ""
     assign_expected = any(_PRETTY.get(e) == "':='" for e in expected)
-    if last is not None and _FUSED_END.fullmatch(str(last)) and last.type == "IDENT" \
-            and (tok.type in ("SEMICOLON", "$END") or tok.line > last.line):
-        return (f"'{last}' is written END_{_FUSED_END.fullmatch(str(last)).group(1).upper()}",
-                last.line, last.column)
+    fused = _FUSED_END.fullmatch(str(last)) if last is not None and last.type == "IDENT" else None
+    if fused and (tok.type in ("SEMICOLON", "$END") or tok.line > last.line):
+        return f"'{last}' is written END_{fused.group(1).upper()}", last.line, last.column
     if word == "=" and last is not None and str(last) == "=" and last.end_pos == tok.start_pos:
         return "'==' is not ST: compare with '='", last.line, last.column
     if word == "&" and last is not None and str(last) == "&" and last.end_pos == tok.start_pos:
